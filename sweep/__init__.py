@@ -1,0 +1,15 @@
+"""sweep: Numba-accelerated parameter-space sweeps of the Baumberger & Gauthier (1996) spring-block model."""
+
+from .api import run_sweep, solve_point
+from .errors import InputError
+from .io import open_dataset as open
+from .io import save
+from .params import FrictionParams
+from .plan import Plan, make_plan
+from .presets import presets, provenance
+from .scene import Scene, default_scene, load_scene
+from .status import Status
+
+__all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "default_scene", "load_scene", "make_plan",
+           "open", "presets", "provenance", "run_sweep", "save", "solve_point"]
+__version__ = "0.1.0"

@@ -1,0 +1,38 @@
+"""The public entry points: run a sweep, solve one point."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import xarray as xr
+
+from .dataset import build_dataset
+from .engine import execute
+from .params import FrictionParams
+from .plan import make_plan
+from .scene import Scene
+
+__all__ = ["run_sweep", "solve_point"]
+
+
+def run_sweep(scene: Scene, progress: bool | None = None, history: str = "") -> xr.Dataset:
+    """Run ``scene`` and return its Dataset (dims K_over_M, V; see the README's output contract).
+
+    ``progress``: None shows a bar on an interactive terminal for sweeps longer than ~2 s; True/False force it.
+    ``history`` is recorded in the file's history attribute (the CLI passes its command line).
+    """
+    plan = make_plan(scene)
+    raw = execute(scene, plan, progress=progress)
+    return build_dataset(scene, plan, raw, history=history or "sweep.run_sweep")
+
+
+def solve_point(params: FrictionParams, K_over_M: float, V: float, rtol: float = 1e-6,
+                observables: Sequence[str] = ("xi_inf", "trajectory", "t50", "t90"),
+                trajectory_tau: tuple[float, float, int] = (1e-3, 1e6, 61), t_obs: Sequence[float] = (),
+                step: float | None = None, max_steps: int = 1_000_000) -> xr.Dataset:
+    """Solve one (K/M [s-2], V [m s-1]) point through the sweep kernel; returns its 0-d Dataset
+    (xi_inf, status, steps, and by default the trajectory xi(tau), psi(tau), t50, t90)."""
+    scene = Scene(protocol="stop", params=params, K_over_M=[K_over_M], V=[V], rtol=rtol,
+                  observables=tuple(observables), trajectory_tau=trajectory_tau, t_obs=tuple(t_obs), step=step,
+                  max_steps=max_steps)
+    return run_sweep(scene, progress=False, history="sweep.solve_point").isel(K_over_M=0, V=0)

@@ -1,0 +1,118 @@
+"""Command line: ``sweep run | plot | info``."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InputError
+
+DEFAULT_OUT = Path("sweep-out") / "landscape.nc"
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from .scene import default_scene, load_scene
+
+    scene = load_scene(args.config) if args.config else default_scene()
+    from .plan import make_plan
+
+    plan = make_plan(scene)
+    if args.dry_run:
+        from .engine import estimate_seconds
+
+        seconds, mean_steps = estimate_seconds(scene, plan)
+        print(plan.text())
+        print(f"{'grid':>28}: {scene.shape[0]} K/M x {scene.shape[1]} V, rtol {scene.rtol:g}, "
+              f"observables {', '.join(scene.observables)}")
+        print(f"{'estimated steps per point':>28}: {mean_steps:.0f} (mean of a pilot subsample)")
+        print(f"{'estimated time':>28}: {seconds:.1f} s on this machine")
+        return 0
+    from .api import run_sweep
+    from .io import save
+    from .plot import plot_landscape
+
+    t0 = time.perf_counter()
+    ds = run_sweep(scene, progress=None if not args.quiet else False,
+                   history="sweep " + " ".join(shlex.quote(a) for a in sys.argv[1:]))
+    out = save(ds, args.output)
+    elapsed = time.perf_counter() - t0
+    png = plot_landscape(ds, args.png or out.with_suffix(".png"))
+    counts = np.unique(ds["status"].values, return_counts=True)
+    print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, "
+          f"{scene.n_points / max(elapsed, 1e-9):,.0f} points/s)")
+    print(f"wrote {png}")
+    meanings = ds["status"].attrs["flag_meanings"].split()
+    print("status: " + ", ".join(f"{meanings[c]} {n}" for c, n in zip(*counts)))
+    return 0
+
+
+def _cmd_plot(args: argparse.Namespace) -> int:
+    from .io import open_dataset
+    from .plot import plot_landscape
+
+    ds = open_dataset(args.file)
+    png = plot_landscape(ds, args.output or Path(args.file).with_suffix(".png"), variable=args.variable)
+    print(f"wrote {png}")
+    return 0
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    from .io import open_dataset
+
+    ds = open_dataset(args.file)
+    print(f"{args.file}: {ds.attrs.get('title', '')}")
+    print(f"  source: {ds.attrs.get('source', '?')}")
+    print(f"  history: {ds.attrs.get('history', '?')}")
+    print("  dims: " + ", ".join(f"{k}={v}" for k, v in ds.sizes.items()))
+    for name in ("K_over_M", "V"):
+        c = ds[name]
+        print(f"  {name}: {c.values.min():.4g} .. {c.values.max():.4g} [{c.units}]")
+    for key in sorted(k for k in ds.attrs if k.startswith("plan_")):
+        print(f"  {key}: {ds.attrs[key]}")
+    meanings = ds["status"].attrs["flag_meanings"].split()
+    codes, counts = np.unique(ds["status"].values, return_counts=True)
+    print("  status: " + ", ".join(f"{meanings[c]} {n}" for c, n in zip(codes, counts)))
+    for name, var in ds.data_vars.items():
+        vals = var.values[np.isfinite(var.values)] if var.dtype.kind == "f" else var.values
+        rng = f"{vals.min():.4g} .. {vals.max():.4g}" if vals.size else "all NaN"
+        print(f"  {name:18s} [{var.attrs.get('units', '')}] {rng}  {var.attrs.get('long_name', '')}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="sweep", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="run a scene (default: the built-in sample2 landscape) and write netCDF + PNG")
+    run.add_argument("config", nargs="?", help="scene TOML file (omit for the built-in default scene)")
+    run.add_argument("-o", "--output", type=Path, default=DEFAULT_OUT, help=f"netCDF output (default {DEFAULT_OUT})")
+    run.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
+    run.add_argument("--dry-run", action="store_true", help="print the plan and an estimated time, then exit")
+    run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    run.set_defaults(func=_cmd_run)
+    plot = sub.add_parser("plot", help="draw the landscape map of a sweep file")
+    plot.add_argument("file")
+    plot.add_argument("-o", "--output", type=Path, help="PNG path (default: the file with .png)")
+    plot.add_argument("--variable", default="xi_inf", help="variable to map (default xi_inf)")
+    plot.set_defaults(func=_cmd_plot)
+    info = sub.add_parser("info", help="summarise a sweep file")
+    info.add_argument("file")
+    info.set_defaults(func=_cmd_info)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except (InputError, FileNotFoundError) as exc:
+        print(f"sweep: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

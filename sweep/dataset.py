@@ -1,0 +1,110 @@
+"""Dataset assembly: flat kernel outputs -> a self-describing CF-1.11 xarray.Dataset (DESIGN.md contract).
+
+Reduced quantities (xi, tau, chi) and dimensional ones (slip in m, times in s) never share a name.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import sys
+from importlib import metadata
+
+import numpy as np
+import xarray as xr
+
+from . import physics
+from .engine import RawResult
+from .plan import Plan
+from .scene import Scene
+from .status import Status, flag_attrs
+
+__all__ = ["build_dataset", "REFERENCES"]
+
+REFERENCES = (
+    "T. Baumberger and L. Gauthier, Creeplike relaxation at the interface between rough solids under shear, "
+    "J. Phys. I France 6 (1996) 1021-1030, doi:10.1051/jp1:1996113"
+)
+DIMS = ("K_over_M", "V")
+
+
+def versions() -> str:
+    def v(pkg: str) -> str:
+        try:
+            return metadata.version(pkg)
+        except metadata.PackageNotFoundError:
+            return "unknown"
+
+    return (f"sweep {v('sweep')}, numba {v('numba')}, numpy {v('numpy')}, xarray {v('xarray')}, "
+            f"python {sys.version.split()[0]}")
+
+
+def _var(dims, data, units: str, long_name: str, **attrs) -> xr.Variable:
+    return xr.Variable(dims, data, {"units": units, "long_name": long_name, **attrs})
+
+
+def _coords(scene: Scene) -> dict[str, xr.Variable]:
+    p = scene.params
+    mu1 = physics.mu1(scene.V, p.m1, p.m2, p.V0)
+    coords = {
+        "K_over_M": _var("K_over_M", scene.K_over_M, "s-2", "spring stiffness over slider mass K/M"),
+        "V": _var("V", scene.V, "m s-1", "driving velocity before the stop"),
+        "chi": _var("K_over_M", physics.reduced_stiffness(scene.K_over_M, p.D0, p.g), "1",
+                    "reduced stiffness chi = K D0/(M g)"),
+        "mu1": _var("V", mu1, "1", "velocity-weakening slope mu1(V) = m1 - 2 m2 ln(V/V0)"),
+        "chi_c": _var("V", physics.chi_c_quasistatic(mu1), "1",
+                      "reduced stiffness on the Hopf line of the quasi-static model (NaN: no Hopf line, mu1 <= 0)"),
+        "gamma": _var("V", physics.inertia_number(scene.V, p.D0, p.g), "1", "inertia number gamma = V^2/(g D0)"),
+    }
+    if "trajectory" in scene.observables:
+        coords["tau"] = _var("tau", scene.tau_samples, "1", "reduced time after the stop tau = V t/D0")
+    if "slip_at" in scene.observables:
+        coords["t_obs"] = _var("t_obs", np.asarray(scene.t_obs), "s", "time after the stop")
+    return coords
+
+
+def build_dataset(scene: Scene, plan: Plan, raw: RawResult, history: str = "") -> xr.Dataset:
+    """Assemble the Dataset of a stop sweep from the kernel's flat outputs."""
+    shape = scene.shape
+    p = scene.params
+    grid = lambda a: a.reshape(shape + a.shape[1:])  # noqa: E731
+    xi_inf = grid(raw.xi_inf)
+    chi = plan.chi.reshape(shape)
+    stable = physics.stable_sliding(chi, plan.mu1.reshape(shape), p.A).astype(np.int8)
+    data = {
+        "xi_inf": _var(DIMS, xi_inf, "1", "relaxed slip after the stop in units of D0, Dx_inf/D0"),
+        "slip_inf": _var(DIMS, p.D0 * xi_inf, "m", "relaxed slip after the stop Dx_inf"),
+        "stress_relaxation": _var(DIMS, chi * xi_inf, "1", "reduced stress relaxation K Dx_inf/(M g) = chi xi_inf"),
+        "stable": _var(DIMS, stable, "1", "steady sliding at V is linearly stable (quasi-static model)",
+                       flag_values=np.array([0, 1], np.int8), flag_meanings="unstable stable"),
+        "status": _var(DIMS, grid(raw.status), "1", "numerical status of the point", **flag_attrs()),
+        "steps": _var(DIMS, grid(raw.steps), "1", "RK4 steps taken by the point (first pass)"),
+    }
+    n_traj = plan.tau_samples.size
+    if "trajectory" in scene.observables:
+        traj_dims = DIMS + ("tau",)
+        data["xi"] = _var(traj_dims, grid(raw.xi_at[:, :n_traj]), "1", "slip since the stop in units of D0, xi(tau)")
+        data["psi"] = _var(traj_dims, np.exp(grid(raw.u_at[:, :n_traj])), "1",
+                           "reduced contact age psi(tau) = V phi/D0")
+    if "slip_at" in scene.observables:
+        data["slip_at"] = _var(DIMS + ("t_obs",), p.D0 * grid(raw.xi_at[:, n_traj:]), "m",
+                               "slip since the stop at time t_obs")
+    seconds_per_tau = p.D0 / scene.V[None, :]
+    for name, col, pct in (("t50", 0, 50), ("t90", 1, 90)):
+        if name in scene.observables:
+            data[name] = _var(DIMS, grid(raw.tau_at_fraction[:, col]) * seconds_per_tau, "s",
+                              f"time after the stop to reach {pct} % of the relaxed slip")
+    attrs = {
+        "Conventions": "CF-1.11",
+        "title": "Relaxation landscape of the Baumberger-Gauthier spring-block model (stop scene)",
+        "institution": "sweep users",
+        "source": versions(),
+        "history": f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')}: {history or 'sweep'}",
+        "references": REFERENCES,
+        "comment": (f"status codes: {', '.join(f'{s.value}={s.name.lower()}' for s in Status)}; points on "
+                    "unstable steady sliding (stable = 0) are computed and flagged by stable, not by status"),
+        "scene": scene.to_toml(),
+        "plan_hash": plan.hash(),
+        "elapsed_seconds": float(raw.seconds),
+    }
+    attrs.update({f"plan_{k}": v for k, v in plan.describe().items()})
+    return xr.Dataset(data, coords=_coords(scene), attrs=attrs)

@@ -1,0 +1,1 @@
+"""Right-hand sides and observables of each protocol (numba), one module per protocol."""

@@ -1,0 +1,203 @@
+"""Quasi-static stop scene (PHYSICS.md 3a; paper eqs. 7-9), compiled with numba.
+
+The paper's equations in reduced time tau (' = d/dtau, u = ln psi),
+
+    A ln(xi' psi) = -chi xi - dmu(psi),    psi' = 1 - xi' psi,    xi(0) = 0, psi(0) = 1,
+
+are integrated in the *contact-age time* s = int_0^tau dtau'/psi. There they read
+
+    dxi/ds = E,    du/ds = 1 - E,    E = xi' psi = exp(-(chi xi + mu1 u + m2 u^2)/A),
+
+so that xi + u = s exactly: the state is the single number xi (u = s - xi), and tau = int e^u ds is a
+quadrature carried only when a time-resolved observable is asked for. In s the costly corner of the tau
+form (psi << tau, small chi/A with mu1 < 0; PHYSICS.md 6) is not stiff: its stiffness rate is |mu1 + 2 m2 u|/A.
+
+Fixed-step RK4 runs in a scaled log time sigma, ds/dsigma = w(s) = 1/(1/(s + s_c) + 1/L): logarithmic early
+(resolving the stiff start, rate (chi - mu1)/A, with s_c = 1/(1 + (chi + |mu1|)/A)) and linear with step L*h late (resolving the
+decay of E, rate (mu1 + 2 m2 u)/A, with L = 1/(|mu1|/A + sqrt(m2/A) + 0.1)). s is carried as a state of
+the autonomous system (xi, s[, tau]) so no transcendental call is spent on the map.
+
+The integration stops once the remaining slip can be written in closed form (:func:`tail_slip`): from
+dxi/du = E/(1 - E) and E = exp(-chi xi/A) exp(-(mu1 u + m2 u^2)/A),
+
+    (A/chi) [exp(chi xi_inf/A) - exp(chi xi_e/A)] = int_{u_e}^inf exp(-(mu1 u + m2 u^2)/A) (1 + E + ...) du,
+
+whose first two terms are exponential (m2 = 0) or Gaussian (m2 > 0, via erfcx) integrals. This generalises the
+paper's eq. 13 to m2 != 0; the neglected E^3 term and the frozen-xi error are bounded by the stopping test.
+Every function here is written for one point; the batch loop lives in :mod:`sweep.engine`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..status import Status
+
+OK = int(Status.OK)
+MAX_STEPS = int(Status.MAX_STEPS)
+NONFINITE = int(Status.NONFINITE)
+NO_FINITE_LIMIT = int(Status.NO_FINITE_LIMIT)
+
+EXP_MAX = 700.0
+"""Largest exponent passed to exp (exp(709.8) overflows float64); beyond it the point is flagged nonfinite."""
+E_TAIL_MAX = 0.05
+"""The closed-form tail is used only once E = xi' psi has fallen below this."""
+TAIL_SAFETY = 0.1
+"""Fraction of the tolerance allowed for the truncation of the tail series."""
+SQRT_PI = math.sqrt(math.pi)
+
+
+@njit(cache=True)
+def erfcx(z: float) -> float:
+    """Scaled complementary error function exp(z^2) erfc(z) for z >= 0 (asymptotic series beyond 25)."""
+    if z < 25.0:
+        return math.exp(z * z) * math.erfc(z)
+    iz2 = 1.0 / (z * z)
+    return (1.0 - 0.5 * iz2 * (1.0 - 1.5 * iz2 * (1.0 - 2.5 * iz2))) / (z * SQRT_PI)
+
+
+@njit(cache=True)
+def tail_integral(a: float, b: float, u: float, order: float) -> float:
+    """exp(order (a u + b u^2)) int_u^inf exp(-order (a v + b v^2)) dv, for b >= 0 and a + 2 b u > 0 [1]."""
+    if b == 0.0:
+        return 1.0 / (order * a)
+    kb = order * b
+    return 0.5 * SQRT_PI / math.sqrt(kb) * erfcx(math.sqrt(kb) * (u + 0.5 * a / b))
+
+
+@njit(cache=True)
+def tail_slip(k: float, a: float, b: float, u: float, E: float) -> float:
+    """Reduced slip remaining after the horizon, xi_inf - xi_e, from the state (u_e, E_e) [1].
+
+    k = chi/A, a = mu1/A, b = m2/A. Two terms of the series in E (module docstring); exact as E -> 0.
+    """
+    T = E * tail_integral(a, b, u, 1.0) + E * E * tail_integral(a, b, u, 2.0)
+    return math.log1p(k * T) / k
+
+
+@njit(cache=True)
+def tail_is_accurate(k: float, a: float, b: float, u: float, E: float, tol: float) -> bool:
+    """True once the closed-form tail's own error is below TAIL_SAFETY * tol (absolute, reduced).
+
+    Requires E to decrease from here on (mu1 + 2 m2 u > 0). The neglected E^3 term contributes
+    ~E^3/(3 g) and freezing xi in the E^2 term ~E^3 k/(2 g^2), g = a + 2 b u the decay rate of E.
+    """
+    g = a + 2.0 * b * u
+    if g <= 0.0 or E > E_TAIL_MAX:
+        return False
+    return E * E * E * (1.0 / (3.0 * g) + k / (2.0 * g * g)) <= TAIL_SAFETY * tol
+
+
+@njit(cache=True)
+def derivatives(xi, s, k, a, b, s_c, inv_L, with_tau):
+    """d(xi, s, tau)/dsigma and E at one state; NaN derivatives flag an exponent beyond EXP_MAX."""
+    u = s - xi
+    w = 1.0 / (1.0 / (s + s_c) + inv_L)
+    expo = -(k * xi + u * (a + b * u))
+    if expo > EXP_MAX or (with_tau and u > EXP_MAX):
+        return math.nan, w, math.nan, math.nan
+    E = math.exp(expo)
+    dtau = w * math.exp(u) if with_tau else 0.0
+    return w * E, w, dtau, E
+
+
+@njit(cache=True)
+def hermite(y0, y1, m0, m1, t):
+    """Cubic Hermite interpolant on [0, 1] with end slopes m0, m1 (already scaled by the step)."""
+    t2 = t * t
+    t3 = t2 * t
+    return (2 * t3 - 3 * t2 + 1) * y0 + (t3 - 2 * t2 + t) * m0 + (-2 * t3 + 3 * t2) * y1 + (t3 - t2) * m1
+
+
+@njit(cache=True)
+def hermite_crossing(y0, y1, m0, m1, target):
+    """theta in [0, 1] where the increasing Hermite interpolant equals target (safeguarded Newton)."""
+    lo, hi = 0.0, 1.0
+    t = (target - y0) / (y1 - y0) if y1 > y0 else 0.5
+    for _ in range(60):
+        t2 = t * t
+        f = hermite(y0, y1, m0, m1, t) - target
+        if f > 0.0:
+            hi = t
+        else:
+            lo = t
+        df = (6 * t2 - 6 * t) * y0 + (3 * t2 - 4 * t + 1) * m0 + (-6 * t2 + 6 * t) * y1 + (3 * t2 - 2 * t) * m1
+        tn = t - f / df if df > 0.0 else 0.5 * (lo + hi)
+        if not (lo < tn < hi):
+            tn = 0.5 * (lo + hi)
+        if abs(tn - t) <= 1e-15:
+            return tn
+        t = tn
+    return t
+
+
+@njit(cache=True)
+def march(k, a, b, h, s_c, inv_L, max_steps, want_limit, rtol, atol, tau_targets, xi_at, u_at, xi_targets, tau_at):
+    """Integrate one stop point with fixed-step RK4 in sigma.
+
+    Records xi and u = ln psi where tau crosses each of the increasing ``tau_targets`` (into xi_at, u_at)
+    and tau where xi crosses each of the increasing ``xi_targets`` (into tau_at), by cubic Hermite
+    interpolation (fourth order, like the stepper). Stops when the tail test passes (if ``want_limit``) and
+    all targets are recorded. Returns (status, xi_inf, steps); xi_inf is NaN unless the tail was reached.
+    """
+    with_tau = tau_targets.size > 0 or xi_targets.size > 0
+    xi, s, tau = 0.0, 0.0, 0.0
+    dxi, ds, dtau, E = derivatives(xi, s, k, a, b, s_c, inv_L, with_tau)
+    it, ix = 0, 0
+    while it < tau_targets.size and tau_targets[it] <= 0.0:
+        xi_at[it], u_at[it] = 0.0, 0.0
+        it += 1
+    xi_inf = math.nan
+    tail_done = not want_limit
+    n = 0
+    while n < max_steps:
+        # classical RK4 (solvers.tableau.RK4); stage 1 is the previous step's end derivative (FSAL reuse)
+        k2x, k2s, k2t, _ = derivatives(xi + 0.5 * h * dxi, s + 0.5 * h * ds, k, a, b, s_c, inv_L, with_tau)
+        k3x, k3s, k3t, _ = derivatives(xi + 0.5 * h * k2x, s + 0.5 * h * k2s, k, a, b, s_c, inv_L, with_tau)
+        k4x, k4s, k4t, _ = derivatives(xi + h * k3x, s + h * k3s, k, a, b, s_c, inv_L, with_tau)
+        xi1 = xi + h / 6.0 * (dxi + 2.0 * (k2x + k3x) + k4x)
+        s1 = s + h / 6.0 * (ds + 2.0 * (k2s + k3s) + k4s)
+        tau1 = tau + h / 6.0 * (dtau + 2.0 * (k2t + k3t) + k4t)
+        dxi1, ds1, dtau1, E = derivatives(xi1, s1, k, a, b, s_c, inv_L, with_tau)
+        n += 1
+        if not (math.isfinite(xi1) and math.isfinite(dxi1) and math.isfinite(tau1) and math.isfinite(dtau1)):
+            return NONFINITE, math.nan, n
+        while it < tau_targets.size and tau_targets[it] <= tau1:
+            th = hermite_crossing(tau, tau1, h * dtau, h * dtau1, tau_targets[it])
+            xi_at[it] = hermite(xi, xi1, h * dxi, h * dxi1, th)
+            u_at[it] = hermite(s, s1, h * ds, h * ds1, th) - xi_at[it]
+            it += 1
+        while ix < xi_targets.size and xi_targets[ix] <= xi1:
+            th = hermite_crossing(xi, xi1, h * dxi, h * dxi1, xi_targets[ix])
+            tau_at[ix] = hermite(tau, tau1, h * dtau, h * dtau1, th)
+            ix += 1
+        xi, s, tau, dxi, ds, dtau = xi1, s1, tau1, dxi1, ds1, dtau1
+        if not tail_done:
+            u = s - xi
+            if tail_is_accurate(k, a, b, u, E, rtol * xi + atol):
+                xi_inf = xi + tail_slip(k, a, b, u, E)
+                tail_done = True
+        if tail_done and it == tau_targets.size and ix == xi_targets.size:
+            return OK, xi_inf, n
+    return MAX_STEPS, xi_inf, n
+
+
+@njit(cache=True)
+def solve_stop_point(k, a, b, h, s_c, inv_L, max_steps, finite, rtol, atol, tau_targets, xi_at, u_at,
+                     fractions, tau_at_fraction):
+    """One stop point: pass 1 gives xi_inf and the time-resolved samples; if ``fractions`` is not empty a
+    second pass (same steps) finds tau where xi = fraction * xi_inf (e.g. t50, t90).
+    Returns (status, xi_inf, steps of pass 1)."""
+    no_targets = np.empty(0)
+    status, xi_inf, n = march(k, a, b, h, s_c, inv_L, max_steps, finite, rtol, atol, tau_targets, xi_at, u_at,
+                              no_targets, no_targets)
+    tau_at_fraction[:] = math.nan
+    if not finite:
+        return (NO_FINITE_LIMIT if status == OK else status), math.nan, n
+    if fractions.size > 0 and status == OK:
+        status, _, _ = march(k, a, b, h, s_c, inv_L, max_steps, False, rtol, atol, no_targets, no_targets,
+                             no_targets, fractions * xi_inf, tau_at_fraction)
+    return status, xi_inf, n

@@ -1,0 +1,128 @@
+"""Plan: what to model and how to step, decided once per scene ("model only what the scene requires").
+
+For the stop scene the model is the quasi-static one (the paper's), the state is xi alone (plus the
+quadrature tau only when a time-resolved observable is asked for), the stepper is fixed-step RK4 in the
+scaled log time sigma of :mod:`sweep.models.stop`, and the step count is chosen per point:
+
+* the time map is scaled to the point: s_c = 1/(1 + (chi + |mu1|)/A) (stiff start) and L = 1/(|mu1|/A + sqrt(m2/A) + 0.1)
+  (decay rate of the tail), so that the RK4 error constant is nearly the same at every point;
+* one step h in sigma then meets ``rtol`` everywhere: h = min(H_MAX, (rtol / (SAFETY * C_RK4))^(1/4)),
+  with C_RK4 the largest error constant err/h^4 measured on a calibration set spanning chi/A 1e-2..1e3,
+  mu1/A -3..3, m2/A 0..3 (measured max 1.75e-3; tests/test_accuracy.py checks the rule against an
+  independent scipy reference);
+* each point stops when its closed-form tail is accurate to 0.1 * (rtol xi + atol), so its number of steps
+  (sigma_end / h) follows from its own dynamics: a few tens on most of the grid, thousands in the costly
+  corner (small chi/A with mu1 < 0 and small m2, where the slider creeps along a slow manifold).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import physics
+from .scene import Scene
+
+__all__ = ["Plan", "make_plan", "STEP_RULE"]
+
+C_RK4 = 2.0e-3
+"""Largest RK4 error constant |err/xi_inf| / h^4 over the calibration set."""
+SAFETY = 3.0
+H_MAX = 0.7
+"""Upper bound on the step in sigma (keeps RK4 stable along the slow manifold: h L |mu1 + 2 m2 u|/A < 1)."""
+L_FLOOR = 0.1
+STEP_RULE = (
+    f"RK4, fixed step h in sigma (ds/dsigma = 1/(1/(s + s_c) + 1/L), s = int dtau/psi); "
+    f"h = min({H_MAX}, (rtol/({SAFETY} * {C_RK4}))**0.25); per point s_c = 1/(1 + (chi + |mu1|)/A), "
+    f"L = 1/(|mu1|/A + sqrt(|m2|/A) + {L_FLOOR}); stop when the closed-form tail is accurate to "
+    f"0.1*(rtol*xi + atol); steps per point = sigma_end/h"
+)
+
+
+def rk4_step_for(rtol: float) -> float:
+    """Step in sigma that meets ``rtol`` on xi_inf at every point (the rule of :data:`STEP_RULE`)."""
+    return min(H_MAX, (rtol / (SAFETY * C_RK4)) ** 0.25)
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """The resolved plan of a scene; per-point arrays are flat in C order over (K_over_M, V)."""
+
+    model: str
+    stepper: str
+    step: float
+    step_source: str
+    rule: str
+    max_steps: int
+    chi: np.ndarray
+    mu1: np.ndarray
+    k: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    s_c: np.ndarray
+    inv_L: np.ndarray
+    finite: np.ndarray
+    tau_samples: np.ndarray
+
+    @property
+    def n_points(self) -> int:
+        return self.k.size
+
+    def describe(self) -> dict[str, str]:
+        """Human-readable summary, also stored in the Dataset attrs."""
+        return {
+            "model": self.model,
+            "state": "xi (u = s - xi)" + (" + tau quadrature" if self.needs_tau else ""),
+            "stepper": self.stepper,
+            "step": f"{self.step!r} in sigma ({self.step_source})",
+            "step_rule": self.rule,
+            "max_steps": str(self.max_steps),
+            "horizon": "per point: until the closed-form tail is accurate (and all requested times are passed)",
+            "points": str(self.n_points),
+            "points_without_finite_limit": str(int(np.count_nonzero(~self.finite))),
+        }
+
+    needs_tau: bool = False
+
+    def text(self) -> str:
+        return "\n".join(f"{k:>28}: {v}" for k, v in self.describe().items())
+
+    def hash(self) -> str:
+        """Digest of everything that determines the numbers (compared on resume)."""
+        h = hashlib.sha256()
+        h.update(repr(sorted(self.describe().items())).encode())
+        for arr in (self.k, self.a, self.b, self.s_c, self.inv_L, self.finite, self.tau_samples):
+            h.update(np.ascontiguousarray(arr).tobytes())
+        return h.hexdigest()[:16]
+
+
+def make_plan(scene: Scene) -> Plan:
+    """Decide model, state, stepper and per-point step parameters for ``scene``."""
+    p = scene.params
+    chi_axis = physics.reduced_stiffness(scene.K_over_M, p.D0, p.g)
+    mu1_axis = physics.mu1(scene.V, p.m1, p.m2, p.V0)
+    chi, mu1 = (x.ravel() for x in np.meshgrid(chi_axis, mu1_axis, indexing="ij"))
+    k, a, b = chi / p.A, mu1 / p.A, np.full(chi.size, p.m2 / p.A)
+    # PHYSICS.md 6: finite relaxed slip iff m2 > 0, or m2 = 0 and mu1 > 0
+    finite = (b > 0) | ((b == 0) & (a > 0))
+    step, source = (scene.step, "override") if scene.step is not None else (rk4_step_for(scene.rtol), "rule")
+    return Plan(
+        model="quasistatic",
+        stepper="rk4",
+        step=step,
+        step_source=source,
+        rule=STEP_RULE,
+        max_steps=int(scene.max_steps),
+        chi=chi,
+        mu1=mu1,
+        k=k,
+        a=a,
+        b=b,
+        s_c=1.0 / (1.0 + k + np.abs(a)),
+        inv_L=np.abs(a) + np.sqrt(np.abs(b)) + L_FLOOR,
+        finite=finite,
+        tau_samples=scene.tau_samples,
+        needs_tau=bool(set(scene.observables) & {"trajectory", "slip_at", "t50", "t90"}),
+    )

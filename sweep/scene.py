@@ -1,0 +1,263 @@
+"""Scene: a frozen, validated description of one study (DESIGN.md), built from Python or from TOML.
+
+Everything is checked here, before any compilation or computation, and every error names its field and
+the allowed range. SI units throughout: K_over_M [s-2], V [m s-1], times [s].
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import InputError
+from .params import FrictionParams, require_finite, require_positive
+from .presets import presets
+
+__all__ = ["Scene", "OBSERVABLES", "PROTOCOLS", "DEFAULT_ATOL", "default_scene", "load_scene"]
+
+PROTOCOLS = ("stop",)
+OBSERVABLES = ("xi_inf", "trajectory", "slip_at", "t50", "t90")
+DEFAULT_ATOL = {"xi_inf": 1e-12, "trajectory": 1e-12, "slip_at": 1e-12, "t50": 0.0, "t90": 0.0}
+"""Absolute floors per observable, in the observable's reduced unit (xi for slips, tau for times)."""
+RTOL_RANGE = (1e-10, 1e-2)
+TAU_MAX = 1e250
+"""Largest reduced time that can be asked for (float64 carries tau up to ~1e308)."""
+
+
+def _axis(name: str, values: Any) -> np.ndarray:
+    """Validate one grid axis: 1-D, non-empty, finite, > 0, strictly increasing."""
+    try:
+        arr = np.array(values, dtype=float).reshape(-1) if np.ndim(values) <= 1 else None
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a 1-D sequence of numbers, got {values!r}") from None
+    if arr is None:
+        raise InputError(f"{name} must be 1-D, got an array of shape {np.shape(values)}")
+    if arr.size == 0:
+        raise InputError(f"{name} is empty: give at least one value")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{name} contains NaN or inf: all values must be finite")
+    if np.any(arr <= 0):
+        raise InputError(f"{name} must be > 0 (allowed range: 0 < {name} < inf), got min {arr.min()!r}")
+    if np.any(np.diff(arr) <= 0):
+        raise InputError(f"{name} must be strictly increasing (sorted, no duplicates)")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """What to study: protocol, friction parameters, the (K/M, V) grid, observables and accuracy.
+
+    Parameters
+    ----------
+    protocol : "stop"
+        The paper's experiment: steady sliding at V, drive frozen at t = 0 (PHYSICS.md 3a).
+    params : FrictionParams
+        Friction law; see :data:`sweep.presets`.
+    K_over_M : array [s-2]
+        Spring stiffness over slider mass; strictly increasing, > 0.
+    V : array [m s-1]
+        Driving velocity before the stop; strictly increasing, > 0.
+    rtol : float
+        Relative accuracy of every observable w.r.t. the exact solution of the model, 1e-10 <= rtol <= 1e-2.
+    atol : mapping, optional
+        Absolute floors per observable (reduced units), overriding :data:`DEFAULT_ATOL`.
+    observables : tuple of str
+        Subset of ``OBSERVABLES``. xi_inf (with slip_inf, stress_relaxation, stable, status) is always
+        computed; "trajectory" adds xi(tau), psi(tau); "slip_at" the slip at ``t_obs``; "t50"/"t90" the times
+        to 50 %/90 % of the relaxed slip.
+    trajectory_tau : (min, max, num)
+        Log-spaced reduced times of the trajectory samples, 0 < min < max <= 1e250, num >= 2.
+    t_obs : sequence of float [s]
+        Times after the stop for "slip_at" (>= 0, strictly increasing).
+    step : float, optional
+        Override of the planned RK4 step in the scaled log time sigma (0 < step <= 2); default from rtol.
+    max_steps : int
+        Step budget per point; a point that needs more gets status max_steps.
+    """
+
+    protocol: str
+    params: FrictionParams
+    K_over_M: np.ndarray
+    V: np.ndarray
+    rtol: float = 1e-6
+    atol: Mapping[str, float] = field(default_factory=dict)
+    observables: tuple[str, ...] = ("xi_inf",)
+    trajectory_tau: tuple[float, float, int] = (1e-3, 1e6, 61)
+    t_obs: tuple[float, ...] = ()
+    step: float | None = None
+    max_steps: int = 1_000_000
+
+    def __post_init__(self) -> None:
+        set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen dataclass)
+        if self.protocol not in PROTOCOLS:
+            raise InputError(f"protocol must be one of {PROTOCOLS}, got {self.protocol!r}")
+        if not isinstance(self.params, FrictionParams):
+            raise InputError(f"params must be a sweep.FrictionParams, got {type(self.params).__name__}")
+        set_("K_over_M", _axis("K_over_M", self.K_over_M))
+        set_("V", _axis("V", self.V))
+        rtol = require_positive("rtol", self.rtol)
+        if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
+            raise InputError(f"rtol must be in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}], got {rtol!r}")
+        set_("rtol", rtol)
+        obs = (self.observables,) if isinstance(self.observables, str) else tuple(self.observables)
+        unknown = [o for o in obs if o not in OBSERVABLES]
+        if unknown:
+            raise InputError(f"unknown observable(s) {unknown} in observables; allowed: {list(OBSERVABLES)}")
+        set_("observables", tuple(o for o in OBSERVABLES if o in obs or o == "xi_inf"))
+        atol = dict(self.atol)
+        for name, value in atol.items():
+            if name not in OBSERVABLES:
+                raise InputError(f"atol has unknown observable {name!r}; allowed: {list(OBSERVABLES)}")
+            if require_finite(f"atol[{name!r}]", value) < 0:
+                raise InputError(f"atol[{name!r}] must be >= 0 (allowed range: 0 <= atol < inf), got {value!r}")
+        set_("atol", {**DEFAULT_ATOL, **{k: float(v) for k, v in atol.items()}})
+        self._check_trajectory_tau()
+        t_obs = _times("t_obs", self.t_obs)
+        if "slip_at" in self.observables and t_obs.size == 0:
+            raise InputError("observable 'slip_at' needs t_obs: the times after the stop [s], e.g. [0.1, 1, 10]")
+        set_("t_obs", tuple(t_obs.tolist()))
+        if self.step is not None:
+            step = require_positive("step", self.step)
+            if step > 2.0:
+                raise InputError(f"step must be in (0, 2] (RK4 stability in sigma), got {step!r}")
+            set_("step", step)
+        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, (int, np.integer)) or self.max_steps < 1:
+            raise InputError(f"max_steps must be an integer >= 1, got {self.max_steps!r}")
+
+    def _check_trajectory_tau(self) -> None:
+        try:
+            lo, hi, num = self.trajectory_tau
+        except (TypeError, ValueError):
+            raise InputError("trajectory_tau must be (min, max, num)") from None
+        lo, hi = require_positive("trajectory_tau min", lo), require_positive("trajectory_tau max", hi)
+        if not lo < hi <= TAU_MAX:
+            raise InputError(f"trajectory_tau needs 0 < min < max <= {TAU_MAX:g}, got ({lo!r}, {hi!r})")
+        if isinstance(num, bool) or int(num) != num or num < 2:
+            raise InputError(f"trajectory_tau num must be an integer >= 2, got {num!r}")
+        object.__setattr__(self, "trajectory_tau", (lo, hi, int(num)))
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self.K_over_M.size, self.V.size)
+
+    @property
+    def n_points(self) -> int:
+        return self.K_over_M.size * self.V.size
+
+    @property
+    def tau_samples(self) -> np.ndarray:
+        """Reduced times of the trajectory samples (empty unless "trajectory" is observed)."""
+        if "trajectory" not in self.observables:
+            return np.empty(0)
+        lo, hi, num = self.trajectory_tau
+        return np.logspace(math.log10(lo), math.log10(hi), num)
+
+    def to_toml(self) -> str:
+        """Canonical TOML: resolved parameters and explicit axis values (round-trips through load_scene)."""
+        lines = [f'protocol = "{self.protocol}"', f"rtol = {self.rtol!r}"]
+        lines.append("observables = [" + ", ".join(f'"{o}"' for o in self.observables) + "]")
+        lines.append(f"trajectory_tau = [{self.trajectory_tau[0]!r}, {self.trajectory_tau[1]!r}, "
+                     f"{self.trajectory_tau[2]}]")
+        lines.append("t_obs = [" + ", ".join(repr(t) for t in self.t_obs) + "]")
+        if self.step is not None:
+            lines.append(f"step = {self.step!r}")
+        lines.append(f"max_steps = {int(self.max_steps)}")
+        lines.append("[atol]")
+        lines += [f"{k} = {v!r}" for k, v in sorted(self.atol.items())]
+        lines.append("[params]")
+        lines += [f"{k} = {v!r}" for k, v in self.params.as_dict().items()]
+        for name in ("K_over_M", "V"):
+            lines.append(f"[{name}]")
+            lines.append("values = [" + ", ".join(repr(float(x)) for x in getattr(self, name)) + "]")
+        return "\n".join(lines) + "\n"
+
+
+def _times(name: str, values: Sequence[float]) -> np.ndarray:
+    arr = np.array(values, dtype=float).reshape(-1)
+    if arr.size and (not np.all(np.isfinite(arr)) or np.any(arr < 0) or np.any(np.diff(arr) <= 0)):
+        raise InputError(f"{name} must be finite, >= 0 and strictly increasing [s], got {list(values)!r}")
+    return arr
+
+
+def _axis_from_toml(name: str, spec: Any) -> np.ndarray:
+    if not isinstance(spec, Mapping):
+        raise InputError(f"[{name}] must be a table with start/stop/num[/spacing] or values")
+    extra = set(spec) - {"start", "stop", "num", "spacing", "values"}
+    if extra:
+        raise InputError(f"[{name}] has unknown key(s) {sorted(extra)}; allowed: start, stop, num, spacing, values")
+    if "values" in spec:
+        if set(spec) - {"values"}:
+            raise InputError(f"[{name}]: give either values or start/stop/num, not both")
+        return _axis(name, spec["values"])
+    missing = {"start", "stop", "num"} - set(spec)
+    if missing:
+        raise InputError(f"[{name}] is missing {sorted(missing)}")
+    start, stop = require_positive(f"{name}.start", spec["start"]), require_positive(f"{name}.stop", spec["stop"])
+    num = spec["num"]
+    if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+        raise InputError(f"{name}.num must be an integer >= 1, got {num!r}")
+    spacing = spec.get("spacing", "log")
+    if spacing == "log":
+        return _axis(name, np.logspace(math.log10(start), math.log10(stop), num))
+    if spacing == "linear":
+        return _axis(name, np.linspace(start, stop, num))
+    raise InputError(f'{name}.spacing must be "log" or "linear", got {spacing!r}')
+
+
+SCENE_KEYS = {f.name for f in fields(Scene)} | {"preset"}
+
+
+def scene_from_mapping(cfg: Mapping[str, Any]) -> Scene:
+    """Build a Scene from a parsed TOML mapping (same fields as :class:`Scene`, plus ``preset``)."""
+    unknown = set(cfg) - SCENE_KEYS
+    if unknown:
+        raise InputError(f"unknown key(s) {sorted(unknown)} in scene; allowed: {sorted(SCENE_KEYS)}")
+    for required in ("K_over_M", "V"):
+        if required not in cfg:
+            raise InputError(f"scene is missing the [{required}] axis table")
+    if "preset" in cfg:
+        if cfg["preset"] not in presets:
+            raise InputError(f"preset must be one of {sorted(presets)}, got {cfg['preset']!r}")
+        base = presets[cfg["preset"]]
+        params = base.replace(**cfg.get("params", {}))
+    elif "params" in cfg:
+        try:
+            params = FrictionParams(**cfg["params"])
+        except TypeError as exc:
+            raise InputError(f"[params]: {exc} (fields: A, m1, m2, D0, V0, m0, g)") from None
+    else:
+        raise InputError("scene needs preset = \"sample1\"|\"sample2\" and/or a [params] table")
+    kwargs = {k: v for k, v in cfg.items() if k not in ("preset", "params", "K_over_M", "V")}
+    if "trajectory_tau" in kwargs and isinstance(kwargs["trajectory_tau"], Mapping):
+        t = kwargs["trajectory_tau"]
+        kwargs["trajectory_tau"] = (t.get("min"), t.get("max"), t.get("num"))
+    return Scene(params=params, K_over_M=_axis_from_toml("K_over_M", cfg["K_over_M"]),
+                 V=_axis_from_toml("V", cfg["V"]), **{"protocol": "stop", **kwargs})
+
+
+def load_scene(source: str | Path) -> Scene:
+    """Read a Scene from a TOML file path (or a TOML string if it contains a newline)."""
+    text = str(source)
+    if "\n" not in text:
+        path = Path(text)
+        if not path.is_file():
+            raise InputError(f"scene file {text!r} does not exist")
+        text = path.read_text()
+    try:
+        cfg = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"malformed TOML in scene: {exc}") from None
+    return scene_from_mapping(cfg)
+
+
+def default_scene() -> Scene:
+    """The built-in scene of ``sweep run``: preset sample2, K/M 1e3..1e6 s^-2 (200), V 0.1..100 um/s (100)."""
+    return Scene(protocol="stop", params=presets["sample2"], K_over_M=np.logspace(3, 6, 200),
+                 V=np.logspace(-7, -4, 100), rtol=1e-6)

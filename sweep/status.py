@@ -1,0 +1,37 @@
+"""Per-point status codes: one fixed, append-only integer enum shared by every kernel and file.
+
+A kernel never raises; each point gets one of these codes and the sweep goes on. Physical labels are not
+statuses: a stop computed from unstable steady sliding is flagged by the ``stable`` variable, not here.
+Never renumber or remove a code (files on disk depend on the values); append new ones at the end.
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+import numpy as np
+
+__all__ = ["Status", "flag_attrs"]
+
+
+class Status(IntEnum):
+    OK = 0
+    """Converged within the plan's accuracy."""
+    MAX_STEPS = 1
+    """The step budget ran out before the stopping criterion (or the requested times) was reached."""
+    STEP_UNDERFLOW = 2
+    """An adaptive stepper's step fell below its floor (reserved for adaptive steppers)."""
+    NONFINITE = 3
+    """A state or exponent left the finite range (caught before the overflow happened)."""
+    NO_FINITE_LIMIT = 4
+    """The model has no finite relaxed slip here (m2 < 0, or m2 = 0 with mu1 <= 0; PHYSICS.md 6):
+    xi_inf, slip_inf, stress_relaxation, t50 and t90 are NaN by definition; finite-time observables
+    (slip_at, trajectory) are still computed."""
+
+
+def flag_attrs() -> dict[str, object]:
+    """CF ``flag_values``/``flag_meanings`` attributes describing :class:`Status`."""
+    return {
+        "flag_values": np.array([s.value for s in Status], dtype=np.int8),
+        "flag_meanings": " ".join(s.name.lower() for s in Status),
+    }

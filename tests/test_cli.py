@@ -1,0 +1,69 @@
+"""The command line: run (config, dry run, default output names), plot, info, and errors."""
+
+import subprocess
+import sys
+
+import pytest
+
+import sweep
+
+CONFIG = """
+protocol = "stop"
+preset = "sample2"
+rtol = 1e-5
+observables = ["xi_inf", "t50"]
+[params]
+m2 = 0.003
+[K_over_M]
+start = 1e3
+stop = 1e6
+num = 12
+spacing = "log"
+[V]
+values = [1e-7, 1e-6, 1e-5, 1e-4]
+"""
+
+
+def sweep_cli(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "sweep.cli", *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=600)
+
+
+@pytest.fixture
+def config(tmp_path):
+    path = tmp_path / "scene.toml"
+    path.write_text(CONFIG)
+    return path
+
+
+def test_run_plot_info(config, tmp_path):
+    out = tmp_path / "res" / "out.nc"
+    proc = sweep_cli("run", str(config), "-o", str(out), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert out.exists() and out.with_suffix(".png").stat().st_size > 10_000
+    assert "wrote" in proc.stdout and " s" in proc.stdout
+    ds = sweep.open(out)
+    assert ds.sizes == {"K_over_M": 12, "V": 4}
+    assert ds.attrs["scene"].count("m2 = 0.003") == 1 and "t50" in ds
+    assert "sweep run" in ds.attrs["history"]
+    png = tmp_path / "map.png"
+    proc = sweep_cli("plot", str(out), "-o", str(png), cwd=tmp_path)
+    assert proc.returncode == 0 and png.stat().st_size > 10_000, proc.stderr
+    proc = sweep_cli("info", str(out), cwd=tmp_path)
+    assert proc.returncode == 0 and "xi_inf" in proc.stdout and "status: ok 48" in proc.stdout, proc.stdout
+
+
+def test_dry_run_prints_the_plan_and_writes_nothing(config, tmp_path):
+    proc = sweep_cli("run", str(config), "--dry-run", "-o", str(tmp_path / "x.nc"), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    for word in ("model", "stepper", "step", "horizon", "points", "estimated time"):
+        assert word in proc.stdout
+    assert not (tmp_path / "x.nc").exists()
+
+
+def test_bad_config_is_a_clear_error(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(CONFIG.replace("rtol = 1e-5", "rtol = 5"))
+    proc = sweep_cli("run", str(bad), "-o", str(tmp_path / "x.nc"), cwd=tmp_path)
+    assert proc.returncode == 2 and "rtol" in proc.stderr and "Traceback" not in proc.stderr
+    assert not (tmp_path / "x.nc").exists()

@@ -1,0 +1,27 @@
+"""Convergence order of the RK4 kernel, measured against the exact m2 = 0 relaxed slip."""
+
+import math
+
+import numpy as np
+
+import sweep
+
+A, M1, D0, G = 0.007, 0.0125, 1e-6, 9.81
+
+
+def exact_m2zero(chi: float) -> float:
+    # independent of the package: separable form of the stop equation in s = int dtau/psi (PHYSICS.md 3a)
+    return A * math.log(chi / M1) / (chi - M1)
+
+
+def test_rk4_order_is_four_on_a_smooth_case():
+    params = sweep.FrictionParams(A=A, m1=M1, m2=0.0, D0=D0)
+    chi = 0.02
+    steps = np.array([0.4, 0.2, 0.1, 0.05])
+    errors = []
+    for h in steps:
+        pt = sweep.solve_point(params, K_over_M=chi * G / D0, V=1e-6, rtol=1e-10, observables=("xi_inf",), step=h)
+        assert int(pt["status"]) == sweep.Status.OK
+        errors.append(abs(float(pt["xi_inf"]) / exact_m2zero(chi) - 1.0))
+    slope = np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    assert 3.7 <= slope <= 4.3, (slope, errors)
