@@ -221,11 +221,11 @@ HOPF_POINTS = [  # (mu1, A, gamma)
 def test_hopf_line_matches_jacobian(mu1, A, gamma):
     chi_fd = bisect_hopf(mu1, A, gamma)
     if gamma == 0:
-        assert ph.chi_c_quasistatic(mu1) == pytest.approx(chi_fd, rel=1e-6)
+        assert ph.chi_c_quasistatic(mu1) == pytest.approx(chi_fd, rel=1e-8)
         # the crossing pair is +-i omega_c
         lam = fd_eigenvalues(chi_fd, mu1, A, gamma)
-        assert np.abs(lam.imag).max() == pytest.approx(ph.omega_c(mu1, A), rel=1e-6)
-    assert ph.chi_c_inertial(mu1, A, gamma) == pytest.approx(chi_fd, rel=1e-6)
+        assert np.abs(lam.imag).max() == pytest.approx(ph.omega_c(mu1, A), rel=1e-8)
+    assert ph.chi_c_inertial(mu1, A, gamma) == pytest.approx(chi_fd, rel=1e-8)
     chi_c = ph.chi_c_inertial(mu1, A, gamma)
     assert ph.growth_rate_linear(chi_c, mu1, A, gamma) == pytest.approx(0.0, abs=1e-10)
     assert not ph.stable_sliding(0.999 * chi_c, mu1, A, gamma)

@@ -1,0 +1,60 @@
+"""Every point ends with a status that says why; never NaN with status ok, never an exception."""
+
+import math
+
+import numpy as np
+import pytest
+
+import sweep
+from sweep.models.stop import march
+
+P = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0033, D0=1e-6)
+
+
+@pytest.mark.parametrize("changes, V", [
+    ({"m2": -0.001}, 1e-6),              # m2 < 0: never converges (PHYSICS.md 6)
+    ({"m2": -0.001, "m1": -0.004}, 1e-6),
+    ({"m2": 0.0, "m1": 0.0}, 1e-6),      # m2 = 0 needs m1 > 0
+    ({"m2": 0.0, "m1": -0.003}, 1e-5),
+])
+def test_no_finite_limit_gets_a_status_not_a_number(changes, V):
+    pt = sweep.solve_point(P.replace(**changes), K_over_M=1e4, V=V, observables=("xi_inf", "slip_at", "t50"),
+                           t_obs=(0.0, 1.0, 100.0, 1e4))
+    assert int(pt["status"]) == sweep.Status.NO_FINITE_LIMIT
+    assert math.isnan(float(pt["xi_inf"])) and math.isnan(float(pt["t50"]))
+    assert math.isnan(float(pt["slip_inf"])) and math.isnan(float(pt["stress_relaxation"]))
+    slip = pt["slip_at"].values  # finite-time observables are still computed
+    assert slip[0] == 0.0 and np.all(np.diff(slip) > 0) and np.all(np.isfinite(slip))
+
+
+def test_no_finite_limit_costs_nothing_when_only_xi_inf_is_asked():
+    pt = sweep.solve_point(P.replace(m2=-0.001), K_over_M=1e4, V=1e-6, observables=("xi_inf",))
+    assert int(pt["status"]) == sweep.Status.NO_FINITE_LIMIT and int(pt["steps"]) == 0
+
+
+def test_step_budget_exhausted_is_max_steps():
+    pt = sweep.solve_point(P, K_over_M=1e3, V=1e-4, observables=("xi_inf",), max_steps=50)
+    assert int(pt["status"]) == sweep.Status.MAX_STEPS and math.isnan(float(pt["xi_inf"]))
+
+
+def test_blow_up_is_caught_before_overflow():
+    """A deliberately unstable step (time map not scaled to the point, k=0.125, a=-15.5) drives the exponent of
+    E past EXP_MAX; the kernel flags the point nonfinite instead of computing inf or NaN."""
+    none = np.empty(0)
+    status, xi_inf, n = march(0.125, -15.46, 1.385e-4, 2.0, 1.0, 1e-3, 1000, True, 1e-6, 0.0, none, none, none, none,
+                              none)
+    assert status == sweep.Status.NONFINITE and math.isnan(xi_inf) and n < 1000
+
+
+def test_mixed_grid_has_only_ok_or_flagged_points():
+    params = P.replace(m2=-0.0005)
+    scene = sweep.Scene(protocol="stop", params=params, K_over_M=np.logspace(2, 7, 6), V=np.logspace(-8, -3, 5))
+    ds = sweep.run_sweep(scene)
+    assert np.all(ds["status"] == sweep.Status.NO_FINITE_LIMIT)
+    scene = sweep.Scene(protocol="stop", params=P, K_over_M=np.logspace(2, 7, 6), V=np.logspace(-8, -3, 5),
+                        max_steps=200)
+    ds = sweep.run_sweep(scene)
+    ok = ds["status"].values == sweep.Status.OK
+    assert ok.any() and (~ok).any()
+    assert np.all(np.isfinite(ds["xi_inf"].values[ok]))
+    assert np.all(ds["status"].values[~ok] == sweep.Status.MAX_STEPS)
