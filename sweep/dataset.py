@@ -98,7 +98,7 @@ def build_dataset(scene: Scene, plan: Plan, raw: RawResult, history: str = "") -
         "title": "Relaxation landscape of the Baumberger-Gauthier spring-block model (stop scene)",
         "institution": "sweep users",
         "source": versions(),
-        "history": f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')}: {history or 'sweep'}",
+        "history": f"{_dt.datetime.now(_dt.UTC).isoformat(timespec='seconds')}: {history or 'sweep'}",
         "references": REFERENCES,
         "comment": (f"status codes: {', '.join(f'{s.value}={s.name.lower()}' for s in Status)}; points on "
                     "unstable steady sliding (stable = 0) are computed and flagged by stable, not by status"),

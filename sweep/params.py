@@ -69,7 +69,7 @@ class FrictionParams:
         for name in ("m1", "m2", "m0"):
             object.__setattr__(self, name, require_finite(name, getattr(self, name)))
 
-    def replace(self, **changes: float) -> "FrictionParams":
+    def replace(self, **changes: float) -> FrictionParams:
         """A copy with some fields changed (validated again)."""
         unknown = set(changes) - set(asdict(self))
         if unknown:

@@ -4,8 +4,8 @@ For the stop scene the model is the quasi-static one (the paper's), the state is
 quadrature tau only when a time-resolved observable is asked for), the stepper is fixed-step RK4 in the
 scaled log time sigma of :mod:`sweep.models.stop`, and the step count is chosen per point:
 
-* the time map is scaled to the point: s_c = 1/(1 + (chi + |mu1|)/A) (stiff start) and L = 1/(|mu1|/A + sqrt(m2/A) + 0.1)
-  (decay rate of the tail), so that the RK4 error constant is nearly the same at every point;
+* the time map is scaled to the point: s_c = 1/(1 + (chi + |mu1|)/A) (stiff start) and
+  L = 1/(|mu1|/A + sqrt(m2/A) + 0.1) (decay rate of the tail), so that the RK4 error constant is nearly the same at every point;
 * one step h in sigma then meets ``rtol`` everywhere: h = min(H_MAX, (rtol / (SAFETY * C_RK4))^(1/4)),
   with C_RK4 the largest error constant err/h^4 measured on a calibration set spanning chi/A 1e-2..1e3,
   mu1/A -3..3, m2/A 0..3 (measured max 1.75e-3; tests/test_accuracy.py checks the rule against an
@@ -65,6 +65,7 @@ class Plan:
     inv_L: np.ndarray
     finite: np.ndarray
     tau_samples: np.ndarray
+    needs_tau: bool
 
     @property
     def n_points(self) -> int:
@@ -83,8 +84,6 @@ class Plan:
             "points": str(self.n_points),
             "points_without_finite_limit": str(int(np.count_nonzero(~self.finite))),
         }
-
-    needs_tau: bool = False
 
     def text(self) -> str:
         return "\n".join(f"{k:>28}: {v}" for k, v in self.describe().items())

@@ -24,7 +24,7 @@ class Progress:
         self.t0 = time.perf_counter()
         self.shown = False
 
-    def __enter__(self) -> "Progress":
+    def __enter__(self) -> Progress:
         return self
 
     def update(self, n: int) -> None:

@@ -13,8 +13,8 @@ quadrature carried only when a time-resolved observable is asked for. In s the c
 form (psi << tau, small chi/A with mu1 < 0; PHYSICS.md 6) is not stiff: its stiffness rate is |mu1 + 2 m2 u|/A.
 
 Fixed-step RK4 runs in a scaled log time sigma, ds/dsigma = w(s) = 1/(1/(s + s_c) + 1/L): logarithmic early
-(resolving the stiff start, rate (chi - mu1)/A, with s_c = 1/(1 + (chi + |mu1|)/A)) and linear with step L*h late (resolving the
-decay of E, rate (mu1 + 2 m2 u)/A, with L = 1/(|mu1|/A + sqrt(m2/A) + 0.1)). s is carried as a state of
+(resolving the stiff start, rate (chi - mu1)/A, with s_c = 1/(1 + (chi + |mu1|)/A)) and linear with step L*h
+late (resolving the decay of E, rate (mu1 + 2 m2 u)/A, with L = 1/(|mu1|/A + sqrt(m2/A) + 0.1)). s is a state of
 the autonomous system (xi, s[, tau]) so no transcendental call is spent on the map.
 
 The integration stops once the remaining slip can be written in closed form (:func:`tail_slip`): from
@@ -95,7 +95,7 @@ def tail_is_accurate(k: float, a: float, b: float, u: float, E: float, tol: floa
 def derivatives(xi, s, k, a, b, s_c, inv_L, with_tau):
     """d(xi, s, tau)/dsigma and E at one state; NaN derivatives flag an exponent beyond EXP_MAX."""
     u = s - xi
-    w = 1.0 / (1.0 / (s + s_c) + inv_L)
+    w = (s + s_c) / (1.0 + inv_L * (s + s_c))  # = 1/(1/(s + s_c) + 1/L), one division
     expo = -(k * xi + u * (a + b * u))
     if expo > EXP_MAX or (with_tau and u > EXP_MAX):
         return math.nan, w, math.nan, math.nan
