@@ -5,7 +5,8 @@ quadrature tau only when a time-resolved observable is asked for), the stepper i
 scaled log time sigma of :mod:`sweep.models.stop`, and the step count is chosen per point:
 
 * the time map is scaled to the point: s_c = 1/(1 + (chi + |mu1|)/A) (stiff start) and
-  L = 1/(|mu1|/A + sqrt(m2/A) + 0.1) (decay rate of the tail), so that the RK4 error constant is nearly the same at every point;
+  L = 1/(|mu1|/A + sqrt(m2/A) + 0.1) (decay rate of the tail), so that the RK4 error constant is nearly the same
+  at every point;
 * one step h in sigma then meets ``rtol`` everywhere: h = min(H_MAX, (rtol / (SAFETY * C_RK4))^(1/4)),
   with C_RK4 the largest error constant err/h^4 measured on a calibration set spanning chi/A 1e-2..1e3,
   mu1/A -3..3, m2/A 0..3 (measured max 1.75e-3; tests/test_accuracy.py checks the rule against an
