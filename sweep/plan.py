@@ -42,6 +42,11 @@ STEP_RULE = (
 )
 
 
+def time_map(k, a, b):
+    """Per-point scales of the time map: (s_c, 1/L) from k = chi/A, a = mu1/A, b = m2/A (see module doc)."""
+    return 1.0 / (1.0 + k + np.abs(a)), np.abs(a) + np.sqrt(np.abs(b)) + L_FLOOR
+
+
 def rk4_step_for(rtol: float) -> float:
     """Step in sigma that meets ``rtol`` on xi_inf at every point (the rule of :data:`STEP_RULE`)."""
     return min(H_MAX, (rtol / (SAFETY * C_RK4)) ** 0.25)
@@ -107,6 +112,7 @@ def make_plan(scene: Scene) -> Plan:
     k, a, b = chi / p.A, mu1 / p.A, np.full(chi.size, p.m2 / p.A)
     # PHYSICS.md 6: finite relaxed slip iff m2 > 0, or m2 = 0 and mu1 > 0
     finite = (b > 0) | ((b == 0) & (a > 0))
+    s_c, inv_L = time_map(k, a, b)
     step, source = (scene.step, "override") if scene.step is not None else (rk4_step_for(scene.rtol), "rule")
     return Plan(
         model="quasistatic",
@@ -120,8 +126,8 @@ def make_plan(scene: Scene) -> Plan:
         k=k,
         a=a,
         b=b,
-        s_c=1.0 / (1.0 + k + np.abs(a)),
-        inv_L=np.abs(a) + np.sqrt(np.abs(b)) + L_FLOOR,
+        s_c=s_c,
+        inv_L=inv_L,
         finite=finite,
         tau_samples=scene.tau_samples,
         needs_tau=bool(set(scene.observables) & {"trajectory", "slip_at", "t50", "t90"}),
