@@ -14,16 +14,15 @@ from pathlib import Path
 import numpy as np
 
 from sweep.models.stop import solve_stop_point
-from sweep.plan import C_RK4, H_MAX, SAFETY, time_map
+from sweep.plan import C_RK4, H_MAX, SAFETY, time_scale
 
 NONE = np.empty(0)
 
 
 def xi_inf(k, a, b, h, rtol):
     finite = b > 0 or (b == 0 and a > 0)
-    s_c, inv_L = time_map(k, a, b)
-    status, x, n = solve_stop_point(k, a, b, h, s_c, inv_L, 10**8, finite, rtol, 1e-14, NONE, NONE, NONE, NONE,
-                                    np.empty(2))
+    status, x, n = solve_stop_point(k, a, b, h, time_scale(k, a), 10**8, finite, rtol, 1e-14, NONE, NONE, NONE,
+                                    NONE, np.empty(2))
     return x if status == 0 else math.nan, n
 
 

@@ -1,8 +1,10 @@
 """Engine: run a plan's points through the compiled kernel in chunks, in parallel, with progress.
 
 The numba layer (``stop_batch``) knows nothing of xarray: it fills preallocated flat arrays, one point
-written once by one thread. Chunks are strided over the flat grid (chunk j takes points j, j + n_chunks, ...)
-so that every chunk mixes cheap and costly points; inside a chunk prange hands out small blocks.
+written once by one thread. The costly points cluster in one corner of the grid (small K/M with mu1 < 0) and
+numba's prange splits a batch into equal contiguous shares, so the points are visited in a fixed
+pseudo-random order: every chunk, and every thread's share of it, then mixes cheap and costly points
+(2 threads: 1.2x -> 1.96x speed-up on the default scene). Results do not depend on the order.
 """
 
 from __future__ import annotations
@@ -11,7 +13,6 @@ import math
 import time
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 from numba import njit, prange
 
@@ -24,11 +25,11 @@ __all__ = ["RawResult", "execute", "estimate_seconds"]
 
 FRACTIONS = np.array([0.5, 0.9])
 """Fractions of the relaxed slip whose times are reported as t50 and t90."""
-PRANGE_BLOCK = 4
+ORDER_SEED = 20261121
 
 
 @njit(parallel=True, cache=True)
-def stop_batch(k, a, b, s_c, inv_L, finite, h, max_steps, rtol, atol, tau_samples, obs_tau, want_fractions,
+def stop_batch(k, a, b, s_c, finite, h, max_steps, rtol, atol, tau_samples, obs_tau, want_fractions,
                xi_inf, status, steps, xi_at, u_at, tau_at_fraction):
     """Solve a flat batch of stop points. obs_tau[i, :] are point i's extra reduced times (slip_at)."""
     n_traj = tau_samples.size
@@ -41,7 +42,7 @@ def stop_batch(k, a, b, s_c, inv_L, finite, h, max_steps, rtol, atol, tau_sample
         targets = np.concatenate((tau_samples, obs_tau[i]))
         order = np.argsort(targets, kind="mergesort")
         xs, us = np.full(targets.size, math.nan), np.full(targets.size, math.nan)
-        st, x, n = solve_stop_point(k[i], a[i], b[i], h, s_c[i], inv_L[i], max_steps, finite[i], rtol, atol,
+        st, x, n = solve_stop_point(k[i], a[i], b[i], h, s_c[i], max_steps, finite[i], rtol, atol,
                                     targets[order], xs, us, fractions, tau_at_fraction[i])
         xi_inf[i], status[i], steps[i] = x, st, n
         for j in range(targets.size):
@@ -82,14 +83,14 @@ def execute(scene: Scene, plan: Plan, indices: np.ndarray | None = None, progres
     want_fractions = bool({"t50", "t90"} & set(scene.observables))
     atol = scene.atol["xi_inf"]
     n_chunks = max(1, math.ceil(n / (chunk_size or 4096)))
+    order = np.random.default_rng(ORDER_SEED).permutation(n)
     t0 = time.perf_counter()
-    with Progress(n, enabled=progress) as bar, numba.parallel_chunksize(PRANGE_BLOCK):
-        for j in range(n_chunks):
-            sel = np.arange(j, n, n_chunks)
+    with Progress(n, enabled=progress) as bar:
+        for sel in np.array_split(order, n_chunks):
             g = idx[sel]
             parts = [np.empty(sel.size), np.empty(sel.size, np.int8), np.empty(sel.size, np.int32),
                      np.empty((sel.size, n_t)), np.empty((sel.size, n_t)), np.empty((sel.size, 2))]
-            stop_batch(plan.k[g], plan.a[g], plan.b[g], plan.s_c[g], plan.inv_L[g], plan.finite[g], plan.step,
+            stop_batch(plan.k[g], plan.a[g], plan.b[g], plan.s_c[g], plan.finite[g], plan.step,
                        plan.max_steps, scene.rtol, atol, plan.tau_samples, np.ascontiguousarray(obs_tau[g]),
                        want_fractions, *parts)
             for dest, part in zip((out.xi_inf, out.status, out.steps, out.xi_at, out.u_at, out.tau_at_fraction),

@@ -4,9 +4,9 @@ For the stop scene the model is the quasi-static one (the paper's), the state is
 quadrature tau only when a time-resolved observable is asked for), the stepper is fixed-step RK4 in the
 scaled log time sigma of :mod:`sweep.models.stop`, and the step count is chosen per point:
 
-* the time map is scaled to the point: s_c = 1/(1 + (chi + |mu1|)/A) (stiff start) and
-  L = 1/(|mu1|/A + sqrt(m2/A) + 0.1) (decay rate of the tail), so that the RK4 error constant is nearly the same
-  at every point;
+* the time map is scaled to the point: s_c = 1/(1 + (chi + |mu1|)/A) (stiff start) and the late step follows
+  the local rate (mu1 + 2 m2 u)/A (:mod:`sweep.models.stop`), so that the RK4 error constant is nearly the
+  same at every point;
 * one step h in sigma then meets ``rtol`` everywhere: h = min(H_MAX, (rtol / (SAFETY * C_RK4))^(1/4)),
   with C_RK4 the largest error constant err/h^4 measured on a calibration set spanning chi/A 1e-2..1e3,
   mu1/A -3..3, m2/A 0..3 (measured max 1.75e-3; tests/test_accuracy.py checks the rule against an
@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import physics
+from .models.stop import RATE_FLOOR, TAIL_SAFETY
 from .scene import Scene
 
 __all__ = ["Plan", "make_plan", "STEP_RULE"]
@@ -33,18 +34,17 @@ C_RK4 = 2.0e-3
 SAFETY = 3.0
 H_MAX = 0.7
 """Upper bound on the step in sigma (keeps RK4 stable along the slow manifold: h L |mu1 + 2 m2 u|/A < 1)."""
-L_FLOOR = 0.1
 STEP_RULE = (
-    f"RK4, fixed step h in sigma (ds/dsigma = 1/(1/(s + s_c) + 1/L), s = int dtau/psi); "
-    f"h = min({H_MAX}, (rtol/({SAFETY} * {C_RK4}))**0.25); per point s_c = 1/(1 + (chi + |mu1|)/A), "
-    f"L = 1/(|mu1|/A + sqrt(|m2|/A) + {L_FLOOR}); stop when the closed-form tail is accurate to "
-    f"0.1*(rtol*xi + atol); steps per point = sigma_end/h"
+    f"RK4, fixed step h in sigma (ds/dsigma = 1/(1/(s + s_c) + r), s = int dtau/psi, u = ln psi = s - xi, "
+    f"r = sqrt(((mu1 + 2 m2 u)/A)^2 + |m2|/(4 A)) + {RATE_FLOOR}); h = min({H_MAX}, (rtol/({SAFETY} * {C_RK4}))**0.25); "
+    f"per point s_c = 1/(1 + (chi + |mu1|)/A); stop when the closed-form tail is accurate to "
+    f"{TAIL_SAFETY}*(rtol*xi + atol); steps per point = sigma_end/h"
 )
 
 
-def time_map(k, a, b):
-    """Per-point scales of the time map: (s_c, 1/L) from k = chi/A, a = mu1/A, b = m2/A (see module doc)."""
-    return 1.0 / (1.0 + k + np.abs(a)), np.abs(a) + np.sqrt(np.abs(b)) + L_FLOOR
+def time_scale(k, a):
+    """Per-point scale s_c of the early log time, from k = chi/A and a = mu1/A (see module doc)."""
+    return 1.0 / (1.0 + k + np.abs(a))
 
 
 def rk4_step_for(rtol: float) -> float:
@@ -68,7 +68,6 @@ class Plan:
     a: np.ndarray
     b: np.ndarray
     s_c: np.ndarray
-    inv_L: np.ndarray
     finite: np.ndarray
     tau_samples: np.ndarray
     needs_tau: bool
@@ -98,7 +97,7 @@ class Plan:
         """Digest of everything that determines the numbers (compared on resume)."""
         h = hashlib.sha256()
         h.update(repr(sorted(self.describe().items())).encode())
-        for arr in (self.k, self.a, self.b, self.s_c, self.inv_L, self.finite, self.tau_samples):
+        for arr in (self.k, self.a, self.b, self.s_c, self.finite, self.tau_samples):
             h.update(np.ascontiguousarray(arr).tobytes())
         return h.hexdigest()[:16]
 
@@ -112,7 +111,6 @@ def make_plan(scene: Scene) -> Plan:
     k, a, b = chi / p.A, mu1 / p.A, np.full(chi.size, p.m2 / p.A)
     # PHYSICS.md 6: finite relaxed slip iff m2 > 0, or m2 = 0 and mu1 > 0
     finite = (b > 0) | ((b == 0) & (a > 0))
-    s_c, inv_L = time_map(k, a, b)
     step, source = (scene.step, "override") if scene.step is not None else (rk4_step_for(scene.rtol), "rule")
     return Plan(
         model="quasistatic",
@@ -126,8 +124,7 @@ def make_plan(scene: Scene) -> Plan:
         k=k,
         a=a,
         b=b,
-        s_c=s_c,
-        inv_L=inv_L,
+        s_c=time_scale(k, a),
         finite=finite,
         tau_samples=scene.tau_samples,
         needs_tau=bool(set(scene.observables) & {"trajectory", "slip_at", "t50", "t90"}),

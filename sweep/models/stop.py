@@ -12,10 +12,12 @@ so that xi + u = s exactly: the state is the single number xi (u = s - xi), and 
 quadrature carried only when a time-resolved observable is asked for. In s the costly corner of the tau
 form (psi << tau, small chi/A with mu1 < 0; PHYSICS.md 6) is not stiff: its stiffness rate is |mu1 + 2 m2 u|/A.
 
-Fixed-step RK4 runs in a scaled log time sigma, ds/dsigma = w(s) = 1/(1/(s + s_c) + 1/L): logarithmic early
-(resolving the stiff start, rate (chi - mu1)/A, with s_c = 1/(1 + (chi + |mu1|)/A)) and linear with step L*h
-late (resolving the decay of E, rate (mu1 + 2 m2 u)/A, with L = 1/(|mu1|/A + sqrt(m2/A) + 0.1)). s is a state of
-the autonomous system (xi, s[, tau]) so no transcendental call is spent on the map.
+Fixed-step RK4 runs in a scaled log time sigma, ds/dsigma = w = 1/(1/(s + s_c) + r(u)): logarithmic early
+(resolving the stiff start, rate (chi - mu1)/A, with s_c = 1/(1 + (chi + |mu1|)/A)) and with step h/r late, where
+r(u) = sqrt(g^2 + |m2|/(4A)) + 0.1 follows the local rate g = (mu1 + 2 m2 u)/A: the decay rate of E in the tail
+and the stiffness |g| along the slow creep manifold of the costly corner, which flattens near its fold (g -> 0),
+so the steps grow there (a third fewer steps on the default grid than a fixed late step 1/max|g|). s is a
+state of the autonomous system (xi, s[, tau]) so no transcendental call is spent on the map.
 
 The integration stops once the remaining slip can be written in closed form (:func:`tail_slip`): from
 dxi/du = E/(1 - E) and E = exp(-chi xi/A) exp(-(mu1 u + m2 u^2)/A),
@@ -47,6 +49,8 @@ E_TAIL_MAX = 0.05
 """The closed-form tail is used only once E = xi' psi has fallen below this."""
 TAIL_SAFETY = 0.1
 """Fraction of the tolerance allowed for the truncation of the tail series."""
+RATE_FLOOR = 0.1
+"""Floor of the late rate r(u) of the time map (bounds the step in s by h/RATE_FLOOR)."""
 SQRT_PI = math.sqrt(math.pi)
 
 
@@ -92,10 +96,12 @@ def tail_is_accurate(k: float, a: float, b: float, u: float, E: float, tol: floa
 
 
 @njit(cache=True)
-def derivatives(xi, s, k, a, b, s_c, inv_L, with_tau):
+def derivatives(xi, s, k, a, b, s_c, with_tau):
     """d(xi, s, tau)/dsigma and E at one state; NaN derivatives flag an exponent beyond EXP_MAX."""
     u = s - xi
-    w = (s + s_c) / (1.0 + inv_L * (s + s_c))  # = 1/(1/(s + s_c) + 1/L), one division
+    g = a + 2.0 * b * u
+    r = math.sqrt(g * g + 0.25 * abs(b)) + RATE_FLOOR
+    w = (s + s_c) / (1.0 + r * (s + s_c))  # = 1/(1/(s + s_c) + r), one division
     expo = -(k * xi + u * (a + b * u))
     if expo > EXP_MAX or (with_tau and u > EXP_MAX):
         return math.nan, w, math.nan, math.nan
@@ -135,7 +141,7 @@ def hermite_crossing(y0, y1, m0, m1, target):
 
 
 @njit(cache=True)
-def march(k, a, b, h, s_c, inv_L, max_steps, want_limit, rtol, atol, tau_targets, xi_at, u_at, xi_targets, tau_at):
+def march(k, a, b, h, s_c, max_steps, want_limit, rtol, atol, tau_targets, xi_at, u_at, xi_targets, tau_at):
     """Integrate one stop point with fixed-step RK4 in sigma.
 
     Records xi and u = ln psi where tau crosses each of the increasing ``tau_targets`` (into xi_at, u_at)
@@ -145,7 +151,7 @@ def march(k, a, b, h, s_c, inv_L, max_steps, want_limit, rtol, atol, tau_targets
     """
     with_tau = tau_targets.size > 0 or xi_targets.size > 0
     xi, s, tau = 0.0, 0.0, 0.0
-    dxi, ds, dtau, E = derivatives(xi, s, k, a, b, s_c, inv_L, with_tau)
+    dxi, ds, dtau, E = derivatives(xi, s, k, a, b, s_c, with_tau)
     it, ix = 0, 0
     while it < tau_targets.size and tau_targets[it] <= 0.0:
         xi_at[it], u_at[it] = 0.0, 0.0
@@ -155,13 +161,13 @@ def march(k, a, b, h, s_c, inv_L, max_steps, want_limit, rtol, atol, tau_targets
     n = 0
     while n < max_steps:
         # classical RK4 (solvers.tableau.RK4); stage 1 is the previous step's end derivative (FSAL reuse)
-        k2x, k2s, k2t, _ = derivatives(xi + 0.5 * h * dxi, s + 0.5 * h * ds, k, a, b, s_c, inv_L, with_tau)
-        k3x, k3s, k3t, _ = derivatives(xi + 0.5 * h * k2x, s + 0.5 * h * k2s, k, a, b, s_c, inv_L, with_tau)
-        k4x, k4s, k4t, _ = derivatives(xi + h * k3x, s + h * k3s, k, a, b, s_c, inv_L, with_tau)
+        k2x, k2s, k2t, _ = derivatives(xi + 0.5 * h * dxi, s + 0.5 * h * ds, k, a, b, s_c, with_tau)
+        k3x, k3s, k3t, _ = derivatives(xi + 0.5 * h * k2x, s + 0.5 * h * k2s, k, a, b, s_c, with_tau)
+        k4x, k4s, k4t, _ = derivatives(xi + h * k3x, s + h * k3s, k, a, b, s_c, with_tau)
         xi1 = xi + h / 6.0 * (dxi + 2.0 * (k2x + k3x) + k4x)
         s1 = s + h / 6.0 * (ds + 2.0 * (k2s + k3s) + k4s)
         tau1 = tau + h / 6.0 * (dtau + 2.0 * (k2t + k3t) + k4t)
-        dxi1, ds1, dtau1, E = derivatives(xi1, s1, k, a, b, s_c, inv_L, with_tau)
+        dxi1, ds1, dtau1, E = derivatives(xi1, s1, k, a, b, s_c, with_tau)
         n += 1
         if not (math.isfinite(xi1) and math.isfinite(dxi1) and math.isfinite(tau1) and math.isfinite(dtau1)):
             return NONFINITE, math.nan, n
@@ -186,18 +192,18 @@ def march(k, a, b, h, s_c, inv_L, max_steps, want_limit, rtol, atol, tau_targets
 
 
 @njit(cache=True)
-def solve_stop_point(k, a, b, h, s_c, inv_L, max_steps, finite, rtol, atol, tau_targets, xi_at, u_at,
+def solve_stop_point(k, a, b, h, s_c, max_steps, finite, rtol, atol, tau_targets, xi_at, u_at,
                      fractions, tau_at_fraction):
     """One stop point: pass 1 gives xi_inf and the time-resolved samples; if ``fractions`` is not empty a
     second pass (same steps) finds tau where xi = fraction * xi_inf (e.g. t50, t90).
     Returns (status, xi_inf, steps of pass 1)."""
     no_targets = np.empty(0)
-    status, xi_inf, n = march(k, a, b, h, s_c, inv_L, max_steps, finite, rtol, atol, tau_targets, xi_at, u_at,
+    status, xi_inf, n = march(k, a, b, h, s_c, max_steps, finite, rtol, atol, tau_targets, xi_at, u_at,
                               no_targets, no_targets)
     tau_at_fraction[:] = math.nan
     if not finite:
         return (NO_FINITE_LIMIT if status == OK else status), math.nan, n
     if fractions.size > 0 and status == OK:
-        status, _, _ = march(k, a, b, h, s_c, inv_L, max_steps, False, rtol, atol, no_targets, no_targets,
+        status, _, _ = march(k, a, b, h, s_c, max_steps, False, rtol, atol, no_targets, no_targets,
                              no_targets, fractions * xi_inf, tau_at_fraction)
     return status, xi_inf, n
