@@ -42,7 +42,7 @@ def stop_batch(k, a, b, s_c, finite, h, max_steps, rtol, atol, tau_samples, obs_
         targets = np.concatenate((tau_samples, obs_tau[i]))
         order = np.argsort(targets, kind="mergesort")
         xs, us = np.full(targets.size, math.nan), np.full(targets.size, math.nan)
-        st, x, n = solve_stop_point(k[i], a[i], b[i], h, s_c[i], max_steps, finite[i], rtol, atol,
+        st, x, n = solve_stop_point(k[i], a[i], b[i], h[i], s_c[i], max_steps, finite[i], rtol, atol,
                                     targets[order], xs, us, fractions, tau_at_fraction[i])
         xi_inf[i], status[i], steps[i] = x, st, n
         for j in range(targets.size):
@@ -90,7 +90,7 @@ def execute(scene: Scene, plan: Plan, indices: np.ndarray | None = None, progres
             g = idx[sel]
             parts = [np.empty(sel.size), np.empty(sel.size, np.int8), np.empty(sel.size, np.int32),
                      np.empty((sel.size, n_t)), np.empty((sel.size, n_t)), np.empty((sel.size, 2))]
-            stop_batch(plan.k[g], plan.a[g], plan.b[g], plan.s_c[g], plan.finite[g], plan.step,
+            stop_batch(plan.k[g], plan.a[g], plan.b[g], plan.s_c[g], plan.finite[g], plan.step[g],
                        plan.max_steps, scene.rtol, atol, plan.tau_samples, np.ascontiguousarray(obs_tau[g]),
                        want_fractions, *parts)
             for dest, part in zip((out.xi_inf, out.status, out.steps, out.xi_at, out.u_at, out.tau_at_fraction),

@@ -7,10 +7,13 @@ scaled log time sigma of :mod:`sweep.models.stop`, and the step count is chosen 
 * the time map is scaled to the point: s_c = 1/(1 + (chi + |mu1|)/A) (stiff start) and the late step follows
   the local rate (mu1 + 2 m2 u)/A (:mod:`sweep.models.stop`), so that the RK4 error constant is nearly the
   same at every point;
-* one step h in sigma then meets ``rtol`` everywhere: h = min(H_MAX, (rtol / (SAFETY * C_RK4))^(1/4)),
-  with C_RK4 the largest error constant err/h^4 measured on a calibration set spanning chi/A 1e-2..1e3,
-  mu1/A -3..3, m2/A 0..3 (measured max 1.75e-3; tests/test_accuracy.py checks the rule against an
-  independent scipy reference);
+* the step h in sigma then meets ``rtol`` at each point: h = min(H_MAX, (rtol / (SAFETY * C))^(1/4)), with C
+  the largest error constant err/h^4 measured on a calibration set spanning chi/A 1e-2..1e3, mu1/A -3..3,
+  m2/A 0..3 (benchmarks/calibrate_rk4.py): C_STABLE where steady sliding is stable (chi > mu1; measured
+  max 4.4e-4 as h -> 0, 7.4e-4 at h = 0.7) and C_UNSTABLE on the stick-slip side, where the stop starts on an
+  unstable fixed point and the
+  error constant is ~3x larger (measured max 1.7e-3); tests/test_accuracy.py checks the rule against an
+  independent scipy reference;
 * each point stops when its closed-form tail is accurate to 0.1 * (rtol xi + atol), so its number of steps
   (sigma_end / h) follows from its own dynamics: a few tens on most of the grid, thousands in the costly
   corner (small chi/A with mu1 < 0 and small m2, where the slider creeps along a slow manifold).
@@ -29,14 +32,17 @@ from .scene import Scene
 
 __all__ = ["Plan", "make_plan", "STEP_RULE"]
 
-C_RK4 = 2.0e-3
-"""Largest RK4 error constant |err/xi_inf| / h^4 over the calibration set."""
+C_STABLE = 6.0e-4
+"""Bound on the RK4 error constant |err/xi_inf| / h^4 where steady sliding is stable (chi > mu1)."""
+C_UNSTABLE = 2.0e-3
+"""Bound on the RK4 error constant where steady sliding is unstable (chi <= mu1)."""
 SAFETY = 3.0
 H_MAX = 0.7
-"""Upper bound on the step in sigma (keeps RK4 stable along the slow manifold: h L |mu1 + 2 m2 u|/A < 1)."""
+"""Upper bound on the step in sigma (keeps RK4 stable along the slow creep manifold, h |mu1 + 2 m2 u|/(A r) < 1)."""
 STEP_RULE = (
     f"RK4, fixed step h in sigma (ds/dsigma = 1/(1/(s + s_c) + r), s = int dtau/psi, u = ln psi = s - xi, "
-    f"r = sqrt(((mu1 + 2 m2 u)/A)^2 + |m2|/(4 A)) + {RATE_FLOOR}); h = min({H_MAX}, (rtol/({SAFETY} * {C_RK4}))**0.25); "
+    f"r = sqrt(((mu1 + 2 m2 u)/A)^2 + |m2|/(4 A)) + {RATE_FLOOR}); h = min({H_MAX}, (rtol/({SAFETY} C))**0.25), "
+    f"C = {C_STABLE} where chi > mu1 (stable sliding) else {C_UNSTABLE}; "
     f"per point s_c = 1/(1 + (chi + |mu1|)/A); stop when the closed-form tail is accurate to "
     f"{TAIL_SAFETY}*(rtol*xi + atol); steps per point = sigma_end/h"
 )
@@ -47,9 +53,10 @@ def time_scale(k, a):
     return 1.0 / (1.0 + k + np.abs(a))
 
 
-def rk4_step_for(rtol: float) -> float:
-    """Step in sigma that meets ``rtol`` on xi_inf at every point (the rule of :data:`STEP_RULE`)."""
-    return min(H_MAX, (rtol / (SAFETY * C_RK4)) ** 0.25)
+def rk4_step_for(rtol: float, stable_sliding):
+    """Step in sigma that meets ``rtol`` on xi_inf at each point (the rule of :data:`STEP_RULE`)."""
+    error_constant = np.where(stable_sliding, C_STABLE, C_UNSTABLE)
+    return np.minimum(H_MAX, (rtol / (SAFETY * error_constant)) ** 0.25)
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,7 +65,7 @@ class Plan:
 
     model: str
     stepper: str
-    step: float
+    step: np.ndarray
     step_source: str
     rule: str
     max_steps: int
@@ -82,7 +89,8 @@ class Plan:
             "model": self.model,
             "state": "xi (u = s - xi)" + (" + tau quadrature" if self.needs_tau else ""),
             "stepper": self.stepper,
-            "step": f"{self.step!r} in sigma ({self.step_source})",
+            "step": (f"{self.step.min():.6g}..{self.step.max():.6g} in sigma" if self.step.min() < self.step.max()
+                     else f"{self.step[0]:.6g} in sigma") + f" ({self.step_source})",
             "step_rule": self.rule,
             "max_steps": str(self.max_steps),
             "horizon": "per point: until the closed-form tail is accurate (and all requested times are passed)",
@@ -97,7 +105,7 @@ class Plan:
         """Digest of everything that determines the numbers (compared on resume)."""
         h = hashlib.sha256()
         h.update(repr(sorted(self.describe().items())).encode())
-        for arr in (self.k, self.a, self.b, self.s_c, self.finite, self.tau_samples):
+        for arr in (self.k, self.a, self.b, self.s_c, self.step, self.finite, self.tau_samples):
             h.update(np.ascontiguousarray(arr).tobytes())
         return h.hexdigest()[:16]
 
@@ -111,7 +119,10 @@ def make_plan(scene: Scene) -> Plan:
     k, a, b = chi / p.A, mu1 / p.A, np.full(chi.size, p.m2 / p.A)
     # PHYSICS.md 6: finite relaxed slip iff m2 > 0, or m2 = 0 and mu1 > 0
     finite = (b > 0) | ((b == 0) & (a > 0))
-    step, source = (scene.step, "override") if scene.step is not None else (rk4_step_for(scene.rtol), "rule")
+    if scene.step is not None:
+        step, source = np.full(k.size, scene.step), "override"
+    else:
+        step, source = rk4_step_for(scene.rtol, k > a), "rule"
     return Plan(
         model="quasistatic",
         stepper="rk4",

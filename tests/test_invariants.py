@@ -38,8 +38,12 @@ def test_eq12_early_stage_limit():
     pt = point(tau=(1e-9, 1e-3, 7))
     early = physics.xi_early(pt["tau"].values, CHI, A)
     rel = np.abs(pt["xi"].values / early - 1)
-    assert rel[0] < 1e-7
-    assert np.all(np.diff(rel) > 0), "the early-stage formula must become exact as tau -> 0"
+    assert rel[0] < 1e-12, "the early-stage formula is the exact tau -> 0 limit"
+    # the departure is O(tau): it grows tenfold per decade once above rounding
+    tau = pt["tau"].values
+    visible = rel > 1e-11
+    assert visible.sum() >= 3
+    assert np.allclose(rel[visible] / tau[visible], rel[-1] / tau[-1], rtol=0.05)
 
 
 def test_eq13_late_stage_ratio():

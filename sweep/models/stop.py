@@ -141,13 +141,43 @@ def hermite_crossing(y0, y1, m0, m1, target):
 
 
 @njit(cache=True)
+def rk4_step(xi, s, tau, dxi, ds, dtau, h, k, a, b, s_c, with_tau):
+    """One classical RK4 step (solvers.tableau.RK4) of size h in sigma from a state and its derivative."""
+    k2x, k2s, k2t, _ = derivatives(xi + 0.5 * h * dxi, s + 0.5 * h * ds, k, a, b, s_c, with_tau)
+    k3x, k3s, k3t, _ = derivatives(xi + 0.5 * h * k2x, s + 0.5 * h * k2s, k, a, b, s_c, with_tau)
+    k4x, k4s, k4t, _ = derivatives(xi + h * k3x, s + h * k3s, k, a, b, s_c, with_tau)
+    return (xi + h / 6.0 * (dxi + 2.0 * (k2x + k3x) + k4x),
+            s + h / 6.0 * (ds + 2.0 * (k2s + k3s) + k4s),
+            tau + h / 6.0 * (dtau + 2.0 * (k2t + k3t) + k4t))
+
+
+@njit(cache=True)
+def state_where(component, target, theta, xi, s, tau, dxi, ds, dtau, h, k, a, b, s_c):
+    """State (xi, s, tau) inside a step where ``component`` (0: xi, 2: tau) equals ``target``.
+
+    Newton on theta in [0, 1] with exact partial RK4 steps of size theta*h from the step's start (fifth-order
+    local error, like the step itself), started from the Hermite estimate ``theta``.
+    """
+    for _ in range(8):
+        x1, s1, t1 = rk4_step(xi, s, tau, dxi, ds, dtau, theta * h, k, a, b, s_c, True)
+        value = x1 if component == 0 else t1
+        dx1, _, dt1, _ = derivatives(x1, s1, k, a, b, s_c, True)
+        slope = h * (dx1 if component == 0 else dt1)
+        miss = value - target
+        if abs(miss) <= 4e-16 * abs(target) or not slope > 0.0:
+            break
+        theta = min(1.0, max(0.0, theta - miss / slope))
+    return x1, s1, t1
+
+
+@njit(cache=True)
 def march(k, a, b, h, s_c, max_steps, want_limit, rtol, atol, tau_targets, xi_at, u_at, xi_targets, tau_at):
     """Integrate one stop point with fixed-step RK4 in sigma.
 
     Records xi and u = ln psi where tau crosses each of the increasing ``tau_targets`` (into xi_at, u_at)
-    and tau where xi crosses each of the increasing ``xi_targets`` (into tau_at), by cubic Hermite
-    interpolation (fourth order, like the stepper). Stops when the tail test passes (if ``want_limit``) and
-    all targets are recorded. Returns (status, xi_inf, steps); xi_inf is NaN unless the tail was reached.
+    and tau where xi crosses each of the increasing ``xi_targets`` (into tau_at), from exact partial steps
+    (:func:`state_where`). Stops when the tail test passes (if ``want_limit``) and all targets are recorded.
+    Returns (status, xi_inf, steps); xi_inf is NaN unless the tail was reached.
     """
     with_tau = tau_targets.size > 0 or xi_targets.size > 0
     xi, s, tau = 0.0, 0.0, 0.0
@@ -160,25 +190,20 @@ def march(k, a, b, h, s_c, max_steps, want_limit, rtol, atol, tau_targets, xi_at
     tail_done = not want_limit
     n = 0
     while n < max_steps:
-        # classical RK4 (solvers.tableau.RK4); stage 1 is the previous step's end derivative (FSAL reuse)
-        k2x, k2s, k2t, _ = derivatives(xi + 0.5 * h * dxi, s + 0.5 * h * ds, k, a, b, s_c, with_tau)
-        k3x, k3s, k3t, _ = derivatives(xi + 0.5 * h * k2x, s + 0.5 * h * k2s, k, a, b, s_c, with_tau)
-        k4x, k4s, k4t, _ = derivatives(xi + h * k3x, s + h * k3s, k, a, b, s_c, with_tau)
-        xi1 = xi + h / 6.0 * (dxi + 2.0 * (k2x + k3x) + k4x)
-        s1 = s + h / 6.0 * (ds + 2.0 * (k2s + k3s) + k4s)
-        tau1 = tau + h / 6.0 * (dtau + 2.0 * (k2t + k3t) + k4t)
+        # stage 1 of each step is the previous step's end derivative (FSAL reuse)
+        xi1, s1, tau1 = rk4_step(xi, s, tau, dxi, ds, dtau, h, k, a, b, s_c, with_tau)
         dxi1, ds1, dtau1, E = derivatives(xi1, s1, k, a, b, s_c, with_tau)
         n += 1
         if not (math.isfinite(xi1) and math.isfinite(dxi1) and math.isfinite(tau1) and math.isfinite(dtau1)):
             return NONFINITE, math.nan, n
         while it < tau_targets.size and tau_targets[it] <= tau1:
             th = hermite_crossing(tau, tau1, h * dtau, h * dtau1, tau_targets[it])
-            xi_at[it] = hermite(xi, xi1, h * dxi, h * dxi1, th)
-            u_at[it] = hermite(s, s1, h * ds, h * ds1, th) - xi_at[it]
+            xt, st, _ = state_where(2, tau_targets[it], th, xi, s, tau, dxi, ds, dtau, h, k, a, b, s_c)
+            xi_at[it], u_at[it] = xt, st - xt
             it += 1
         while ix < xi_targets.size and xi_targets[ix] <= xi1:
             th = hermite_crossing(xi, xi1, h * dxi, h * dxi1, xi_targets[ix])
-            tau_at[ix] = hermite(tau, tau1, h * dtau, h * dtau1, th)
+            tau_at[ix] = state_where(0, xi_targets[ix], th, xi, s, tau, dxi, ds, dtau, h, k, a, b, s_c)[2]
             ix += 1
         xi, s, tau, dxi, ds, dtau = xi1, s1, tau1, dxi1, ds1, dtau1
         if not tail_done:
