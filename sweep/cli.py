@@ -33,9 +33,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"{'estimated time':>28}: {seconds:.1f} s on this machine")
         return 0
     from .api import run_sweep
+    from .engine import warm_up
     from .io import save
     from .plot import plot_landscape
 
+    compile_s = warm_up(scene, plan)
     t0 = time.perf_counter()
     ds = run_sweep(scene, progress=None if not args.quiet else False,
                    history="sweep " + " ".join(shlex.quote(a) for a in sys.argv[1:]))
@@ -43,8 +45,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     elapsed = time.perf_counter() - t0
     png = plot_landscape(ds, args.png or out.with_suffix(".png"))
     counts = np.unique(ds["status"].values, return_counts=True)
-    print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, "
-          f"{scene.n_points / max(elapsed, 1e-9):,.0f} points/s)")
+    print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, {scene.n_points / max(elapsed, 1e-9):,.0f} "
+          f"points/s; kernel {'compiled' if compile_s > 2 else 'loaded'} in {compile_s:.1f} s beforehand)")
     print(f"wrote {png}")
     meanings = ds["status"].attrs["flag_meanings"].split()
     print("status: " + ", ".join(f"{meanings[c]} {n}" for c, n in zip(*counts)))

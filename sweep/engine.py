@@ -21,7 +21,7 @@ from .plan import Plan, make_plan
 from .progress import Progress
 from .scene import Scene
 
-__all__ = ["RawResult", "execute", "estimate_seconds"]
+__all__ = ["RawResult", "estimate_seconds", "execute", "warm_up"]
 
 FRACTIONS = np.array([0.5, 0.9])
 """Fractions of the relaxed slip whose times are reported as t50 and t90."""
@@ -101,6 +101,13 @@ def execute(scene: Scene, plan: Plan, indices: np.ndarray | None = None, progres
     return out
 
 
+def warm_up(scene: Scene, plan: Plan) -> float:
+    """Compile the kernel (or load it from numba's on-disk cache) on one point; returns the seconds taken."""
+    t0 = time.perf_counter()
+    execute(scene, plan, np.arange(1), progress=False)
+    return time.perf_counter() - t0
+
+
 def estimate_seconds(scene: Scene, plan: Plan | None = None, sample: int = 256) -> tuple[float, float]:
     """Estimate the wall time of the whole sweep by timing a strided pilot subsample.
 
@@ -110,6 +117,6 @@ def estimate_seconds(scene: Scene, plan: Plan | None = None, sample: int = 256) 
     plan = plan or make_plan(scene)
     stride = max(1, plan.n_points // sample)
     pilot = np.arange(0, plan.n_points, stride)
-    execute(scene, plan, pilot[:2], progress=False)  # load or compile the kernel
+    warm_up(scene, plan)
     res = execute(scene, plan, pilot, progress=False)
     return res.seconds * plan.n_points / pilot.size, float(res.steps.mean())
