@@ -32,7 +32,6 @@ ORDER_SEED = 20261121
 def stop_batch(k, a, b, s_c, finite, h, max_steps, rtol, atol, tau_samples, obs_tau, want_fractions,
                xi_inf, status, steps, xi_at, u_at, tau_at_fraction):
     """Solve a flat batch of stop points. obs_tau[i, :] are point i's extra reduced times (slip_at)."""
-    n_traj = tau_samples.size
     fractions = FRACTIONS if want_fractions else np.empty(0)
     for i in prange(k.size):
         if not finite[i] and xi_at.shape[1] == 0:
@@ -48,7 +47,6 @@ def stop_batch(k, a, b, s_c, finite, h, max_steps, rtol, atol, tau_samples, obs_
         for j in range(targets.size):
             xi_at[i, order[j]] = xs[j]
             u_at[i, order[j]] = us[j]
-    return n_traj
 
 
 @dataclass
