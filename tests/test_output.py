@@ -77,8 +77,12 @@ def test_global_attributes(small_ds):
 def test_netcdf_round_trip(small_ds, tmp_path):
     path = sweep.save(small_ds, tmp_path / "out.nc")
     back = sweep.open(path)
-    xr.testing.assert_identical(back.drop_attrs(), small_ds.drop_attrs())
-    assert back.attrs["scene"] == small_ds.attrs["scene"]
+    xr.testing.assert_equal(back, small_ds)
+    for name in small_ds.variables:
+        for key in ("units", "long_name", "flag_meanings"):
+            assert back[name].attrs.get(key) == small_ds[name].attrs.get(key), (name, key)
+    for key, value in small_ds.attrs.items():
+        assert back.attrs[key] == value, key
     assert back["status"].dtype == np.int8
 
 
