@@ -52,9 +52,12 @@ TAIL_SAFETY = 0.1
 RATE_FLOOR = 0.1
 """Floor of the late rate r(u) of the time map (bounds the step in s by h/RATE_FLOOR)."""
 SQRT_PI = math.sqrt(math.pi)
+FAST = {"nsz", "arcp", "contract", "afn"}
+"""fastmath flags of every kernel here (~9 % faster): FMA contraction and reciprocal division, but no "nnan" or
+"ninf" (the status codes rely on isfinite) and no "reassoc" (results stay reproducible on one instruction set)."""
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def erfcx(z: float) -> float:
     """Scaled complementary error function exp(z^2) erfc(z) for z >= 0 (asymptotic series beyond 25)."""
     if z < 25.0:
@@ -63,7 +66,7 @@ def erfcx(z: float) -> float:
     return (1.0 - 0.5 * iz2 * (1.0 - 1.5 * iz2 * (1.0 - 2.5 * iz2))) / (z * SQRT_PI)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def tail_integral(a: float, b: float, u: float, order: float) -> float:
     """exp(order (a u + b u^2)) int_u^inf exp(-order (a v + b v^2)) dv, for b >= 0 and a + 2 b u > 0 [1]."""
     if b == 0.0:
@@ -72,7 +75,7 @@ def tail_integral(a: float, b: float, u: float, order: float) -> float:
     return 0.5 * SQRT_PI / math.sqrt(kb) * erfcx(math.sqrt(kb) * (u + 0.5 * a / b))
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def tail_slip(k: float, a: float, b: float, u: float, E: float) -> float:
     """Reduced slip remaining after the horizon, xi_inf - xi_e, from the state (u_e, E_e) [1].
 
@@ -82,7 +85,7 @@ def tail_slip(k: float, a: float, b: float, u: float, E: float) -> float:
     return math.log1p(k * T) / k
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def tail_is_accurate(k: float, a: float, b: float, u: float, E: float, tol: float) -> bool:
     """True once the closed-form tail's own error is below TAIL_SAFETY * tol (absolute, reduced).
 
@@ -95,7 +98,7 @@ def tail_is_accurate(k: float, a: float, b: float, u: float, E: float, tol: floa
     return E * E * E * (1.0 / (3.0 * g) + k / (2.0 * g * g)) <= TAIL_SAFETY * tol
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def derivatives(xi, s, k, a, b, s_c, with_tau):
     """d(xi, s, tau)/dsigma and E at one state; NaN derivatives flag an exponent beyond EXP_MAX."""
     u = s - xi
@@ -110,7 +113,7 @@ def derivatives(xi, s, k, a, b, s_c, with_tau):
     return w * E, w, dtau, E
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def hermite(y0, y1, m0, m1, t):
     """Cubic Hermite interpolant on [0, 1] with end slopes m0, m1 (already scaled by the step)."""
     t2 = t * t
@@ -118,7 +121,7 @@ def hermite(y0, y1, m0, m1, t):
     return (2 * t3 - 3 * t2 + 1) * y0 + (t3 - 2 * t2 + t) * m0 + (-2 * t3 + 3 * t2) * y1 + (t3 - t2) * m1
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def hermite_crossing(y0, y1, m0, m1, target):
     """theta in [0, 1] where the increasing Hermite interpolant equals target (safeguarded Newton)."""
     lo, hi = 0.0, 1.0
@@ -140,7 +143,7 @@ def hermite_crossing(y0, y1, m0, m1, target):
     return t
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def rk4_step(xi, s, tau, dxi, ds, dtau, h, k, a, b, s_c, with_tau):
     """One classical RK4 step (solvers.tableau.RK4) of size h in sigma from a state and its derivative."""
     k2x, k2s, k2t, _ = derivatives(xi + 0.5 * h * dxi, s + 0.5 * h * ds, k, a, b, s_c, with_tau)
@@ -151,7 +154,7 @@ def rk4_step(xi, s, tau, dxi, ds, dtau, h, k, a, b, s_c, with_tau):
             tau + h / 6.0 * (dtau + 2.0 * (k2t + k3t) + k4t))
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def state_where(component, target, theta, xi, s, tau, dxi, ds, dtau, h, k, a, b, s_c):
     """State (xi, s, tau) and slip rate dxi/dtau inside a step where ``component`` (0: xi, 2: tau) equals
     ``target``.
@@ -171,7 +174,7 @@ def state_where(component, target, theta, xi, s, tau, dxi, ds, dtau, h, k, a, b,
     return x1, s1, t1, dx1 / dt1
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def march(k, a, b, h, s_c, max_steps, want_limit, rtol, atol, tau_targets, xi_at, u_at, xi_targets, tau_at,
           rate_at):
     """Integrate one stop point with fixed-step RK4 in sigma.
@@ -220,7 +223,7 @@ def march(k, a, b, h, s_c, max_steps, want_limit, rtol, atol, tau_targets, xi_at
     return MAX_STEPS, xi_inf, n
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def solve_stop_point(k, a, b, h, s_c, max_steps, finite, rtol, atol, tau_targets, xi_at, u_at,
                      fractions, tau_at_fraction):
     """One stop point: pass 1 gives xi_inf and the time-resolved samples; if ``fractions`` is not empty a
