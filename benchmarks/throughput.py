@@ -628,6 +628,12 @@ def main(argv=None):
     chosen_r = {k: v for k, v in rand.items() if v}
     best_r = min(chosen_r, key=lambda k: chosen_r[k]["ms_per_traj"]) if chosen_r else None
     scipy_us_r = chosen_r[best_r]["ms_per_traj"] * 1e3 if best_r else math.nan
+    def ratios(scipy_us_per_traj, engine_same_points):
+        """scipy cost per trajectory over the engine's: on the same points, and against the grid averages."""
+        return {"ratio_same_points_1_core": scipy_us_per_traj / engine_same_points["us_per_traj"],
+                "ratio_vs_grid_per_core_all_threads": scipy_us_per_traj / per_core_all,
+                "ratio_vs_grid_1_thread": scipy_us_per_traj / (t_eng_1 / plan.n_points * 1e6)}
+
     scipy_out = {
         "subsample": {"points": int(idx.size), "flat_indices": idx.tolist(),
                       "includes_costliest_grid_point": bool(int(np.argmax(eng_res.steps)) in set(idx.tolist())),
@@ -649,9 +655,7 @@ def main(argv=None):
         "engine_same_points": eng_sub,
         "best_method": best_name,
         "best_us_per_traj": scipy_us,
-        "ratio_same_points_1_core": scipy_us / eng_sub["us_per_traj"],
-        "ratio_vs_grid_per_core_all_threads": scipy_us / per_core_all,
-        "ratio_vs_grid_1_thread": scipy_us / (t_eng_1 / plan.n_points * 1e6),
+        **ratios(scipy_us, eng_sub),
         "note_strided_ratios": "ratio_vs_grid_* divide scipy's mean on the strided, corner-heavy subsample "
                               "(biased high) by the engine's grid mean; see random_subsample for the unbiased one",
         "random_subsample": {
@@ -666,9 +670,7 @@ def main(argv=None):
             "engine_same_points": eng_sub_r,
             "best_method": best_r,
             "best_us_per_traj": scipy_us_r,
-            "ratio_same_points_1_core": scipy_us_r / eng_sub_r["us_per_traj"],
-            "ratio_vs_grid_per_core_all_threads": scipy_us_r / per_core_all,
-            "ratio_vs_grid_1_thread": scipy_us_r / (t_eng_1 / plan.n_points * 1e6),
+            **ratios(scipy_us_r, eng_sub_r),
         },
     }
     if not quick:
@@ -733,6 +735,19 @@ def main(argv=None):
     print(f"\nwrote {args.out}" + (f" and {result['png']}" if result.get("png") else ""))
 
 
+def print_scipy_rows(chosen, engine, rtol, missing):
+    """One row per scipy method at its chosen tolerance, then the engine on the same points."""
+    print(f"{'':24s}{'rtol':>8s}{'atol':>8s}{'max err':>10s}{'us/traj':>10s}{'nfev':>8s}{'us/eval':>9s}")
+    for name, ch in chosen.items():
+        if ch is None:
+            print(f"{name:24s}  {missing}")
+            continue
+        print(f"{name:24s}{ch['rtol']:8.0e}{ch['atol']:8.0e}{ch['max_rel_err']:10.1e}{ch['ms_per_traj'] * 1e3:10.0f}"
+              f"{ch['mean_nfev']:8.0f}{ch['us_per_rhs_eval']:9.2f}")
+    print(f"{'engine (1 thread)':24s}{rtol:8.0e}{'':8s}{engine['max_rel_err']:10.1e}{engine['us_per_traj']:10.1f}"
+          f"{engine['mean_rhs_evals']:8.0f}{engine['us_per_traj'] / engine['mean_rhs_evals']:9.3f}")
+
+
 def print_table(r):
     m, e, s, npy, c = r["machine"], r["engine"], r["scipy"], r["numpy_rk4"], r["cold_start"]
     n_all = m["NUMBA_NUM_THREADS"]
@@ -771,31 +786,13 @@ def print_table(r):
           f"{s['subsample']['engine_mean_steps_subsample']:.0f} vs {s['subsample']['engine_mean_steps_grid']:.0f} "
           f"on the grid); reference check vs m2=0 closed form: max rel err "
           f"{s['reference_closed_form_check_m2_0']['max_rel_err']:.1e}")
-    print(f"{'':24s}{'rtol':>8s}{'atol':>8s}{'max err':>10s}{'us/traj':>10s}{'nfev':>8s}{'us/eval':>9s}")
-    for name, mm in s["methods"].items():
-        ch = mm["chosen"]
-        if ch is None:
-            print(f"{name:24s}  no scanned tolerance met {ERROR_TARGET:g}")
-            continue
-        print(f"{name:24s}{ch['rtol']:8.0e}{ch['atol']:8.0e}{ch['max_rel_err']:10.1e}{ch['ms_per_traj'] * 1e3:10.0f}"
-              f"{ch['mean_nfev']:8.0f}{ch['us_per_rhs_eval']:9.2f}")
-    es = s["engine_same_points"]
-    print(f"{'engine (1 thread)':24s}{r['scene']['rtol']:8.0e}{'':8s}{es['max_rel_err']:10.1e}{es['us_per_traj']:10.1f}"
-          f"{es['mean_rhs_evals']:8.0f}{es['us_per_traj'] / es['mean_rhs_evals']:9.3f}")
+    print_scipy_rows({name: mm["chosen"] for name, mm in s["methods"].items()}, s["engine_same_points"],
+                     r["scene"]["rtol"], f"no scanned tolerance met {ERROR_TARGET:g}")
     rs = s["random_subsample"]
     print(f"\nscipy at the chosen tolerances on {rs['points']} uniformly random points (seed {rs['seed']}; "
           f"engine mean steps there {rs['engine_mean_steps_subsample']:.0f} vs "
           f"{rs['engine_mean_steps_grid']:.0f} on the grid)")
-    print(f"{'':24s}{'rtol':>8s}{'atol':>8s}{'max err':>10s}{'us/traj':>10s}{'nfev':>8s}{'us/eval':>9s}")
-    for name, ch in rs["methods"].items():
-        if ch is None:
-            print(f"{name:24s}  no tolerance chosen")
-            continue
-        print(f"{name:24s}{ch['rtol']:8.0e}{ch['atol']:8.0e}{ch['max_rel_err']:10.1e}{ch['ms_per_traj'] * 1e3:10.0f}"
-              f"{ch['mean_nfev']:8.0f}{ch['us_per_rhs_eval']:9.2f}")
-    er = rs["engine_same_points"]
-    print(f"{'engine (1 thread)':24s}{r['scene']['rtol']:8.0e}{'':8s}{er['max_rel_err']:10.1e}{er['us_per_traj']:10.1f}"
-          f"{er['mean_rhs_evals']:8.0f}{er['us_per_traj'] / er['mean_rhs_evals']:9.3f}")
+    print_scipy_rows(rs["methods"], rs["engine_same_points"], r["scene"]["rtol"], "no tolerance chosen")
     per_core = e[f"threads_{n_all}"]["us_per_traj_per_core"]
     print(f"best scipy us/traj: strided {s['best_us_per_traj']:.0f} ({s['best_method']}), random "
           f"{rs['best_us_per_traj']:.0f} ({rs['best_method']}); engine per core over the grid ({n_all} threads) "
