@@ -61,3 +61,20 @@ def test_no_finite_limit_cases(case):
     assert not ref.finite
     tau_obs = pt["t_obs"].values * c["V"] / c["D0"]
     np.testing.assert_allclose(pt["slip_at"].values, c["D0"] * ref.xi(tau_obs), rtol=1e-5)
+
+
+@pytest.mark.parametrize("name", ["g_chiA1_mA0.3_slowtail", "g_chiA1000_mA1_stiff", "s2_KM1e3_V100um_corner",
+                                  "g_chiA0.1_mA-0.5_m2A0.2"])
+def test_late_trajectory_to_astronomical_times(name):
+    """Samples far beyond the transient (up to tau = 1e200) come from the closed-form continuation: cheap,
+    status ok, and still within rtol of the reference (which integrates all the way)."""
+    case = next(c for c in STOP_CASES if c.name == name)
+    rtol, tau = 1e-6, (1e-3, 1e200, 41)
+    pt, _ = engine_point(case, rtol, observables=("trajectory",), trajectory_tau=tau)
+    assert int(pt["status"]) == sweep.Status.OK
+    ref = reference_stop(case.chi, case.A, case.mu1, case.m2)
+    taus = np.logspace(math.log10(tau[0]), math.log10(tau[1]), tau[2])
+    np.testing.assert_allclose(pt["xi"].values, ref.xi(taus), rtol=rtol, atol=1e-12)
+    np.testing.assert_allclose(pt["psi"].values, ref.psi(taus), rtol=rtol)
+    short, _ = engine_point(case, rtol, observables=("trajectory",), trajectory_tau=(1e-3, 1e3, 41))
+    assert int(pt["steps"]) <= 2 * int(short["steps"]) + 200, "the late trajectory must not be integrated"

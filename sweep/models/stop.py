@@ -175,13 +175,29 @@ def state_where(component, target, theta, xi, s, tau, dxi, ds, dtau, h, k, a, b,
 
 
 @njit(cache=True, fastmath=FAST)
+def continue_in_closed_form(k, a, b, xi_inf, u_e, tau_e, tau_targets, xi_at, u_at):
+    """xi and u = ln psi at reduced times beyond a state (u_e, tau_e) where E is already negligible.
+
+    With E -> 0, ds = du/(1 - E) -> du and dtau = e^u ds, so tau = tau_e + e^u - e^u_e; the slip still to come
+    at u is the closed-form tail (:func:`tail_slip`) with E evaluated at xi_inf. The neglected terms are
+    relatively O(E_e/|1 - (mu1 + 2 m2 u)/A|) in psi and O(E^2) in xi; called once E_e < TAIL_SAFETY rtol, this
+    replaces the integration of the long, featureless late trajectory (e.g. tau up to 1e250) by a formula.
+    """
+    for j in range(tau_targets.size):
+        u = u_e + math.log1p((tau_targets[j] - tau_e) * math.exp(-u_e))
+        u_at[j] = u
+        xi_at[j] = xi_inf - tail_slip(k, a, b, u, math.exp(-(k * xi_inf + u * (a + b * u))))
+
+
+@njit(cache=True, fastmath=FAST)
 def march(k, a, b, h, s_c, max_steps, want_limit, rtol, atol, tau_targets, xi_at, u_at, xi_targets, tau_at,
           rate_at):
     """Integrate one stop point with fixed-step RK4 in sigma.
 
     Records xi and u = ln psi where tau crosses each of the increasing ``tau_targets`` (into xi_at, u_at)
     and tau and the slip rate dxi/dtau where xi crosses each of the increasing ``xi_targets`` (into tau_at,
-    rate_at), from exact partial steps
+    rate_at), from exact partial steps; tau targets beyond the end of the transient (E < TAIL_SAFETY rtol,
+    relaxed slip known) come from :func:`continue_in_closed_form`
     (:func:`state_where`). Stops when the tail test passes (if ``want_limit``) and all targets are recorded.
     Returns (status, xi_inf, steps); xi_inf is NaN unless the tail was reached.
     """
@@ -218,6 +234,9 @@ def march(k, a, b, h, s_c, max_steps, want_limit, rtol, atol, tau_targets, xi_at
             if tail_is_accurate(k, a, b, u, E, rtol * xi + atol):
                 xi_inf = xi + tail_slip(k, a, b, u, E)
                 tail_done = True
+        if it < tau_targets.size and E < TAIL_SAFETY * rtol and math.isfinite(xi_inf):
+            continue_in_closed_form(k, a, b, xi_inf, s - xi, tau, tau_targets[it:], xi_at[it:], u_at[it:])
+            it = tau_targets.size
         if tail_done and it == tau_targets.size and ix == xi_targets.size:
             return OK, xi_inf, n
     return MAX_STEPS, xi_inf, n
