@@ -13,10 +13,12 @@ import math
 import time
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numba import njit, prange
 
 from .models.stop import NO_FINITE_LIMIT, solve_stop_point
+from .models.stop_lanes import relax_in_lanes
 from .plan import Plan, make_plan
 from .progress import Progress
 from .scene import Scene
@@ -49,6 +51,16 @@ def stop_batch(k, a, b, s_c, finite, h, max_steps, rtol, atol, tau_samples, obs_
             u_at[i, order[j]] = us[j]
 
 
+@njit(parallel=True, cache=True)
+def relax_batch(k, a, b, s_c, finite, h, max_steps, rtol, atol, groups, xi_inf, status, steps):
+    """xi_inf-only batch: strided groups of points, each group stepped in lanes by one thread. Few, large
+    groups keep both lanes busy (a group's last point runs alone); four per thread still balance the load."""
+    groups = min(groups, k.size)
+    for g in prange(groups):
+        relax_in_lanes(k, a, b, h, s_c, finite, max_steps, rtol, atol, np.arange(g, k.size, groups), xi_inf,
+                       status, steps)
+
+
 @dataclass
 class RawResult:
     """Flat per-point outputs of the kernel (numpy only), in reduced units."""
@@ -79,6 +91,7 @@ def execute(scene: Scene, plan: Plan, indices: np.ndarray | None = None, progres
     out = RawResult(np.full(n, np.nan), np.zeros(n, np.int8), np.zeros(n, np.int32),
                     np.full((n, n_t), np.nan), np.full((n, n_t), np.nan), np.full((n, 2), np.nan), 0.0)
     want_fractions = bool({"t50", "t90"} & set(scene.observables))
+    relaxed_slip_only = n_t == 0 and not want_fractions
     atol = scene.atol["xi_inf"]
     n_chunks = max(1, math.ceil(n / (chunk_size or 4096)))
     order = np.random.default_rng(ORDER_SEED).permutation(n)
@@ -86,11 +99,14 @@ def execute(scene: Scene, plan: Plan, indices: np.ndarray | None = None, progres
     with Progress(n, enabled=progress) as bar:
         for sel in np.array_split(order, n_chunks):
             g = idx[sel]
-            parts = [np.empty(sel.size), np.empty(sel.size, np.int8), np.empty(sel.size, np.int32),
-                     np.empty((sel.size, n_t)), np.empty((sel.size, n_t)), np.empty((sel.size, 2))]
-            stop_batch(plan.k[g], plan.a[g], plan.b[g], plan.s_c[g], plan.finite[g], plan.step[g],
-                       plan.max_steps, scene.rtol, atol, plan.tau_samples, np.ascontiguousarray(obs_tau[g]),
-                       want_fractions, *parts)
+            per_point = (plan.k[g], plan.a[g], plan.b[g], plan.s_c[g], plan.finite[g], plan.step[g])
+            parts = [np.empty(sel.size), np.empty(sel.size, np.int8), np.empty(sel.size, np.int32)]
+            if relaxed_slip_only:
+                relax_batch(*per_point, plan.max_steps, scene.rtol, atol, 4 * numba.get_num_threads(), *parts)
+            else:
+                parts += [np.empty((sel.size, n_t)), np.empty((sel.size, n_t)), np.empty((sel.size, 2))]
+                stop_batch(*per_point, plan.max_steps, scene.rtol, atol, plan.tau_samples,
+                           np.ascontiguousarray(obs_tau[g]), want_fractions, *parts)
             for dest, part in zip((out.xi_inf, out.status, out.steps, out.xi_at, out.u_at, out.tau_at_fraction),
                                   parts):
                 dest[sel] = part
