@@ -18,25 +18,43 @@ __all__ = ["plot_landscape"]
 
 
 def plot_landscape(ds: xr.Dataset, path: str | os.PathLike, variable: str = "xi_inf") -> Path:
-    """Log-log map of ``variable`` over (K/M, V) with the quasi-static Hopf line (K/M)_c(V) = g chi_c / D0.
+    """Picture of ``variable`` over the (K/M, V) grid, written to ``path``.
 
-    Points with a non-ok status are marked with grey crosses; the stick-slip side of the line (steady sliding
-    unstable) is hatched.
+    A 2-D grid gives a log-log map with the quasi-static Hopf line (K/M)_c(V) = g chi_c / D0, the stick-slip
+    side (steady sliding unstable) hatched and points with a non-ok status marked by grey crosses. A grid with
+    a single K/M or a single V gives a curve along the other axis, dashed where sliding is unstable.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(7.5, 5.5), dpi=110)
+    if min(ds.sizes["K_over_M"], ds.sizes["V"]) > 1:
+        _draw_map(fig, ax, ds, variable)
+        ax.set_title(_caption(ds) + "\nhatched: steady sliding unstable (stick-slip)", fontsize=9)
+    else:
+        _draw_curve(ax, ds, variable)
+        ax.set_title(_caption(ds), fontsize=9)
+    ax.legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def _label(ds: xr.Dataset, variable: str) -> str:
+    return f"{ds[variable].attrs.get('long_name', variable)} [{ds[variable].units}]"
+
+
+def _draw_map(fig, ax, ds: xr.Dataset, variable: str) -> None:
     km, v_um = ds["K_over_M"].values, ds["V"].values * 1e6
     z = ds[variable].values.T  # rows: V, columns: K/M
-    fig, ax = plt.subplots(figsize=(7.5, 5.5), dpi=110)
     finite = z[np.isfinite(z) & (z > 0)]
     norm = LogNorm(finite.min(), finite.max()) if finite.size and finite.max() > finite.min() else None
     mesh = ax.pcolormesh(km, v_um, np.ma.masked_invalid(z), shading="nearest", cmap="viridis", norm=norm)
-    fig.colorbar(mesh, ax=ax, label=f"{ds[variable].attrs.get('long_name', variable)} [{ds[variable].units}]")
+    fig.colorbar(mesh, ax=ax, label=_label(ds, variable))
     unstable = ds["stable"].values.T == 0
     if unstable.any():
         ax.contourf(km, v_um, unstable.astype(float), levels=[0.5, 1.5], colors="none", hatches=["//"])
-    scene_g_over_d0 = float(ds["K_over_M"][0] / ds["chi"][0])
-    kc = ds["chi_c"].values * scene_g_over_d0
+    kc = ds["chi_c"].values * float(ds["K_over_M"][0] / ds["chi"][0])  # chi -> K/M is the factor g/D0
     ax.plot(kc, v_um, "w-", lw=2.2)
     ax.plot(kc, v_um, "r--", lw=1.6, label="Hopf line (linear, quasi-static)")
     failed = ds["status"].values.T != 0
@@ -45,15 +63,23 @@ def plot_landscape(ds: xr.Dataset, path: str | os.PathLike, variable: str = "xi_
         ax.plot(kk[failed], vv[failed], "x", color="0.5", ms=3, label="status != ok")
     ax.set(xscale="log", yscale="log", xlim=(km.min(), km.max()), ylim=(v_um.min(), v_um.max()),
            xlabel="K/M [s$^{-2}$]", ylabel="V [µm/s]")
-    ax.set_title(_caption(ds), fontsize=9)
-    ax.legend(loc="lower right", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+
+
+def _draw_curve(ax, ds: xr.Dataset, variable: str) -> None:
+    along = "V" if ds.sizes["K_over_M"] == 1 else "K_over_M"
+    line = ds.squeeze()
+    x = line[along].values * (1e6 if along == "V" else 1.0)
+    y = np.where(line["status"].values == 0, line[variable].values, np.nan)
+    stable = line["stable"].values == 1
+    ax.plot(x, np.where(stable, y, np.nan), "-", color="C0", label="steady sliding stable")
+    ax.plot(x, np.where(stable, np.nan, y), "--", color="C0", label="unstable (stick-slip side)")
+    fixed = "V = {:g} µm/s".format(float(ds["V"][0]) * 1e6) if along == "K_over_M" else \
+        "K/M = {:g} s$^{{-2}}$".format(float(ds["K_over_M"][0]))
+    ax.set(xscale="log", yscale="log", ylabel=_label(ds, variable),
+           xlabel=("V [µm/s]" if along == "V" else "K/M [s$^{-2}$]") + f" at {fixed}")
 
 
 def _caption(ds: xr.Dataset) -> str:
     params = tomllib.loads(ds.attrs["scene"]).get("params", {}) if "scene" in ds.attrs else {}
     shown = ", ".join(f"{k}={params[k]:g}" for k in ("A", "m1", "m2", "D0") if k in params)
-    return f"stop scene, quasi-static model; {shown}\nhatched: steady sliding unstable (stick-slip)"
+    return f"stop scene, quasi-static model; {shown}"

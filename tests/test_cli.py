@@ -67,3 +67,13 @@ def test_bad_config_is_a_clear_error(tmp_path):
     proc = sweep_cli("run", str(bad), "-o", str(tmp_path / "x.nc"), cwd=tmp_path)
     assert proc.returncode == 2 and "rtol" in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "x.nc").exists()
+
+
+@pytest.mark.parametrize("axes", ["[K_over_M]\nvalues = [1e3, 1e4, 1e5]\n[V]\nvalues = [1e-6]\n",
+                                  "[K_over_M]\nvalues = [2.8e5]\n[V]\nvalues = [1e-6]\n"])
+def test_run_on_a_line_or_a_point_draws_a_curve(tmp_path, axes):
+    config = tmp_path / "line.toml"
+    config.write_text('preset = "sample2"\n' + axes)
+    proc = sweep_cli("run", str(config), "-o", str(tmp_path / "line.nc"), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "line.png").stat().st_size > 10_000
