@@ -75,7 +75,10 @@ def _draw_curve(ax, ds: xr.Dataset, variable: str) -> None:
     ax.plot(x, np.where(stable, np.nan, y), "--", color="C0", label="unstable (stick-slip side)")
     fixed = "V = {:g} µm/s".format(float(ds["V"][0]) * 1e6) if along == "K_over_M" else \
         "K/M = {:g} s$^{{-2}}$".format(float(ds["K_over_M"][0]))
-    ax.set(xscale="log", yscale="log", ylabel=_label(ds, variable),
+    has_values = bool(np.any(np.isfinite(y) & (y > 0)))
+    if not has_values:  # e.g. every point without a finite limit: say so instead of an empty log axis
+        ax.text(0.5, 0.5, "no finite values (see status)", transform=ax.transAxes, ha="center")
+    ax.set(xscale="log", yscale="log" if has_values else "linear", ylabel=_label(ds, variable),
            xlabel=("V [µm/s]" if along == "V" else "K/M [s$^{-2}$]") + f" at {fixed}")
 
 

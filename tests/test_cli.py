@@ -69,9 +69,14 @@ def test_bad_config_is_a_clear_error(tmp_path):
     assert not (tmp_path / "x.nc").exists()
 
 
+NO_LIMIT = "[params]\nm2 = -0.001\n"
+
+
 @pytest.mark.parametrize("axes", ["[K_over_M]\nvalues = [1e3, 1e4, 1e5]\n[V]\nvalues = [1e-6]\n",
-                                  "[K_over_M]\nvalues = [2.8e5]\n[V]\nvalues = [1e-6]\n"])
-def test_run_on_a_line_or_a_point_draws_a_curve(tmp_path, axes):
+                                  "[K_over_M]\nvalues = [2.8e5]\n[V]\nvalues = [1e-6]\n",
+                                  NO_LIMIT + "[K_over_M]\nvalues = [1e3, 1e5]\n[V]\nvalues = [1e-6]\n",
+                                  NO_LIMIT + "[K_over_M]\nvalues = [1e3, 1e5]\n[V]\nvalues = [1e-6, 1e-5]\n"])
+def test_run_on_a_line_a_point_or_without_finite_values_draws_a_picture(tmp_path, axes):
     config = tmp_path / "line.toml"
     config.write_text('preset = "sample2"\n' + axes)
     proc = sweep_cli("run", str(config), "-o", str(tmp_path / "line.nc"), cwd=tmp_path)
