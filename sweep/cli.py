@@ -43,14 +43,22 @@ def _cmd_run(args: argparse.Namespace) -> int:
                    history="sweep " + " ".join(shlex.quote(a) for a in sys.argv[1:]))
     out = save(ds, args.output)
     elapsed = time.perf_counter() - t0
-    png = plot_landscape(ds, args.png or out.with_suffix(".png"))
-    counts = np.unique(ds["status"].values, return_counts=True)
     print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, {scene.n_points / max(elapsed, 1e-9):,.0f} "
           f"points/s; kernel {'compiled' if compile_s > 2 else 'loaded'} in {compile_s:.1f} s beforehand)")
-    print(f"wrote {png}")
-    meanings = ds["status"].attrs["flag_meanings"].split()
-    print("status: " + ", ".join(f"{meanings[c]} {n}" for c, n in zip(*counts)))
+    print(_status_summary(ds))
+    try:
+        print(f"wrote {plot_landscape(ds, args.png or out.with_suffix('.png'))}")
+    except Exception as exc:  # the results are safe on disk; a failed picture must not hide that
+        print(f"sweep: could not draw the picture ({type(exc).__name__}: {exc}); the data are in {out}",
+              file=sys.stderr)
+        return 1
     return 0
+
+
+def _status_summary(ds) -> str:
+    meanings = ds["status"].attrs["flag_meanings"].split()
+    codes, counts = np.unique(ds["status"].values, return_counts=True)
+    return "status: " + ", ".join(f"{meanings[c]} {n}" for c, n in zip(codes, counts))
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:
@@ -76,9 +84,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
         print(f"  {name}: {c.values.min():.4g} .. {c.values.max():.4g} [{c.units}]")
     for key in sorted(k for k in ds.attrs if k.startswith("plan_")):
         print(f"  {key}: {ds.attrs[key]}")
-    meanings = ds["status"].attrs["flag_meanings"].split()
-    codes, counts = np.unique(ds["status"].values, return_counts=True)
-    print("  status: " + ", ".join(f"{meanings[c]} {n}" for c, n in zip(codes, counts)))
+    print("  " + _status_summary(ds))
     for name, var in ds.data_vars.items():
         vals = var.values[np.isfinite(var.values)] if var.dtype.kind == "f" else var.values
         rng = f"{vals.min():.4g} .. {vals.max():.4g}" if vals.size else "all NaN"
