@@ -4,7 +4,8 @@ The numba layer (``stop_batch``) knows nothing of xarray: it fills preallocated 
 written once by one thread. The costly points cluster in one corner of the grid (small K/M with mu1 < 0) and
 numba's prange splits a batch into equal contiguous shares, so the points are visited in a fixed
 pseudo-random order: every chunk, and every thread's share of it, then mixes cheap and costly points
-(2 threads: 1.2x -> 1.96x speed-up on the default scene). Results do not depend on the order.
+(2 threads: 1.2x -> 1.96x speed-up on the default scene). Results do not depend on the order. Sweeps of the
+relaxed slip alone go through ``relax_batch`` instead (two points in flight per thread, models/stop_lanes.py).
 """
 
 from __future__ import annotations

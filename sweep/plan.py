@@ -124,11 +124,11 @@ def make_plan(scene: Scene) -> Plan:
     k, a, b = chi / p.A, mu1 / p.A, np.full(chi.size, p.m2 / p.A)
     # PHYSICS.md 6: finite relaxed slip iff m2 > 0, or m2 = 0 and mu1 > 0
     finite = (b > 0) | ((b == 0) & (a > 0))
-    time_resolved = bool(set(scene.observables) & {"trajectory", "slip_at", "t50", "t90"})
     if scene.step is not None:
         step, source = np.full(k.size, scene.step), "override"
     else:
-        step, source = rk4_step_for(scene.rtol, k > a, time_resolved), "rule"
+        stable = physics.stable_sliding(chi, mu1, p.A)
+        step, source = rk4_step_for(scene.rtol, stable, scene.time_resolved), "rule"
     return Plan(
         model="quasistatic",
         stepper="rk4",
@@ -144,5 +144,5 @@ def make_plan(scene: Scene) -> Plan:
         s_c=time_scale(k, a),
         finite=finite,
         tau_samples=scene.tau_samples,
-        needs_tau=time_resolved,
+        needs_tau=scene.time_resolved,
     )

@@ -148,6 +148,11 @@ class Scene:
         return (self.K_over_M.size, self.V.size)
 
     @property
+    def time_resolved(self) -> bool:
+        """True when values inside the transient are asked for (not only its limit xi_inf)."""
+        return any(o != "xi_inf" for o in self.observables)
+
+    @property
     def n_points(self) -> int:
         return self.K_over_M.size * self.V.size
 
