@@ -29,10 +29,12 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "") -> 
 def solve_point(params: FrictionParams, K_over_M: float, V: float, rtol: float = 1e-6,
                 observables: Sequence[str] = ("xi_inf", "trajectory", "t50", "t90"),
                 trajectory_tau: tuple[float, float, int] = (1e-3, 1e6, 61), t_obs: Sequence[float] = (),
-                step: float | None = None, max_steps: int = 1_000_000) -> xr.Dataset:
+                method: str = "auto", step: float | None = None, precision: str = "float64",
+                max_steps: int = 1_000_000) -> xr.Dataset:
     """Solve one (K/M [s-2], V [m s-1]) point through the sweep kernel; returns its 0-d Dataset
-    (xi_inf, status, steps, and by default the trajectory xi(tau), psi(tau), t50, t90)."""
+    (xi_inf, status, steps, and by default the trajectory xi(tau), psi(tau), t50, t90, each with its
+    ``<name>_error`` estimate). Arguments as in :class:`sweep.Scene`."""
     scene = Scene(protocol="stop", params=params, K_over_M=[K_over_M], V=[V], rtol=rtol,
-                  observables=tuple(observables), trajectory_tau=trajectory_tau, t_obs=tuple(t_obs), step=step,
-                  max_steps=max_steps)
+                  observables=tuple(observables), trajectory_tau=trajectory_tau, t_obs=tuple(t_obs), method=method,
+                  step=step, precision=precision, max_steps=max_steps)
     return run_sweep(scene, progress=False, history="sweep.solve_point").isel(K_over_M=0, V=0)

@@ -77,22 +77,33 @@ def build_dataset(scene: Scene, plan: Plan, raw: RawResult, history: str = "") -
         "stable": _var(DIMS, stable, "1", "steady sliding at V is linearly stable (quasi-static model)",
                        flag_values=np.array([0, 1], np.int8), flag_meanings="unstable stable"),
         "status": _var(DIMS, grid(raw.status), "1", "numerical status of the point", **flag_attrs()),
-        "steps": _var(DIMS, grid(raw.steps), "1", "RK4 steps taken by the point (first pass)"),
+        "steps": _var(DIMS, grid(raw.steps), "1", "steps taken by the point (fine run of the first pass)"),
     }
+    errors = {"xi_inf": grid(raw.xi_inf_err), "slip_inf": p.D0 * grid(raw.xi_inf_err),
+              "stress_relaxation": chi * grid(raw.xi_inf_err)}
     n_traj = plan.tau_samples.size
     if "trajectory" in scene.observables:
         traj_dims = DIMS + ("tau",)
         data["xi"] = _var(traj_dims, grid(raw.xi_at[:, :n_traj]), "1", "slip since the stop in units of D0, xi(tau)")
         data["psi"] = _var(traj_dims, np.exp(grid(raw.u_at[:, :n_traj])), "1",
                            "reduced contact age psi(tau) = V phi/D0")
+        errors["xi"] = grid(raw.xi_at_err[:, :n_traj])
+        errors["psi"] = data["psi"].values * np.expm1(grid(raw.u_at_err[:, :n_traj]))
     if "slip_at" in scene.observables:
         data["slip_at"] = _var(DIMS + ("t_obs",), p.D0 * grid(raw.xi_at[:, n_traj:]), "m",
                                "slip since the stop at time t_obs")
+        errors["slip_at"] = p.D0 * grid(raw.xi_at_err[:, n_traj:])
     seconds_per_tau = p.D0 / scene.V[None, :]
     for name, col, pct in (("t50", 0, 50), ("t90", 1, 90)):
         if name in scene.observables:
             data[name] = _var(DIMS, grid(raw.tau_at_fraction[:, col]) * seconds_per_tau, "s",
                               f"time after the stop to reach {pct} % of the relaxed slip")
+            errors[name] = grid(raw.tau_at_fraction_err[:, col]) * seconds_per_tau
+    for name, err in errors.items():
+        var = data[name]
+        var.attrs["ancillary_variables"] = f"{name}_error"
+        data[f"{name}_error"] = _var(var.dims, err, var.attrs["units"],
+                                     f"estimated absolute numerical error of {name} (Richardson pair + tail bound)")
     attrs = {
         "Conventions": "CF-1.11",
         "title": "Relaxation landscape of the Baumberger-Gauthier spring-block model (stop scene)",

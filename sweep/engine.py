@@ -18,61 +18,75 @@ import numba
 import numpy as np
 from numba import njit, prange
 
-from .models.stop import NO_FINITE_LIMIT, solve_stop_point
-from .models.stop_lanes import relax_in_lanes
+from .models.stop import NO_FINITE_LIMIT, OK
+from .models.stop_lanes import lane_kernels
+from .models.stop_march import solve_stop_point
 from .plan import Plan, make_plan
 from .progress import Progress
 from .scene import Scene
+from .status import Status
 
 __all__ = ["RawResult", "estimate_seconds", "execute", "warm_up"]
 
 FRACTIONS = np.array([0.5, 0.9])
 """Fractions of the relaxed slip whose times are reported as t50 and t90."""
 ORDER_SEED = 20261121
+ERROR_ABOVE_TOL = int(Status.ERROR_ABOVE_TOL)
 
 
 @njit(parallel=True, cache=True)
-def stop_batch(k, a, b, s_c, finite, h, max_steps, rtol, atol, tau_samples, obs_tau, want_fractions,
-               xi_inf, status, steps, xi_at, u_at, tau_at_fraction):
-    """Solve a flat batch of stop points. obs_tau[i, :] are point i's extra reduced times (slip_at)."""
+def stop_batch(method, order, adaptive, k, a, b, s_c, finite, h, max_steps, rtol, atol, ctrl_tol, tau_samples, obs_tau,
+               want_fractions, xi_inf, xi_inf_err, status, steps, xi_at, u_at, xi_at_err, u_at_err, tau_at_fraction,
+               tau_at_fraction_err):
+    """Solve a flat batch of stop points one by one (Richardson pairs, models/stop_march.py). obs_tau[i, :] are
+    point i's extra reduced times (slip_at)."""
     fractions = FRACTIONS if want_fractions else np.empty(0)
     for i in prange(k.size):
         if not finite[i] and xi_at.shape[1] == 0:
-            xi_inf[i], status[i], steps[i] = math.nan, NO_FINITE_LIMIT, 0
+            xi_inf[i], xi_inf_err[i], status[i], steps[i] = math.nan, math.nan, NO_FINITE_LIMIT, 0
             tau_at_fraction[i, :] = math.nan
+            tau_at_fraction_err[i, :] = math.nan
             continue
         targets = np.concatenate((tau_samples, obs_tau[i]))
-        order = np.argsort(targets, kind="mergesort")
-        xs, us = np.full(targets.size, math.nan), np.full(targets.size, math.nan)
-        st, x, n = solve_stop_point(k[i], a[i], b[i], h[i], s_c[i], max_steps, finite[i], rtol, atol,
-                                    targets[order], xs, us, fractions, tau_at_fraction[i])
-        xi_inf[i], status[i], steps[i] = x, st, n
-        for j in range(targets.size):
-            xi_at[i, order[j]] = xs[j]
-            u_at[i, order[j]] = us[j]
-
-
-@njit(parallel=True, cache=True)
-def relax_batch(k, a, b, s_c, finite, h, max_steps, rtol, atol, groups, xi_inf, status, steps):
-    """xi_inf-only batch: strided groups of points, each group stepped in lanes by one thread. Few, large
-    groups keep both lanes busy (a group's last point runs alone); four per thread still balance the load."""
-    groups = min(groups, k.size)
-    for g in prange(groups):
-        relax_in_lanes(k, a, b, h, s_c, finite, max_steps, rtol, atol, np.arange(g, k.size, groups), xi_inf,
-                       status, steps)
+        order_t = np.argsort(targets, kind="mergesort")
+        n_t = targets.size
+        xs, us, xe, ue = np.full(n_t, math.nan), np.full(n_t, math.nan), np.full(n_t, math.nan), np.full(n_t, math.nan)
+        st, x, xe_inf, n = solve_stop_point(method, order, adaptive, h[i], k[i], a[i], b[i], s_c[i], max_steps,
+                                            finite[i], rtol, atol, ctrl_tol, targets[order_t], xs, us, xe, ue,
+                                            fractions, tau_at_fraction[i], tau_at_fraction_err[i])
+        xi_inf[i], xi_inf_err[i], status[i], steps[i] = x, xe_inf, st, n
+        for j in range(n_t):
+            xi_at[i, order_t[j]], u_at[i, order_t[j]] = xs[j], us[j]
+            xi_at_err[i, order_t[j]], u_at_err[i, order_t[j]] = xe[j], ue[j]
 
 
 @dataclass
 class RawResult:
-    """Flat per-point outputs of the kernel (numpy only), in reduced units."""
+    """Flat per-point outputs of the kernel (numpy only), in reduced units; ``*_err`` are the absolute error
+    estimates of the same quantities (u = ln psi: its error is the relative error of psi)."""
 
     xi_inf: np.ndarray
+    xi_inf_err: np.ndarray
     status: np.ndarray
     steps: np.ndarray
     xi_at: np.ndarray
     u_at: np.ndarray
+    xi_at_err: np.ndarray
+    u_at_err: np.ndarray
     tau_at_fraction: np.ndarray
-    seconds: float
+    tau_at_fraction_err: np.ndarray
+    seconds: float = 0.0
+
+    @classmethod
+    def empty(cls, n: int, n_t: int) -> RawResult:
+        nan = lambda *shape: np.full(shape, np.nan)  # noqa: E731
+        return cls(nan(n), nan(n), np.zeros(n, np.int8), np.zeros(n, np.int32), nan(n, n_t), nan(n, n_t),
+                   nan(n, n_t), nan(n, n_t), nan(n, 2), nan(n, 2))
+
+    def assign(self, sel: np.ndarray, part: RawResult) -> None:
+        for name, value in vars(part).items():
+            if isinstance(value, np.ndarray):
+                getattr(self, name)[sel] = value
 
 
 def _obs_tau(scene: Scene) -> np.ndarray:
@@ -82,6 +96,30 @@ def _obs_tau(scene: Scene) -> np.ndarray:
     return np.broadcast_to(tau_v[None, :, :], (*scene.shape, t.size)).reshape(scene.n_points, t.size)
 
 
+def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
+    """Relaxed slip of the points g through the lane kernel: two runs per point (steps 2h and h)."""
+    out = RawResult.empty(g.size, 0)
+    live = np.flatnonzero(plan.finite[g])
+    out.status[~plan.finite[g]] = NO_FINITE_LIMIT
+    out.steps[~plan.finite[g]] = 0
+    if live.size:
+        pts = g[live]
+        run_point = np.repeat(pts, 2)
+        run_h = plan.step[run_point] * np.tile([2.0, 1.0], pts.size)
+        r_xi, r_tail = np.full(run_point.size, np.nan), np.full(run_point.size, np.nan)
+        r_status, r_steps = np.zeros(run_point.size, np.int8), np.zeros(run_point.size, np.int32)
+        relax_batch = lane_kernels(plan.dtype, plan.method)[1]
+        relax_batch(plan.k, plan.a, plan.b, plan.s_c, run_point, run_h, plan.max_steps, scene.rtol,
+                    scene.atol["xi_inf"], 4 * numba.get_num_threads(), r_xi, r_tail, r_status, r_steps)
+        coarse, fine = slice(0, None, 2), slice(1, None, 2)
+        out.xi_inf[live] = r_xi[fine]
+        out.xi_inf_err[live] = (plan.error_gain * np.abs(r_xi[fine] - r_xi[coarse]) + 2.0 * r_tail[fine]
+                                + plan.roundoff * r_steps[fine] * np.abs(r_xi[fine]))
+        out.status[live] = np.where(r_status[fine] != 0, r_status[fine], r_status[coarse])
+        out.steps[live] = r_steps[fine]
+    return out
+
+
 def execute(scene: Scene, plan: Plan, indices: np.ndarray | None = None, progress: bool | None = None,
             chunk_size: int | None = None) -> RawResult:
     """Run ``plan`` over the points ``indices`` (default: all) of ``scene``; returns flat outputs."""
@@ -89,31 +127,44 @@ def execute(scene: Scene, plan: Plan, indices: np.ndarray | None = None, progres
     obs_tau = _obs_tau(scene)
     n_t = plan.tau_samples.size + obs_tau.shape[1]
     n = idx.size
-    out = RawResult(np.full(n, np.nan), np.zeros(n, np.int8), np.zeros(n, np.int32),
-                    np.full((n, n_t), np.nan), np.full((n, n_t), np.nan), np.full((n, 2), np.nan), 0.0)
+    out = RawResult.empty(n, n_t)
     want_fractions = bool({"t50", "t90"} & set(scene.observables))
-    relaxed_slip_only = n_t == 0 and not want_fractions
-    atol = scene.atol["xi_inf"]
     n_chunks = max(1, math.ceil(n / (chunk_size or 4096)))
     order = np.random.default_rng(ORDER_SEED).permutation(n)
     t0 = time.perf_counter()
     with Progress(n, enabled=progress) as bar:
         for sel in np.array_split(order, n_chunks):
             g = idx[sel]
-            per_point = (plan.k[g], plan.a[g], plan.b[g], plan.s_c[g], plan.finite[g], plan.step[g])
-            parts = [np.empty(sel.size), np.empty(sel.size, np.int8), np.empty(sel.size, np.int32)]
-            if relaxed_slip_only:
-                relax_batch(*per_point, plan.max_steps, scene.rtol, atol, 4 * numba.get_num_threads(), *parts)
+            if plan.lanes:
+                part = _relax_in_lanes(scene, plan, g)
             else:
-                parts += [np.empty((sel.size, n_t)), np.empty((sel.size, n_t)), np.empty((sel.size, 2))]
-                stop_batch(*per_point, plan.max_steps, scene.rtol, atol, plan.tau_samples,
-                           np.ascontiguousarray(obs_tau[g]), want_fractions, *parts)
-            for dest, part in zip((out.xi_inf, out.status, out.steps, out.xi_at, out.u_at, out.tau_at_fraction),
-                                  parts):
-                dest[sel] = part
+                part = RawResult.empty(sel.size, n_t)
+                stop_batch(plan.method_arrays, plan.order, plan.adaptive, plan.k[g], plan.a[g], plan.b[g],
+                           plan.s_c[g], plan.finite[g], plan.step[g], plan.max_steps, scene.rtol,
+                           scene.atol["xi_inf"], plan.ctrl_tol, plan.tau_samples, np.ascontiguousarray(obs_tau[g]),
+                           want_fractions, part.xi_inf, part.xi_inf_err, part.status, part.steps, part.xi_at,
+                           part.u_at, part.xi_at_err, part.u_at_err, part.tau_at_fraction, part.tau_at_fraction_err)
+            out.assign(sel, part)
             bar.update(sel.size)
+    mark_error_above_tol(scene, out)
     out.seconds = time.perf_counter() - t0
     return out
+
+
+def mark_error_above_tol(scene: Scene, out: RawResult) -> None:
+    """Status error_above_tol where an ok point's error estimate exceeds rtol |value| + atol (any observable)."""
+    ok = out.status == OK
+    bad = out.xi_inf_err > scene.rtol * np.abs(out.xi_inf) + scene.atol["xi_inf"]
+    for val, err, name in ((out.xi_at, out.xi_at_err, "trajectory"), (out.tau_at_fraction, out.tau_at_fraction_err,
+                                                                      "t50")):
+        if val.shape[1]:
+            with np.errstate(invalid="ignore"):
+                over = err > scene.rtol * np.abs(val) + scene.atol[name]
+            bad |= np.any(over, axis=1)
+    if out.u_at.shape[1]:  # psi = exp(u): the error of u is the relative error of psi
+        with np.errstate(invalid="ignore"):
+            bad |= np.any(out.u_at_err > scene.rtol, axis=1)
+    out.status[ok & bad] = ERROR_ABOVE_TOL
 
 
 def warm_up(scene: Scene, plan: Plan) -> float:

@@ -28,28 +28,47 @@ import numpy as np
 
 from . import physics
 from .models.stop import RATE_FLOOR, TAIL_SAFETY
+from .models.stop_march import ERROR_GAIN
 from .scene import Scene
+from .solvers import METHODS
 
-__all__ = ["Plan", "make_plan", "STEP_RULE"]
+__all__ = ["Plan", "make_plan", "choose_method"]
 
 C_STABLE = 6.0e-4
 """Bound on the RK4 error constant |err/xi_inf| / h^4 where steady sliding is stable (chi > mu1)."""
 C_UNSTABLE = 2.0e-3
 """Bound on the RK4 error constant where steady sliding is unstable (chi <= mu1)."""
-SAFETY = 3.0
-TIME_RESOLVED_FACTOR = 10.0
+TIME_RESOLVED_FACTOR = 30.0
 """Time-resolved observables (values inside the transient, not only its limit) have error constants up to
 ~6x those of xi_inf (tests/test_accuracy.py); when they are asked for, C is multiplied by this factor."""
 H_MAX = 0.7
-"""Upper bound on the step in sigma (keeps RK4 stable along the slow creep manifold, h |mu1 + 2 m2 u|/(A r) < 1)."""
-STEP_RULE = (
-    f"RK4, fixed step h in sigma (ds/dsigma = 1/(1/(s + s_c) + r), s = int dtau/psi, u = ln psi = s - xi, "
-    f"r = sqrt(((mu1 + 2 m2 u)/A)^2 + |m2|/(4 A)) + {RATE_FLOOR}); h = min({H_MAX}, (rtol/({SAFETY} C))**0.25), "
-    f"C = {C_STABLE} where chi > mu1 (stable sliding) else {C_UNSTABLE}, times {TIME_RESOLVED_FACTOR:g} when "
-    f"trajectory, slip_at, t50 or t90 are asked for; "
-    f"per point s_c = 1/(1 + (chi + |mu1|)/A); stop when the closed-form tail is accurate to "
-    f"{TAIL_SAFETY}*(rtol*xi + atol); steps per point = sigma_end/h"
-)
+"""Upper bound on the (coarse) step in sigma (keeps RK4 stable along the slow creep manifold)."""
+CTRL_TOL_FACTOR = {"dp5": 1.0, "dop853": 1.0}
+"""Local tolerance of the adaptive controller per unit rtol, such that the error estimate of the returned
+(fine) solution stays below rtol (calibrated by benchmarks/work_precision.py)."""
+AUTO_METHOD = (("rk4", 0.0),)
+"""(method, smallest rtol it is chosen for), by decreasing rtol: the cheapest method measured by
+benchmarks/work_precision.py that meets each rtol."""
+STEP_SAFETY = 2.0
+"""Margin of the fixed-step rule: the error estimate (~ERROR_GAIN times the error) stays below rtol / STEP_SAFETY on
+the calibration set."""
+ROUNDOFF = {np.dtype(np.float64): 2.0 * np.finfo(np.float64).eps, np.dtype(np.float32): 2.0 * np.finfo(np.float32).eps}
+"""Rounding error per step, relative (added to the estimate as steps * ROUNDOFF * |xi_inf|)."""
+
+
+def _step_rule(method: str) -> str:
+    tab = METHODS[method]
+    common = (f"error estimate: Richardson pair (coarse mesh, same mesh halved), fine solution returned, estimate = "
+              f"{ERROR_GAIN:g}/(2^{tab.order} - 1) |fine - coarse| + 2 x tail bound + steps * roundoff |xi|; "
+              f"time map ds/dsigma = 1/(1/(s + s_c) + r), s = int dtau/psi, u = ln psi = s - xi, "
+              f"r = sqrt(((mu1 + 2 m2 u)/A)^2 + |m2|/(4 A)) + {RATE_FLOOR}, s_c = 1/(1 + (chi + |mu1|)/A); stop when "
+              f"the closed-form tail is accurate to {TAIL_SAFETY}*(rtol*xi + atol)")
+    if tab.adaptive:
+        return (f"{method}: adaptive steps in sigma, PI controller on the embedded order-{tab.order_hat} estimate, "
+                f"local tolerance {CTRL_TOL_FACTOR[method]:g} rtol; " + common)
+    return (f"{method}: fixed step h in sigma, h = min({H_MAX / 2}, (rtol/({STEP_SAFETY * ERROR_GAIN:g} C))**0.25), C = {C_STABLE} "
+            f"where chi > mu1 (stable sliding) else {C_UNSTABLE}, times {TIME_RESOLVED_FACTOR:g} when trajectory, "
+            f"slip_at, t50 or t90 are asked for (coarse step 2h); " + common)
 
 
 def time_scale(k, a):
@@ -58,10 +77,22 @@ def time_scale(k, a):
 
 
 def rk4_step_for(rtol: float, stable_sliding, time_resolved: bool = False):
-    """Step in sigma that meets ``rtol`` at each point (the rule of :data:`STEP_RULE`), on xi_inf alone or,
-    if ``time_resolved``, also on the trajectory, slip_at, t50 and t90."""
+    """Fine step in sigma whose error estimate meets ``rtol`` at each point (:func:`_step_rule`), on xi_inf
+    alone or, if ``time_resolved``, also on the trajectory, slip_at, t50 and t90."""
     error_constant = np.where(stable_sliding, C_STABLE, C_UNSTABLE) * (TIME_RESOLVED_FACTOR if time_resolved else 1.0)
-    return np.minimum(H_MAX, (rtol / (SAFETY * error_constant)) ** 0.25)
+    return np.minimum(H_MAX / 2, (rtol / (STEP_SAFETY * ERROR_GAIN * error_constant)) ** 0.25)
+
+
+def choose_method(scene: Scene) -> tuple[str, str]:
+    """(method, why): the scene's own choice, or the cheapest measured method for its rtol."""
+    if scene.method != "auto":
+        return scene.method, "chosen by the scene"
+    if scene.step is not None or scene.precision == "float32":
+        return "rk4", "auto: fixed step asked for (step or float32)"
+    for method, rtol_min in AUTO_METHOD:
+        if scene.rtol >= rtol_min:
+            return method, f"auto: cheapest measured method for rtol >= {rtol_min:g} (benchmarks/work_precision.py)"
+    raise AssertionError("AUTO_METHOD covers every rtol")
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,9 +100,14 @@ class Plan:
     """The resolved plan of a scene; per-point arrays are flat in C order over (K_over_M, V)."""
 
     model: str
-    stepper: str
+    method: str
+    method_reason: str
+    adaptive: bool
+    lanes: bool
+    dtype: np.dtype
     step: np.ndarray
     step_source: str
+    ctrl_tol: float
     rule: str
     max_steps: int
     chi: np.ndarray
@@ -88,14 +124,46 @@ class Plan:
     def n_points(self) -> int:
         return self.k.size
 
+    @property
+    def tableau(self):
+        return METHODS[self.method]
+
+    @property
+    def order(self) -> int:
+        return self.tableau.order
+
+    @property
+    def method_arrays(self) -> tuple:
+        """(c, a, b, e, fsal, error order) for the per-point kernel (models/stop_march.py)."""
+        c, a, b, e = self.tableau.arrays()
+        return c, a, b, e, self.tableau.fsal, self.tableau.error_order
+
+    @property
+    def lane_method(self) -> tuple:
+        """(c, a, b) in the lanes' float type (models/stop_lanes.py)."""
+        return tuple(x.astype(self.dtype) for x in self.tableau.arrays()[:3])
+
+    @property
+    def error_gain(self) -> float:
+        return ERROR_GAIN / (2.0**self.order - 1.0)
+
+    @property
+    def roundoff(self) -> float:
+        return float(ROUNDOFF[np.dtype(self.dtype)])
+
     def describe(self) -> dict[str, str]:
         """Human-readable summary, also stored in the Dataset attrs."""
+        step = (f"{self.step.min():.6g}..{self.step.max():.6g}" if self.step.min() < self.step.max()
+                else f"{self.step[0]:.6g}")
         return {
             "model": self.model,
             "state": "xi (u = s - xi)" + (" + tau quadrature" if self.needs_tau else ""),
-            "stepper": self.stepper,
-            "step": (f"{self.step.min():.6g}..{self.step.max():.6g} in sigma" if self.step.min() < self.step.max()
-                     else f"{self.step[0]:.6g} in sigma") + f" ({self.step_source})",
+            "method": f"{self.method} ({self.method_reason})",
+            "stepper": (("adaptive" if self.adaptive else "fixed-step")
+                        + (f", {self.dtype.name} lanes" if self.lanes else ", one point per thread")),
+            "step": (f"first trial {step} in sigma, local tolerance {self.ctrl_tol:.3g}" if self.adaptive
+                     else f"{step} in sigma ({self.step_source})"),
+            "error_estimate": "Richardson pair per point (coarse mesh, same mesh halved): <name>_error variables",
             "step_rule": self.rule,
             "max_steps": str(self.max_steps),
             "horizon": "per point: until the closed-form tail is accurate (and all requested times are passed)",
@@ -116,7 +184,7 @@ class Plan:
 
 
 def make_plan(scene: Scene) -> Plan:
-    """Decide model, state, stepper and per-point step parameters for ``scene``."""
+    """Decide model, state, method, float type and per-point step parameters for ``scene``."""
     p = scene.params
     chi_axis = physics.reduced_stiffness(scene.K_over_M, p.D0, p.g)
     mu1_axis = physics.mu1(scene.V, p.m1, p.m2, p.V0)
@@ -124,17 +192,27 @@ def make_plan(scene: Scene) -> Plan:
     k, a, b = chi / p.A, mu1 / p.A, np.full(chi.size, p.m2 / p.A)
     # PHYSICS.md 6: finite relaxed slip iff m2 > 0, or m2 = 0 and mu1 > 0
     finite = (b > 0) | ((b == 0) & (a > 0))
-    if scene.step is not None:
+    method, reason = choose_method(scene)
+    tab = METHODS[method]
+    ctrl_tol = scene.rtol * CTRL_TOL_FACTOR.get(method, 1.0)
+    if tab.adaptive:
+        step, source = np.full(k.size, min(0.5, ctrl_tol ** (1.0 / (tab.error_order + 1)))), "controller"
+    elif scene.step is not None:
         step, source = np.full(k.size, scene.step), "override"
     else:
         stable = physics.stable_sliding(chi, mu1, p.A)
         step, source = rk4_step_for(scene.rtol, stable, scene.time_resolved), "rule"
     return Plan(
         model="quasistatic",
-        stepper="rk4",
+        method=method,
+        method_reason=reason,
+        adaptive=tab.adaptive,
+        lanes=not tab.adaptive and not scene.time_resolved,
+        dtype=np.dtype(scene.precision),
         step=step,
         step_source=source,
-        rule=STEP_RULE,
+        ctrl_tol=ctrl_tol,
+        rule=_step_rule(method),
         max_steps=int(scene.max_steps),
         chi=chi,
         mu1=mu1,

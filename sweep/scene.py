@@ -18,6 +18,7 @@ import numpy as np
 from .errors import InputError
 from .params import FrictionParams, require_finite, require_positive
 from .presets import presets
+from .solvers import METHODS
 
 __all__ = ["Scene", "OBSERVABLES", "PROTOCOLS", "DEFAULT_ATOL", "default_scene", "load_scene"]
 
@@ -26,6 +27,8 @@ OBSERVABLES = ("xi_inf", "trajectory", "slip_at", "t50", "t90")
 DEFAULT_ATOL = {"xi_inf": 1e-12, "trajectory": 1e-12, "slip_at": 1e-12, "t50": 0.0, "t90": 0.0}
 """Absolute floors per observable, in the observable's reduced unit (xi for slips, tau for times)."""
 RTOL_RANGE = (1e-10, 1e-2)
+PRECISIONS = ("float64", "float32")
+FLOAT32_RTOL_MIN = 1e-5
 TAU_MAX = 1e250
 """Largest reduced time that can be asked for (float64 carries tau up to ~1e308)."""
 
@@ -76,8 +79,15 @@ class Scene:
         Log-spaced reduced times of the trajectory samples, 0 < min < max <= 1e250, num >= 2.
     t_obs : sequence of float [s]
         Times after the stop for "slip_at" (>= 0, strictly increasing).
+    method : "auto" | "rk4" | "dp5" | "dop853"
+        Runge-Kutta method (:data:`sweep.solvers.METHODS`); "auto" lets the plan pick the cheapest that meets
+        rtol (sweep.plan). rk4 runs with fixed steps, dp5 and dop853 with adaptive steps.
     step : float, optional
-        Override of the planned RK4 step in the scaled log time sigma (0 < step <= 2); default from rtol.
+        Override of the planned fixed step in the scaled log time sigma (0 < step <= 2; fixed-step methods
+        only); default from rtol. The number of steps of each point then follows from its own horizon.
+    precision : "float64" | "float32"
+        Arithmetic of the relaxed-slip lanes. float32 is about twice as fast there and keeps ~7 digits: allowed
+        only for rtol >= 1e-5, a fixed-step method and observables = ("xi_inf",).
     max_steps : int
         Step budget per point; a point that needs more gets status max_steps.
     """
@@ -91,7 +101,9 @@ class Scene:
     observables: tuple[str, ...] = ("xi_inf",)
     trajectory_tau: tuple[float, float, int] = (1e-3, 1e6, 61)
     t_obs: tuple[float, ...] = ()
+    method: str = "auto"
     step: float | None = None
+    precision: str = "float64"
     max_steps: int = 1_000_000
 
     def __post_init__(self) -> None:
@@ -123,13 +135,33 @@ class Scene:
         if "slip_at" in self.observables and t_obs.size == 0:
             raise InputError("observable 'slip_at' needs t_obs: the times after the stop [s], e.g. [0.1, 1, 10]")
         set_("t_obs", tuple(t_obs.tolist()))
+        self._check_method()
+        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, (int, np.integer)) or self.max_steps < 1:
+            raise InputError(f"max_steps must be an integer >= 1, got {self.max_steps!r}")
+
+    def _check_method(self) -> None:
+        if self.method != "auto" and self.method not in METHODS:
+            raise InputError(f"method must be 'auto' or one of {sorted(METHODS)}, got {self.method!r}")
         if self.step is not None:
             step = require_positive("step", self.step)
             if step > 2.0:
-                raise InputError(f"step must be in (0, 2] (RK4 stability in sigma), got {step!r}")
-            set_("step", step)
-        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, (int, np.integer)) or self.max_steps < 1:
-            raise InputError(f"max_steps must be an integer >= 1, got {self.max_steps!r}")
+                raise InputError(f"step must be in (0, 2] (explicit RK stability in sigma), got {step!r}")
+            if self.method != "auto" and METHODS[self.method].adaptive:
+                raise InputError(f"step is for fixed-step methods; method {self.method!r} chooses its own steps "
+                                 "(leave step unset, or use method='rk4')")
+            object.__setattr__(self, "step", step)
+        if self.precision not in PRECISIONS:
+            raise InputError(f"precision must be one of {PRECISIONS}, got {self.precision!r}")
+        if self.precision == "float32":
+            if self.rtol < FLOAT32_RTOL_MIN:
+                raise InputError(f"precision 'float32' needs rtol >= {FLOAT32_RTOL_MIN:g} (float32 keeps ~7 "
+                                 f"digits and rounding accumulates over the steps), got rtol={self.rtol!r}")
+            if self.time_resolved:
+                raise InputError("precision 'float32' is offered for relaxed-slip sweeps only (observables = "
+                                 f"['xi_inf']), got observables={list(self.observables)}")
+            if self.method != "auto" and METHODS[self.method].adaptive:
+                raise InputError(f"precision 'float32' runs fixed-step methods only (rk4), got method "
+                                 f"{self.method!r}")
 
     def _check_trajectory_tau(self) -> None:
         try:
@@ -171,8 +203,10 @@ class Scene:
         lines.append(f"trajectory_tau = [{self.trajectory_tau[0]!r}, {self.trajectory_tau[1]!r}, "
                      f"{self.trajectory_tau[2]}]")
         lines.append("t_obs = [" + ", ".join(repr(t) for t in self.t_obs) + "]")
+        lines.append(f'method = "{self.method}"')
         if self.step is not None:
             lines.append(f"step = {self.step!r}")
+        lines.append(f'precision = "{self.precision}"')
         lines.append(f"max_steps = {int(self.max_steps)}")
         lines.append("[atol]")
         lines += [f"{k} = {v!r}" for k, v in sorted(self.atol.items())]

@@ -20,13 +20,16 @@ class Status(IntEnum):
     MAX_STEPS = 1
     """The step budget ran out before the stopping criterion (or the requested times) was reached."""
     STEP_UNDERFLOW = 2
-    """An adaptive stepper's step fell below its floor (reserved for adaptive steppers)."""
+    """An adaptive stepper's step fell below its floor (H_FLOOR of models/stop_march.py)."""
     NONFINITE = 3
     """A state or exponent left the finite range (caught before the overflow happened)."""
     NO_FINITE_LIMIT = 4
     """The model has no finite relaxed slip here (m2 < 0, or m2 = 0 with mu1 <= 0; PHYSICS.md 6):
     xi_inf, slip_inf, stress_relaxation, t50 and t90 are NaN by definition; finite-time observables
     (slip_at, trajectory) are still computed."""
+    ERROR_ABOVE_TOL = 5
+    """Computed, but the error estimate of at least one observable (``<name>_error``) exceeds rtol |value| +
+    atol: the value is kept for inspection and must not be trusted to rtol."""
 
 
 def flag_attrs() -> dict[str, object]:
