@@ -43,7 +43,7 @@ TIME_RESOLVED_FACTOR = 30.0
 ~6x those of xi_inf (tests/test_accuracy.py); when they are asked for, C is multiplied by this factor."""
 H_MAX = 0.7
 """Upper bound on the (coarse) step in sigma (keeps RK4 stable along the slow creep manifold)."""
-CTRL_TOL_FACTOR = {"dp5": 1.0, "dop853": 1.0}
+CTRL_TOL_FACTOR = {"dp5": 0.2, "dop853": 0.5}
 """Local tolerance of the adaptive controller per unit rtol, such that the error estimate of the returned
 (fine) solution stays below rtol (calibrated by benchmarks/work_precision.py)."""
 AUTO_METHOD = (("rk4", 0.0),)
@@ -66,8 +66,8 @@ def _step_rule(method: str) -> str:
     if tab.adaptive:
         return (f"{method}: adaptive steps in sigma, PI controller on the embedded order-{tab.order_hat} estimate, "
                 f"local tolerance {CTRL_TOL_FACTOR[method]:g} rtol; " + common)
-    return (f"{method}: fixed step h in sigma, h = min({H_MAX / 2}, (rtol/({STEP_SAFETY * ERROR_GAIN:g} C))**0.25), C = {C_STABLE} "
-            f"where chi > mu1 (stable sliding) else {C_UNSTABLE}, times {TIME_RESOLVED_FACTOR:g} when trajectory, "
+    return (f"{method}: fixed step h in sigma, h = min({H_MAX / 2}, (rtol/({STEP_SAFETY * ERROR_GAIN:g} C))**0.25), "
+            f"C = {C_STABLE} where chi > mu1 (stable sliding) else {C_UNSTABLE}, times {TIME_RESOLVED_FACTOR:g} when trajectory, "
             f"slip_at, t50 or t90 are asked for (coarse step 2h); " + common)
 
 

@@ -77,4 +77,5 @@ def test_late_trajectory_to_astronomical_times(name):
     np.testing.assert_allclose(pt["xi"].values, ref.xi(taus), rtol=rtol, atol=1e-12)
     np.testing.assert_allclose(pt["psi"].values, ref.psi(taus), rtol=rtol)
     short, _ = engine_point(case, rtol, observables=("trajectory",), trajectory_tau=(1e-3, 1e3, 41))
-    assert int(pt["steps"]) <= 2 * int(short["steps"]) + 200, "the late trajectory must not be integrated"
+    # integrating to tau = 1e200 would take thousands of steps more; the continuation starts once E < 1e-5 rtol
+    assert int(pt["steps"]) <= 3 * int(short["steps"]) + 200, "the late trajectory must not be integrated"

@@ -15,13 +15,16 @@ def scene(**kw):
 
 
 def test_lanes_path_matches_the_per_point_path():
-    """xi_inf-only sweeps run several points per thread (models/stop_lanes.py); asking for slip_at at t = 0
-    forces the per-point path without changing the stepping. Same steps and statuses, xi_inf to rounding."""
+    """xi_inf-only sweeps run in vectorised lanes (models/stop_lanes.py); asking for slip_at at t = 0 forces the
+    per-point path (models/stop_march.py) with the same steps in sigma. The per-point path starts its closed-form
+    tail later (TAIL_TIGHTENING), so it takes a few more steps; the values agree within their error estimates."""
     lanes = sweep.run_sweep(scene(max_steps=3000))
     per_point = sweep.run_sweep(scene(max_steps=3000, observables=("xi_inf", "slip_at"), t_obs=(0.0,)))
     np.testing.assert_array_equal(lanes["status"], per_point["status"])
-    np.testing.assert_array_equal(lanes["steps"], per_point["steps"])
-    np.testing.assert_allclose(lanes["xi_inf"], per_point["xi_inf"], rtol=1e-13)
+    ok = lanes["status"].values == sweep.Status.OK
+    assert np.all(per_point["steps"].values[ok] >= lanes["steps"].values[ok])
+    diff = np.abs(lanes["xi_inf"] - per_point["xi_inf"]).values[ok]
+    assert np.all(diff <= (lanes["xi_inf_error"] + per_point["xi_inf_error"]).values[ok])
     statuses = set(np.unique(lanes["status"]).tolist())
     assert {sweep.Status.OK, sweep.Status.MAX_STEPS} <= statuses, statuses
 

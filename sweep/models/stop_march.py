@@ -43,6 +43,10 @@ STEP_UNDERFLOW = int(Status.STEP_UNDERFLOW)
 ADAPTIVE, REPLAY = 0, 1
 ERROR_GAIN = 15.0
 """Nominal ratio of the error estimate to the true error (the estimate errs on the safe side)."""
+TAIL_TIGHTENING = 0.01
+"""The per-point path starts the closed-form tail (and continuation) at TAIL_TIGHTENING x rtol: a few steps more,
+and the tail's error bound, not sharp where its two neglected terms cancel, then stays small next to the
+integration error, so that the estimate of an over-resolved xi_inf (steps set by t50/t90) stays within 100x."""
 H_FLOOR = 1e-12
 """Smallest adaptive step in sigma, relative to max(1, sigma): below it the point gets status step_underflow."""
 
@@ -103,16 +107,21 @@ def hermite_crossing(y0, y1, m0, m1, target):
 
 
 @njit(cache=True, fastmath=FAST)
-def state_where(method, K, component, target, theta, xi, s, tau, d0x, d0s, d0t, h, k, a, bb, s_c):
+def state_where(method, K, component, target, theta, xi, s, tau, d0x, d0s, d0t, h, split, k, a, bb, s_c):
     """State (xi, s, tau) and slip rate dxi/dtau inside a step where ``component`` (0: xi, 2: tau) equals
     ``target``: Newton on theta in [0, 1] with exact partial steps of size theta*h from the step's start (the
-    method's own local order), started from the Hermite estimate ``theta``."""
+    method's own local order), started from the Hermite estimate ``theta``. The partial step is taken as ``split``
+    equal substeps, like the run's own steps, so that the Richardson pair also differs on targets that fall inside
+    a first step shared by the coarse and the fine run."""
     c, A, b, e, _, _ = method
     x1, s1, t1, dx1, dt1 = xi, s, tau, d0x, d0t
     for _ in range(8):
+        x1, s1, t1 = xi, s, tau
         K[0, 0], K[0, 1], K[0, 2] = d0x, d0s, d0t
-        x1, s1, t1, _, _ = erk_step(c, A, b, e, K, xi, s, tau, theta * h, k, a, bb, s_c, True)
-        dx1, _, dt1, _ = derivatives(x1, s1, k, a, bb, s_c, True)
+        for _ in range(split):
+            x1, s1, t1, _, _ = erk_step(c, A, b, e, K, x1, s1, t1, theta * h / split, k, a, bb, s_c, True)
+            dx1, ds1, dt1, _ = derivatives(x1, s1, k, a, bb, s_c, True)
+            K[0, 0], K[0, 1], K[0, 2] = dx1, ds1, dt1
         value = x1 if component == 0 else t1
         slope = h * (dx1 if component == 0 else dt1)
         miss = value - target
@@ -132,8 +141,10 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
     beyond the transient (E < TAIL_SAFETY rtol, relaxed slip known) come from the closed form. Stops when the
     tail test passes (if ``want_limit``) and all targets are recorded.
 
-    Returns (status, xi_inf, steps, tail error bound, mesh, n_mesh): xi_inf is NaN unless the tail was reached;
-    in ADAPTIVE mode the returned mesh holds the n_mesh accepted steps.
+    Returns (status, xi_inf, steps, tail error bound, mesh, n_mesh, first continued target, its bound): xi_inf is
+    NaN unless the tail was reached; in ADAPTIVE mode the returned mesh holds the n_mesh accepted steps; targets
+    from the first continued one on carry the closed form's own error in u = ln psi, bounded by
+    int E du ~ E_e A/(mu1 + 2 m2 u_e), the slip rate neglected by :func:`continue_in_closed_form`.
     """
     c, A, b, e, fsal, q = method
     stages = b.size
@@ -151,6 +162,7 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
         mesh = np.empty(256)
         n_mesh = 0
     h, sigma, err_prev, rejected_nonfinite = h0, 0.0, 1e-4, False
+    cont_from, cont_bound = tau_targets.size, 0.0
     n = 0
     while n < max_steps:
         if mode == REPLAY:
@@ -171,7 +183,8 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
                 rejected_nonfinite = not finite
                 h *= max(0.2, 0.9 * err ** (-1.0 / (q + 1))) if finite else 0.25
                 if h < H_FLOOR * max(1.0, sigma):
-                    return (NONFINITE if rejected_nonfinite else STEP_UNDERFLOW), math.nan, n, tail_err, mesh, n_mesh
+                    return (NONFINITE if rejected_nonfinite else STEP_UNDERFLOW), math.nan, n, tail_err, mesh, n_mesh, \
+                        cont_from, cont_bound
                 continue
             if n_mesh == mesh.size:
                 mesh = np.concatenate((mesh, np.empty(mesh.size)))
@@ -179,17 +192,17 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
             n_mesh += 1
         n += 1
         if not finite:
-            return NONFINITE, math.nan, n, tail_err, mesh, n_mesh
+            return NONFINITE, math.nan, n, tail_err, mesh, n_mesh, cont_from, cont_bound
         while it < tau_targets.size and tau_targets[it] <= tau1:
             th = hermite_crossing(tau, tau1, h * dtau, h * dtau1, tau_targets[it])
-            xt, st, _, _ = state_where(method, K, 2, tau_targets[it], th, xi, s, tau, dxi, ds, dtau, h, k, a, bb,
-                                       s_c)
+            xt, st, _, _ = state_where(method, K, 2, tau_targets[it], th, xi, s, tau, dxi, ds, dtau, h, split, k, a,
+                                       bb, s_c)
             xi_at[it], u_at[it] = xt, st - xt
             it += 1
         while ix < xi_targets.size and xi_targets[ix] <= xi1:
             th = hermite_crossing(xi, xi1, h * dxi, h * dxi1, xi_targets[ix])
             _, _, tau_at[ix], rate_at[ix] = state_where(method, K, 0, xi_targets[ix], th, xi, s, tau, dxi, ds, dtau,
-                                                        h, k, a, bb, s_c)
+                                                        h, split, k, a, bb, s_c)
             ix += 1
         xi, s, tau, dxi, ds, dtau = xi1, s1, tau1, dxi1, ds1, dtau1
         sigma += h
@@ -204,10 +217,11 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
                 xi_inf, tail_err, tail_done = xi + tail_slip(k, a, bb, u, E), bound, True
         if it < tau_targets.size and E < TAIL_SAFETY * rtol and math.isfinite(xi_inf):
             continue_in_closed_form(k, a, bb, xi_inf, s - xi, tau, tau_targets[it:], xi_at[it:], u_at[it:])
+            cont_from, cont_bound = it, E / (a + 2.0 * bb * (s - xi))
             it = tau_targets.size
         if tail_done and it == tau_targets.size and ix == xi_targets.size:
-            return OK, xi_inf, n, tail_err, mesh, n_mesh
-    return MAX_STEPS, xi_inf, n, tail_err, mesh, n_mesh
+            return OK, xi_inf, n, tail_err, mesh, n_mesh, cont_from, cont_bound
+    return MAX_STEPS, xi_inf, n, tail_err, mesh, n_mesh, cont_from, cont_bound
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
@@ -227,22 +241,25 @@ def solve_stop_point(method, order, adaptive, h, k, a, bb, s_c, max_steps, finit
     """
     none = np.empty(0)
     gain = ERROR_GAIN / (2.0**order - 1.0)
+    tail_rtol = TAIL_TIGHTENING * rtol
     n_t = tau_targets.size
     xc_at, uc_at = np.full(n_t, math.nan), np.full(n_t, math.nan)
     tau_at_fraction[:] = math.nan
     tau_at_fraction_err[:] = math.nan
     # pass 1, coarse then fine on the coarse mesh halved
     fixed = np.full(1, 2.0 * h)
-    st_c, x_c, _, _, mesh, n_mesh = march(method, ADAPTIVE if adaptive else REPLAY, h, fixed, 1, 1, k, a, bb, s_c,
-                                          max_steps, finite, rtol, atol, ctrl_tol, tau_targets, xc_at, uc_at, none,
-                                          none, none)
+    st_c, x_c, _, _, mesh, n_mesh, c_from, c_bound = march(
+        method, ADAPTIVE if adaptive else REPLAY, h, fixed, 1, 1, k, a, bb, s_c, max_steps, finite, tail_rtol, atol,
+        ctrl_tol, tau_targets, xc_at, uc_at, none, none, none)
     if n_mesh == 0:
         return st_c, math.nan, math.nan, 0
-    st, x_f, n, tail_err, _, _ = march(method, REPLAY, h, mesh, n_mesh, 2, k, a, bb, s_c, 2 * max_steps, finite,
-                                       rtol, atol, ctrl_tol, tau_targets, xi_at, u_at, none, none, none)
+    st, x_f, n, tail_err, _, _, f_from, f_bound = march(
+        method, REPLAY, h, mesh, n_mesh, 2, k, a, bb, s_c, max_steps, finite, tail_rtol, atol, ctrl_tol, tau_targets,
+        xi_at, u_at, none, none, none)
     for j in range(n_t):
         xi_at_err[j] = gain * abs(xi_at[j] - xc_at[j])
-        u_at_err[j] = gain * abs(u_at[j] - uc_at[j])
+        u_at_err[j] = gain * abs(u_at[j] - uc_at[j]) + (c_bound if j >= c_from else 0.0) + (
+            f_bound if j >= f_from else 0.0)
     if st == OK and st_c != OK:
         st = st_c
     if not finite:
@@ -252,27 +269,25 @@ def solve_stop_point(method, order, adaptive, h, k, a, bb, s_c, max_steps, finit
         return st, x_f, xi_err, n
     # pass 2: the crossings, on the same meshes
     rate_c, rate_f, tau_c = np.empty(fractions.size), np.empty(fractions.size), np.empty(fractions.size)
-    targets_f, targets_c = fractions * x_f, fractions * x_c
-    st2, _, _, _, _, _ = march(method, REPLAY, h, mesh, n_mesh, 2, k, a, bb, s_c, 2 * max_steps, False, rtol, atol,
-                               ctrl_tol, none, none, none, targets_f, tau_at_fraction, rate_f)
+    xi_ref_f, xi_ref_c, cross_err = x_f, x_c, 0.0
+    st2 = march(method, REPLAY, h, mesh, n_mesh, 2, k, a, bb, s_c, max_steps, False, tail_rtol, atol, ctrl_tol, none,
+                none, none, fractions * x_f, tau_at_fraction, rate_f)[0]
     cond = np.max(fractions * x_f / (tau_at_fraction * rate_f)) if st2 == OK else 0.0
     if cond > 1.0:  # ill-conditioned crossings: a more accurate relaxed slip for both runs' targets
-        st3, x_c3, _, _, mesh3, n_mesh3 = march(method, ADAPTIVE if adaptive else REPLAY, h * cond**-0.25, fixed
-                                                * cond**-0.25, 1, 1, k, a, bb, s_c, max_steps, True, rtol / cond,
-                                                atol / cond, ctrl_tol / cond, none, none, none, none, none, none)
-        st4, x_f3, _, tail3, _, _ = march(method, REPLAY, h, mesh3, n_mesh3, 2, k, a, bb, s_c, 2 * max_steps, True,
-                                          rtol / cond, atol / cond, ctrl_tol / cond, none, none, none, none, none,
-                                          none)
+        shrink = cond**-0.25
+        st3, x_c3, _, _, mesh3, n_mesh3, _, _ = march(
+            method, ADAPTIVE if adaptive else REPLAY, h * shrink, fixed * shrink, 1, 1, k, a, bb, s_c, max_steps, True,
+            tail_rtol / cond, atol / cond, ctrl_tol / cond, none, none, none, none, none, none)
+        st4, x_f3, _, tail3, _, _, _, _ = march(
+            method, REPLAY, h, mesh3, n_mesh3, 2, k, a, bb, s_c, max_steps, True, tail_rtol / cond, atol / cond,
+            ctrl_tol / cond, none, none, none, none, none, none)
         if st3 != OK or st4 != OK:
             return max(st3, st4), x_f, xi_err, n
-        targets_f, targets_c = fractions * x_f3, fractions * x_f3
-        cross_err = gain * abs(x_f3 - x_c3) + 2.0 * tail3
-        st2, _, _, _, _, _ = march(method, REPLAY, h, mesh, n_mesh, 2, k, a, bb, s_c, 2 * max_steps, False, rtol,
-                                   atol, ctrl_tol, none, none, none, targets_f, tau_at_fraction, rate_f)
-    else:
-        cross_err = 0.0
-    st2c, _, _, _, _, _ = march(method, REPLAY, h, mesh, n_mesh, 1, k, a, bb, s_c, max_steps, False, rtol, atol,
-                                ctrl_tol, none, none, none, targets_c, tau_c, rate_c)
+        xi_ref_f, xi_ref_c, cross_err = x_f3, x_f3, gain * abs(x_f3 - x_c3) + 2.0 * tail3
+        st2 = march(method, REPLAY, h, mesh, n_mesh, 2, k, a, bb, s_c, max_steps, False, tail_rtol, atol, ctrl_tol,
+                    none, none, none, fractions * xi_ref_f, tau_at_fraction, rate_f)[0]
+    st2c = march(method, REPLAY, h, mesh, n_mesh, 1, k, a, bb, s_c, max_steps, False, tail_rtol, atol, ctrl_tol, none,
+                 none, none, fractions * xi_ref_c, tau_c, rate_c)[0]
     if st2 != OK or st2c != OK:
         return max(st2, st2c), x_f, xi_err, n
     for j in range(fractions.size):
