@@ -67,8 +67,8 @@ def _step_rule(method: str) -> str:
         return (f"{method}: adaptive steps in sigma, PI controller on the embedded order-{tab.order_hat} estimate, "
                 f"local tolerance {CTRL_TOL_FACTOR[method]:g} rtol; " + common)
     return (f"{method}: fixed step h in sigma, h = min({H_MAX / 2}, (rtol/({STEP_SAFETY * ERROR_GAIN:g} C))**0.25), "
-            f"C = {C_STABLE} where chi > mu1 (stable sliding) else {C_UNSTABLE}, times {TIME_RESOLVED_FACTOR:g} when trajectory, "
-            f"slip_at, t50 or t90 are asked for (coarse step 2h); " + common)
+            f"C = {C_STABLE} where chi > mu1 (stable sliding) else {C_UNSTABLE}, times {TIME_RESOLVED_FACTOR:g} "
+            f"when trajectory, slip_at, t50 or t90 are asked for (coarse step 2h); " + common)
 
 
 def time_scale(k, a):
