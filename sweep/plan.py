@@ -139,11 +139,6 @@ class Plan:
         return c, a, b, e, self.tableau.fsal, self.tableau.error_order
 
     @property
-    def lane_method(self) -> tuple:
-        """(c, a, b) in the lanes' float type (models/stop_lanes.py)."""
-        return tuple(x.astype(self.dtype) for x in self.tableau.arrays()[:3])
-
-    @property
     def error_gain(self) -> float:
         return ERROR_GAIN / (2.0**self.order - 1.0)
 

@@ -74,23 +74,30 @@ def make_lane_kernels(dtype, tableau):
         st[_STAGE * W + lane], st[(_STAGE + 1) * W + lane] = dxi, ds
 
     @njit(cache=True, fastmath=FAST, error_model="numpy")
+    def take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c):
+        """Load the next queued run into ``lane`` (or, with the queue exhausted, a harmless dummy point that the
+        lane computes while idle, marked -1); returns the new queue position."""
+        if queued < runs.size:
+            r = runs[queued]
+            p = run_point[r]
+            load(st, lane, f(k[p]), f(a[p]), f(bb[p]), f(s_c[p]), f(run_h[r]))
+            lane_run[lane] = r
+            return queued + 1
+        load(st, lane, one, one, zero, one, zero)
+        lane_run[lane] = -1
+        return queued
+
+    @njit(cache=True, fastmath=FAST, error_model="numpy")
     def relax_runs(k, a, bb, s_c, run_point, run_h, runs, max_steps, rtol, atol, xi_inf, tail_err, status,
                    steps):
         """Solve the runs ``runs`` (indices into run_point/run_h, outputs per run) to their relaxed slip."""
         st = np.zeros(n_fields * W, dtype=f)
-        for l in range(W):  # idle lanes compute a harmless dummy point
-            load(st, l, one, one, zero, one, zero)
         lane_run = np.full(W, -1, np.int64)
         n = np.zeros(W, np.int64)
         queued, busy = 0, 0
         for lane in range(W):
-            if queued < runs.size:
-                r = runs[queued]
-                p = run_point[r]
-                load(st, lane, f(k[p]), f(a[p]), f(bb[p]), f(s_c[p]), f(run_h[r]))
-                lane_run[lane] = r
-                queued += 1
-                busy += 1
+            queued = take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c)
+            busy += lane_run[lane] >= 0
         while busy > 0:
             step_all(st)
             for lane in range(W):
@@ -112,16 +119,8 @@ def make_lane_kernels(dtype, tableau):
                     continue
                 steps[r] = n[lane]
                 n[lane] = 0
-                if queued < runs.size:
-                    r = runs[queued]
-                    p = run_point[r]
-                    load(st, lane, f(k[p]), f(a[p]), f(bb[p]), f(s_c[p]), f(run_h[r]))
-                    lane_run[lane] = r
-                    queued += 1
-                else:
-                    load(st, lane, one, one, zero, one, zero)
-                    lane_run[lane] = -1
-                    busy -= 1
+                queued = take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c)
+                busy -= lane_run[lane] < 0
 
     @njit(parallel=True, cache=True)
     def relax_batch(k, a, bb, s_c, run_point, run_h, max_steps, rtol, atol, groups, xi_inf, tail_err,
