@@ -97,18 +97,20 @@ def _obs_tau(scene: Scene) -> np.ndarray:
 
 
 def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
-    """Relaxed slip of the points g through the lane kernel: two runs per point (steps 2h and h)."""
+    """Relaxed slip of the points g through the lane kernels (one per method of the plan): two runs per point
+    (steps 2h and h)."""
     out = RawResult.empty(g.size, 0)
-    live = np.flatnonzero(plan.finite[g])
     out.status[~plan.finite[g]] = NO_FINITE_LIMIT
     out.steps[~plan.finite[g]] = 0
-    if live.size:
-        pts = g[live]
-        run_point = np.repeat(pts, 2)
-        run_h = plan.step[run_point] * np.tile([2.0, 1.0], pts.size)
+    for m, method in enumerate(plan.point_methods):
+        live = np.flatnonzero(plan.finite[g] & (plan.point_method[g] == m))
+        if live.size == 0:
+            continue
+        run_point = np.repeat(g[live], 2)
+        run_h = plan.step[run_point] * np.tile([2.0, 1.0], live.size)
         r_xi, r_tail = np.full(run_point.size, np.nan), np.full(run_point.size, np.nan)
         r_status, r_steps = np.zeros(run_point.size, np.int8), np.zeros(run_point.size, np.int32)
-        relax_batch = lane_kernels(plan.dtype, plan.method)[1]
+        relax_batch = lane_kernels(plan.dtype, method)[1]
         relax_batch(plan.k, plan.a, plan.b, plan.s_c, run_point, run_h, plan.max_steps, scene.rtol,
                     scene.atol["xi_inf"], 4 * numba.get_num_threads(), r_xi, r_tail, r_status, r_steps)
         coarse, fine = slice(0, None, 2), slice(1, None, 2)

@@ -29,6 +29,7 @@ import numpy as np
 from . import physics
 from .models.stop import RATE_FLOOR, TAIL_SAFETY
 from .models.stop_march import ERROR_GAIN
+from .models.stop_stiff import STIFF_RATE_FLOOR
 from .scene import Scene
 from .solvers import METHODS
 
@@ -52,6 +53,14 @@ benchmarks/work_precision.py that meets each rtol."""
 STEP_SAFETY = 2.0
 """Margin of the fixed-step rule: the error estimate (~ERROR_GAIN times the error) stays below rtol / STEP_SAFETY on
 the calibration set."""
+STIFF_K_MAX = 0.03
+"""Stiff points (Rosenbrock ros4 in the lanes, models/stop_stiff.py): chi/A <= STIFF_K_MAX, mu1 < 0, m2 > 0 and a
+slow creep manifold of length x attraction rate |mu1/A|^3 / (4 (m2/A)(chi/A)) >= STIFF_WORK_MIN. There, on the
+calibration set of benchmarks/calibrate_stiff.py, ros4 needs ~40x fewer steps than RK4 (which is
+stability-limited along the manifold) at equal error; elsewhere RK4 is cheaper (up to 2x)."""
+STIFF_WORK_MIN = 300.0
+C_STIFF = 0.01
+"""Bound on the ros4 error constant |err/xi_inf| / h^4 over the stiff region (measured max 6.0e-3)."""
 ROUNDOFF = {np.dtype(np.float64): 2.0 * np.finfo(np.float64).eps, np.dtype(np.float32): 2.0 * np.finfo(np.float32).eps}
 """Rounding error per step, relative (added to the estimate as steps * ROUNDOFF * |xi_inf|)."""
 
@@ -63,6 +72,10 @@ def _step_rule(method: str) -> str:
               f"time map ds/dsigma = 1/(1/(s + s_c) + r), s = int dtau/psi, u = ln psi = s - xi, "
               f"r = sqrt(((mu1 + 2 m2 u)/A)^2 + |m2|/(4 A)) + {RATE_FLOOR}, s_c = 1/(1 + (chi + |mu1|)/A); stop when "
               f"the closed-form tail is accurate to {TAIL_SAFETY}*(rtol*xi + atol)")
+    if tab.implicit:
+        return (f"{method}: Rosenbrock steps H = h w in contact-age time s, w = 1/(1/(s + s_c) + (g + sqrt(g^2 + "
+                f"|m2|/(4A)))/2 + {STIFF_RATE_FLOOR}), g = (mu1 + 2 m2 u)/A, h = min({H_MAX / 2}, (rtol/"
+                f"({STEP_SAFETY * ERROR_GAIN:g} C))**0.25), C = {C_STIFF} (coarse step 2h); " + common)
     if tab.adaptive:
         return (f"{method}: adaptive steps in sigma, PI controller on the embedded order-{tab.order_hat} estimate, "
                 f"local tolerance {CTRL_TOL_FACTOR[method]:g} rtol; " + common)
@@ -74,6 +87,19 @@ def _step_rule(method: str) -> str:
 def time_scale(k, a):
     """Per-point scale s_c of the early log time, from k = chi/A and a = mu1/A (see module doc)."""
     return 1.0 / (1.0 + k + np.abs(a))
+
+
+def stiff_points(k, a, b) -> np.ndarray:
+    """Points where the Rosenbrock lanes are cheaper than RK4 (:data:`STIFF_K_MAX`), from k = chi/A, a = mu1/A,
+    b = m2/A."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        work = np.where((a < 0) & (b > 0), np.abs(a) ** 3 / (4.0 * b * k), 0.0)
+    return (k <= STIFF_K_MAX) & (work >= STIFF_WORK_MIN)
+
+
+def stiff_step_for(rtol: float) -> float:
+    """Fine step h of the ros4 step rule meeting ``rtol`` (relaxed slip) with error constant C_STIFF."""
+    return min(H_MAX / 2, (rtol / (STEP_SAFETY * ERROR_GAIN * C_STIFF)) ** 0.25)
 
 
 def rk4_step_for(rtol: float, stable_sliding, time_resolved: bool = False):
@@ -102,6 +128,8 @@ class Plan:
     model: str
     method: str
     method_reason: str
+    point_methods: tuple[str, ...]
+    point_method: np.ndarray
     adaptive: bool
     lanes: bool
     dtype: np.dtype
@@ -153,7 +181,9 @@ class Plan:
         return {
             "model": self.model,
             "state": "xi (u = s - xi)" + (" + tau quadrature" if self.needs_tau else ""),
-            "method": f"{self.method} ({self.method_reason})",
+            "method": f"{self.method} ({self.method_reason})" + "".join(
+                f"; {m} at {self.points_of(m).size} stiff points (chi/A <= {STIFF_K_MAX:g}, mu1 < 0, m2 > 0, "
+                f"|mu1/A|^3/(4 m2 chi/A^2) >= {STIFF_WORK_MIN:g})" for m in self.point_methods[1:]),
             "stepper": (("adaptive" if self.adaptive else "fixed-step")
                         + (f", {self.dtype.name} lanes" if self.lanes else ", one point per thread")),
             "step": (f"first trial {step} in sigma, local tolerance {self.ctrl_tol:.3g}" if self.adaptive
@@ -166,6 +196,10 @@ class Plan:
             "points_without_finite_limit": str(int(np.count_nonzero(~self.finite))),
         }
 
+    def points_of(self, method: str) -> np.ndarray:
+        """Flat indices of the points integrated with ``method``."""
+        return np.flatnonzero(self.point_method == self.point_methods.index(method))
+
     def text(self) -> str:
         return "\n".join(f"{k:>28}: {v}" for k, v in self.describe().items())
 
@@ -173,7 +207,7 @@ class Plan:
         """Digest of everything that determines the numbers (compared on resume)."""
         h = hashlib.sha256()
         h.update(repr(sorted(self.describe().items())).encode())
-        for arr in (self.k, self.a, self.b, self.s_c, self.step, self.finite, self.tau_samples):
+        for arr in (self.k, self.a, self.b, self.s_c, self.step, self.finite, self.tau_samples, self.point_method):
             h.update(np.ascontiguousarray(arr).tobytes())
         return h.hexdigest()[:16]
 
@@ -194,20 +228,32 @@ def make_plan(scene: Scene) -> Plan:
         step, source = np.full(k.size, min(0.5, ctrl_tol ** (1.0 / (tab.error_order + 1)))), "controller"
     elif scene.step is not None:
         step, source = np.full(k.size, scene.step), "override"
+    elif tab.implicit:
+        step, source = np.full(k.size, stiff_step_for(scene.rtol)), "rule"
     else:
         stable = physics.stable_sliding(chi, mu1, p.A)
         step, source = rk4_step_for(scene.rtol, stable, scene.time_resolved), "rule"
+    lanes = not tab.adaptive and not scene.time_resolved
+    point_methods, point_method = (method,), np.zeros(k.size, np.int8)
+    if scene.method == "auto" and lanes and method == "rk4":
+        stiff = stiff_points(k, a, b) & finite
+        if stiff.any():
+            point_methods, point_method = ("rk4", "ros4"), stiff.astype(np.int8)
+            if scene.step is None:
+                step = np.where(stiff, stiff_step_for(scene.rtol), step)
     return Plan(
         model="quasistatic",
         method=method,
         method_reason=reason,
+        point_methods=point_methods,
+        point_method=point_method,
         adaptive=tab.adaptive,
-        lanes=not tab.adaptive and not scene.time_resolved,
+        lanes=lanes,
         dtype=np.dtype(scene.precision),
         step=step,
         step_source=source,
         ctrl_tol=ctrl_tol,
-        rule=_step_rule(method),
+        rule="; ".join(_step_rule(m) for m in point_methods),
         max_steps=int(scene.max_steps),
         chi=chi,
         mu1=mu1,

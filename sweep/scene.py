@@ -79,12 +79,15 @@ class Scene:
         Log-spaced reduced times of the trajectory samples, 0 < min < max <= 1e250, num >= 2.
     t_obs : sequence of float [s]
         Times after the stop for "slip_at" (>= 0, strictly increasing).
-    method : "auto" | "rk4" | "dp5" | "dop853"
-        Runge-Kutta method (:data:`sweep.solvers.METHODS`); "auto" lets the plan pick the cheapest that meets
-        rtol (sweep.plan). rk4 runs with fixed steps, dp5 and dop853 with adaptive steps.
+    method : "auto" | "rk4" | "dp5" | "dop853" | "ros4"
+        Integration method (:data:`sweep.solvers.METHODS`); "auto" lets the plan pick, per point, the cheapest
+        that meets rtol (sweep.plan: rk4, and the Rosenbrock ros4 at the stiff points of relaxed-slip sweeps).
+        rk4 and ros4 run with fixed steps, dp5 and dop853 with adaptive steps; ros4 computes the relaxed slip
+        only (observables = ("xi_inf",)).
     step : float, optional
-        Override of the planned fixed step in the scaled log time sigma (0 < step <= 2; fixed-step methods
-        only); default from rtol. The number of steps of each point then follows from its own horizon.
+        Override of the planned fixed step h (0 < step <= 2; fixed-step methods only): in the scaled log time
+        sigma for rk4, in the step rule of ros4 (models/stop_stiff.py); default from rtol. The number of steps
+        of each point then follows from its own horizon.
     precision : "float64" | "float32"
         Arithmetic of the relaxed-slip lanes. float32 is about twice as fast there and keeps ~7 digits: allowed
         only for rtol >= 1e-5, a fixed-step method and observables = ("xi_inf",).
@@ -150,6 +153,9 @@ class Scene:
                 raise InputError(f"step is for fixed-step methods; method {self.method!r} chooses its own steps "
                                  "(leave step unset, or use method='rk4')")
             object.__setattr__(self, "step", step)
+        if self.method != "auto" and METHODS[self.method].implicit and self.time_resolved:
+            raise InputError(f"method {self.method!r} computes the relaxed slip only (observables = ['xi_inf']), "
+                             f"got observables={list(self.observables)}; use rk4, dp5 or dop853")
         if self.precision not in PRECISIONS:
             raise InputError(f"precision must be one of {PRECISIONS}, got {self.precision!r}")
         if self.precision == "float32":

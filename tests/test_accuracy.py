@@ -29,6 +29,21 @@ def test_xi_inf_within_rtol_of_reference(case, rtol):
     assert err <= rtol * abs(ref.xi_inf) + sweep.scene.DEFAULT_ATOL["xi_inf"], (err / ref.xi_inf, int(pt["steps"]))
 
 
+@pytest.mark.parametrize("rtol", (1e-4, 1e-7))
+@pytest.mark.parametrize("case", STOP_CASES, ids=lambda c: c.name)
+def test_rosenbrock_forced_everywhere_is_right_or_says_so(case, rtol):
+    """ros4's step rule is calibrated on the stiff points only; forced elsewhere it may miss rtol, but then its
+    error estimate must say so (status error_above_tol) and must bound the true error."""
+    pt, _ = engine_point(case, rtol, observables=("xi_inf",), method="ros4")
+    ref = reference_stop(case.chi, case.A, case.mu1, case.m2)
+    err = abs(float(pt["xi_inf"]) - ref.xi_inf)
+    assert err <= float(pt["xi_inf_error"]) + sweep.scene.DEFAULT_ATOL["xi_inf"], (err, float(pt["xi_inf_error"]))
+    if int(pt["status"]) == sweep.Status.OK:
+        assert err <= rtol * abs(ref.xi_inf) + sweep.scene.DEFAULT_ATOL["xi_inf"]
+    else:
+        assert int(pt["status"]) == sweep.Status.ERROR_ABOVE_TOL
+
+
 @pytest.mark.parametrize("case", STOP_CASES, ids=lambda c: c.name)
 def test_time_resolved_observables_against_reference(case):
     rtol = 1e-6

@@ -1,8 +1,10 @@
-"""Convergence order of the RK4 kernel, measured against the exact m2 = 0 relaxed slip."""
+"""Convergence order of the fixed-step lane kernels (RK4, Rosenbrock ros4), measured against the exact m2 = 0
+relaxed slip."""
 
 import math
 
 import numpy as np
+import pytest
 
 import sweep
 
@@ -14,13 +16,15 @@ def exact_m2zero(chi: float) -> float:
     return A * math.log(chi / M1) / (chi - M1)
 
 
-def test_rk4_order_is_four_on_a_smooth_case():
+@pytest.mark.parametrize("method", ["rk4", "ros4"])
+def test_fixed_step_order_is_four_on_a_smooth_case(method):
     params = sweep.FrictionParams(A=A, m1=M1, m2=0.0, D0=D0)
     chi = 0.02
     steps = np.array([0.4, 0.2, 0.1, 0.05])
     errors = []
     for h in steps:
-        pt = sweep.solve_point(params, K_over_M=chi * G / D0, V=1e-6, rtol=1e-10, observables=("xi_inf",), step=h)
+        pt = sweep.solve_point(params, K_over_M=chi * G / D0, V=1e-6, rtol=1e-10, observables=("xi_inf",), step=h,
+                              method=method)
         # steps this coarse cannot meet rtol = 1e-10: the error estimate must say so (status error_above_tol)
         err = abs(float(pt["xi_inf"]) - exact_m2zero(chi))
         assert err <= float(pt["xi_inf_error"]), (h, err, float(pt["xi_inf_error"]))

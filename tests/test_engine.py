@@ -18,8 +18,8 @@ def test_lanes_path_matches_the_per_point_path():
     """xi_inf-only sweeps run in vectorised lanes (models/stop_lanes.py); asking for slip_at at t = 0 forces the
     per-point path (models/stop_march.py) with the same steps in sigma. The per-point path starts its closed-form
     tail later (TAIL_TIGHTENING), so it takes a few more steps; the values agree within their error estimates."""
-    lanes = sweep.run_sweep(scene(max_steps=3000))
-    per_point = sweep.run_sweep(scene(max_steps=3000, observables=("xi_inf", "slip_at"), t_obs=(0.0,)))
+    lanes = sweep.run_sweep(scene(max_steps=3000, method="rk4"))
+    per_point = sweep.run_sweep(scene(max_steps=3000, method="rk4", observables=("xi_inf", "slip_at"), t_obs=(0.0,)))
     np.testing.assert_array_equal(lanes["status"], per_point["status"])
     ok = lanes["status"].values == sweep.Status.OK
     assert np.all(per_point["steps"].values[ok] >= lanes["steps"].values[ok])
@@ -27,6 +27,21 @@ def test_lanes_path_matches_the_per_point_path():
     assert np.all(diff <= (lanes["xi_inf_error"] + per_point["xi_inf_error"]).values[ok])
     statuses = set(np.unique(lanes["status"]).tolist())
     assert {sweep.Status.OK, sweep.Status.MAX_STEPS} <= statuses, statuses
+
+
+def test_auto_runs_the_stiff_corner_with_rosenbrock_and_agrees_with_rk4():
+    """method="auto" sends the stiff points (sweep.plan.stiff_points) to the ros4 lanes: same values as RK4
+    within both error estimates, far fewer steps there, and the plan says which points went where."""
+    s = scene(step=None, rtol=1e-7)
+    plan = make_plan(s)
+    assert plan.point_methods == ("rk4", "ros4")
+    stiff = plan.points_of("ros4")
+    assert 0 < stiff.size < plan.n_points and "ros4 at" in plan.describe()["method"]
+    auto, rk4 = execute(s, plan, progress=False), execute(s, make_plan(scene(step=None, rtol=1e-7, method="rk4")),
+                                                         progress=False)
+    assert np.all(auto.status == sweep.Status.OK) and np.all(rk4.status == sweep.Status.OK)
+    assert np.all(np.abs(auto.xi_inf - rk4.xi_inf) <= auto.xi_inf_err + rk4.xi_inf_err)
+    assert np.median(rk4.steps[stiff] / auto.steps[stiff]) > 5.0
 
 
 def test_no_limit_points_in_lanes():

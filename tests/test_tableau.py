@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from sweep.solvers import DOP853, DP5, METHODS, RK4, ButcherTableau
+from sweep.solvers.rosenbrock import rosenbrock_conditions
 from sweep.solvers.tableau import rooted_trees, tree_density, tree_name
 
 
@@ -99,7 +100,7 @@ def test_registered_methods_report_their_properties(method, order, order_hat, fs
 
 
 def test_registry_is_read_only():
-    assert list(METHODS) == ["rk4", "dp5", "dop853"]
+    assert list(METHODS) == ["rk4", "dp5", "dop853", "ros4"]
     with pytest.raises(TypeError):
         METHODS["euler"] = RK4  # type: ignore[index]
 
@@ -183,3 +184,29 @@ def test_fsal_stage_is_the_derivative_at_the_step_end():
     k = _stages(DP5, t, y, h)
     y1 = y + h * (np.array(DP5.b) @ k)
     assert k[-1] == pytest.approx(_rhs(t + h, y1), rel=1e-15)
+
+
+# ---------------------------------------------------------------------------------------------- Rosenbrock
+
+def test_ros4_passes_its_order_conditions_and_is_stable_for_decaying_modes():
+    from sweep.solvers import ROS4
+
+    alpha, gam, b = ROS4.standard_form()
+    for name, value, want in rosenbrock_conditions(alpha, gam, b, ROS4.gamma):
+        assert value == pytest.approx(want, abs=1e-13), name
+    assert abs(ROS4.stability_at_infinity()) == pytest.approx(1.0 / 3.0, abs=1e-12)
+    # A-stability on the imaginary axis and in the left half-plane: |R(z)| <= 1 (HW IV.7.14)
+    B = alpha + gam + ROS4.gamma * np.eye(4)
+    z = np.concatenate([1j * np.geomspace(1e-3, 1e4, 200), -np.geomspace(1e-3, 1e4, 200),
+                        np.geomspace(1e-3, 1e4, 200) * np.exp(1j * 0.75 * np.pi)])
+    R = np.array([1.0 + zz * b @ np.linalg.solve(np.eye(4) - zz * B, np.ones(4)) for zz in z])
+    assert np.all(np.abs(R) <= 1.0 + 1e-12)
+
+
+def test_rosenbrock_tableau_catches_a_wrong_coefficient():
+    from sweep.solvers import ROS4, RosenbrockTableau
+
+    m = list(ROS4.m)
+    m[1] *= 1.0 + 1e-9
+    with pytest.raises(ValueError, match="order condition"):
+        RosenbrockTableau(**{**vars(ROS4), "m": tuple(m)})

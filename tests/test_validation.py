@@ -81,3 +81,9 @@ def test_toml_round_trip_is_canonical():
     again = sweep.load_scene(s.to_toml())
     assert again.to_toml() == s.to_toml()
     np.testing.assert_array_equal(again.K_over_M, s.K_over_M)
+
+
+def test_rosenbrock_is_for_the_relaxed_slip_only():
+    with pytest.raises(InputError, match="relaxed slip only"):
+        sweep.Scene(protocol="stop", params=sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0033, D0=0.7e-6),
+                    K_over_M=[1e4], V=[1e-6], method="ros4", observables=("xi_inf", "t50"))

@@ -21,8 +21,9 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ..solvers import METHODS
+from ..solvers import METHODS, RosenbrockTableau
 from .stop import EXP_MAX, FAST, MAX_STEPS, NONFINITE, OK, TAIL_SAFETY, make_rate, tail_error, tail_slip
+from .stop_stiff import STIFF_RATE_FLOOR, make_stiff_rate
 
 LANES = 16
 """Runs in flight per thread (8 and 32 measured within 10 %: benchmarks/throughput.py)."""
@@ -32,24 +33,18 @@ _E, _EXPO = 7, 8  # E at the step's end, and the largest exponent met during the
 _STAGE = 9  # the derivative at the step's start: dxi, ds
 
 
-def make_lane_kernels(dtype, tableau):
-    """(relax_runs, relax_batch) compiled for ``dtype`` (np.float64 or np.float32) and a fixed-step tableau.
-
-    The lane step is written out for four-stage tableaux whose stage i uses stage i-1 only (a_ij = 0 for
+def _explicit_step(f, tableau):
+    """step_all(st) for a four-stage explicit tableau whose stage i uses stage i-1 only (a_ij = 0 for
     j != i-1, e.g. classical RK4), with the coefficients as compile-time constants: a loop over stages with
     run-time offsets into the lane arrays defeats LLVM's vectoriser (measured 22 ns per evaluation instead of 4.5).
-    Other tableaux run through the per-point kernel (models/stop_march.py).
-    """
-    f = np.dtype(dtype).type
+    Other explicit tableaux run through the per-point kernel (models/stop_march.py)."""
     rate = make_rate(f)
-    zero, one, exp_max = f(0.0), f(1.0), f(EXP_MAX)
     W = LANES
     c, A, b, _ = tableau.arrays()
     if b.size != 4 or np.any(np.tril(A, -2) != 0):
         raise ValueError(f"{tableau.name}: the lane kernel needs a four-stage tableau with a_ij = 0 for j < i - 1")
     a21, a32, a43 = f(A[1, 0]), f(A[2, 1]), f(A[3, 2])
     b1, b2, b3, b4 = (f(x) for x in b)
-    n_fields = _STAGE + 2
 
     @njit(cache=True, fastmath=FAST, error_model="numpy")
     def step_all(st):
@@ -66,12 +61,70 @@ def make_lane_kernels(dtype, tableau):
             st[_X * W + l], st[_S * W + l], st[_STAGE * W + l], st[(_STAGE + 1) * W + l] = x1, s1, d5x, d5s
             st[_E * W + l], st[_EXPO * W + l] = E, max(max(o2, o3), max(o4, o5))
 
+    return step_all
+
+
+def _rosenbrock_step(f, tableau):
+    """step_all(st) for a four-stage Rosenbrock tableau whose stage 4 reuses stage 3's f (Shampine's ROS4
+    structure), on the scalar form in s of :mod:`sweep.models.stop_stiff`: three exponentials per step (stages
+    2 and 3 and the step's end; E at the start is the previous step's end, kept in the _E field)."""
+    rate = make_stiff_rate(f)
+    W = LANES
+    a, c = np.array(tableau.a), np.array(tableau.c)
+    if tableau.stages != 4 or np.any(a[3] != a[2]) or tableau.alpha_x[3] != tableau.alpha_x[2]:
+        raise ValueError(f"{tableau.name}: the lane kernel needs four stages with stage 4 reusing stage 3's f")
+    one = f(1.0)
+    inv_gamma = f(1.0 / tableau.gamma)
+    a21, a31, a32 = f(a[1, 0]), f(a[2, 0]), f(a[2, 1])
+    c21, c31, c32, c41, c42, c43 = f(c[1, 0]), f(c[2, 0]), f(c[2, 1]), f(c[3, 0]), f(c[3, 1]), f(c[3, 2])
+    al2, al3 = f(tableau.alpha_x[1]), f(tableau.alpha_x[2])
+    gx1, gx2, gx3, gx4 = (f(x) for x in tableau.gamma_x)
+    m1, m2, m3, m4 = (f(x) for x in tableau.m)
+
+    @njit(cache=True, fastmath=FAST, error_model="numpy")
+    def step_all(st):
+        """One Rosenbrock step of every lane, of size H = h w(s, u) in s."""
+        for l in range(W):
+            k, a, bb, s_c, h = st[l], st[W + l], st[2 * W + l], st[3 * W + l], st[4 * W + l]
+            x0, s0, E0 = st[_X * W + l], st[_S * W + l], st[_E * W + l]
+            u0 = s0 - x0
+            g0 = a + (bb + bb) * u0
+            r0 = f(0.5) * (g0 + math.sqrt(g0 * g0 + f(0.25) * abs(bb))) + f(STIFF_RATE_FLOOR)
+            H = h * (s0 + s_c) / (one + r0 * (s0 + s_c))
+            iH = one / H
+            d = one / (inv_gamma * iH - E0 * (g0 - k))  # (1/(gamma H) - J)^-1
+            ft = -g0 * E0  # dE/ds
+            u1 = d * (E0 + H * gx1 * ft)
+            E2, _, _, o2 = rate(x0 + a21 * u1, s0 + al2 * H, k, a, bb, s_c)
+            u2 = d * (E2 + H * gx2 * ft + c21 * iH * u1)
+            E3, _, _, o3 = rate(x0 + a31 * u1 + a32 * u2, s0 + al3 * H, k, a, bb, s_c)
+            u3 = d * (E3 + H * gx3 * ft + iH * (c31 * u1 + c32 * u2))
+            u4 = d * (E3 + H * gx4 * ft + iH * (c41 * u1 + c42 * u2 + c43 * u3))
+            x1 = x0 + m1 * u1 + m2 * u2 + m3 * u3 + m4 * u4
+            s1 = s0 + H
+            E1, _, _, o4 = rate(x1, s1, k, a, bb, s_c)
+            st[_X * W + l], st[_S * W + l] = x1, s1
+            st[_E * W + l], st[_EXPO * W + l] = E1, max(max(o2, o3), o4)
+
+    return step_all
+
+
+def make_lane_kernels(dtype, tableau):
+    """(relax_runs, relax_batch) compiled for ``dtype`` (np.float64 or np.float32) and a fixed-step tableau
+    (explicit: :func:`_explicit_step`; Rosenbrock: :func:`_rosenbrock_step`)."""
+    f = np.dtype(dtype).type
+    rate = make_rate(f)
+    zero, one, exp_max = f(0.0), f(1.0), f(EXP_MAX)
+    W = LANES
+    step_all = (_rosenbrock_step if isinstance(tableau, RosenbrockTableau) else _explicit_step)(f, tableau)
+    n_fields = _STAGE + 2
+
     @njit(cache=True, fastmath=FAST, error_model="numpy")
     def load(st, lane, k, a, b, s_c, h):
         st[lane], st[W + lane], st[2 * W + lane], st[3 * W + lane], st[4 * W + lane] = k, a, b, s_c, h
         st[_X * W + lane], st[_S * W + lane] = zero, zero
-        dxi, ds, _, _ = rate(zero, zero, k, a, b, s_c)
-        st[_STAGE * W + lane], st[(_STAGE + 1) * W + lane] = dxi, ds
+        dxi, ds, E, _ = rate(zero, zero, k, a, b, s_c)
+        st[_STAGE * W + lane], st[(_STAGE + 1) * W + lane], st[_E * W + lane] = dxi, ds, E
 
     @njit(cache=True, fastmath=FAST, error_model="numpy")
     def take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c):

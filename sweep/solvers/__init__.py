@@ -1,5 +1,12 @@
-"""Steppers as data: validated Butcher tableaux (the compiled kernels use their coefficients)."""
+"""Steppers as data: validated Butcher and Rosenbrock tableaux (the compiled kernels use their coefficients)."""
 
-from .tableau import DOP853, DP5, METHODS, RK4, ButcherTableau
+from collections.abc import Mapping
+from types import MappingProxyType
 
-__all__ = ["ButcherTableau", "DOP853", "DP5", "METHODS", "RK4"]
+from .rosenbrock import ROS4, RosenbrockTableau
+from .tableau import DOP853, DP5, EXPLICIT_METHODS, RK4, ButcherTableau
+
+METHODS: Mapping[str, ButcherTableau | RosenbrockTableau] = MappingProxyType({**EXPLICIT_METHODS, ROS4.name: ROS4})
+"""Every built-in method by name: explicit Runge-Kutta (rk4, dp5, dop853) and linearly implicit (ros4)."""
+
+__all__ = ["ButcherTableau", "DOP853", "DP5", "EXPLICIT_METHODS", "METHODS", "RK4", "ROS4", "RosenbrockTableau"]

@@ -13,7 +13,8 @@ no list of conditions is written out by hand and a transcription error in a coef
 failed condition naming its tree.
 
 The kernels take :meth:`ButcherTableau.arrays` (float64 c, a, b, e = b - b_hat) plus the flags
-``stages``, ``fsal``, ``adaptive`` and ``error_order``; :data:`METHODS` maps names to the built-in tableaux.
+``stages``, ``fsal``, ``adaptive`` and ``error_order``; :data:`EXPLICIT_METHODS` maps names to the built-in tableaux
+(:data:`sweep.solvers.METHODS` adds the Rosenbrock methods).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from types import MappingProxyType
 import numpy as np
 
 __all__ = [
-    "COEFFICIENT_TOL", "DOP853", "DP5", "MAX_TREE_ORDER", "METHODS", "RK4", "ButcherTableau", "Tree",
+    "COEFFICIENT_TOL", "DOP853", "DP5", "EXPLICIT_METHODS", "MAX_TREE_ORDER", "RK4", "ButcherTableau", "Tree",
     "rooted_trees", "tree_density", "tree_name", "tree_order",
 ]
 
@@ -94,7 +95,7 @@ class ButcherTableau:
 
     Attributes
     ----------
-    name : method name (used in error messages and as the key in :data:`METHODS`).
+    name : method name (used in error messages and as the key in :data:`EXPLICIT_METHODS`).
     c, a, b : nodes (s,), strictly lower triangular coefficients (s, s), weights (s,).
     order : order p of ``b``; order conditions for all trees with |t| <= p are checked.
     b_hat : embedded weights (s,) for the error estimate, or None for a fixed-step method.
@@ -157,6 +158,10 @@ class ButcherTableau:
     def adaptive(self) -> bool:
         """Whether the method has an embedded error estimator (``b_hat``)."""
         return self.b_hat is not None
+
+    @property
+    def implicit(self) -> bool:
+        return False
 
     @property
     def fsal(self) -> bool:
@@ -282,5 +287,5 @@ DOP853); coefficients as in the Fortran code dop853.f (http://www.unige.ch/~hair
 eighth-order formula derives from P. J. Prince, J. R. Dormand, "High order embedded Runge-Kutta formulae",
 J. Comput. Appl. Math. 7 (1981) 67-75."""
 
-METHODS: Mapping[str, ButcherTableau] = MappingProxyType({m.name: m for m in (RK4, DP5, DOP853)})
+EXPLICIT_METHODS: Mapping[str, ButcherTableau] = MappingProxyType({m.name: m for m in (RK4, DP5, DOP853)})
 """Built-in methods by name (read-only)."""
