@@ -57,7 +57,8 @@ def main(argv=None):
         for k_max in (0.03, 0.1, 1.0):
             for w_min in (100.0, 300.0, 1000.0):
                 m = ok & (k <= k_max) & (work >= w_min)
-                cost = (sr[m] * EVALS_PER_STEP["ros4"] * er[m] ** 0.25) / (sk[m] * EVALS_PER_STEP["rk4"] * ek[m] ** 0.25)
+                cost = ((sr[m] * EVALS_PER_STEP["ros4"] * er[m] ** 0.25)
+                        / (sk[m] * EVALS_PER_STEP["rk4"] * ek[m] ** 0.25))
                 row = {"h": h, "k_max": k_max, "work_min": w_min, "points": int(m.sum()),
                        "ros4_C_max": float((er[m] / h**4).max()), "ros4_C_median": float(np.median(er[m] / h**4)),
                        "rk4_C_max": float((ek[m] / h**4).max()), "cost_ros4_over_rk4_median": float(np.median(cost)),

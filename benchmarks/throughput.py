@@ -3,21 +3,32 @@
 
     python benchmarks/throughput.py [--quick] [--out benchmarks/results/throughput.json] [--no-png]
 
-Sections (benchmarks/README.md explains every number):
+Every engine number goes through the public path (sweep.make_plan + sweep.engine.execute, what run_sweep runs,
+or run_sweep itself), so the script does not depend on the kernels' internals. Every point is solved as the
+engine always solves it: a Richardson pair (a coarse run and a fine run, the fine result returned with its
+error estimate), and the timings include both runs. Sections (benchmarks/README.md explains every number):
 
 1. engine      trajectories/s on the default scene (sweep.default_scene(): sample2, 200 x 100, rtol 1e-6),
                warm (one call first, then best of 3), with 1 thread and all threads; steps per point; ns per
-               RK4 step per core.
+               step and per stage evaluation per core, counting the steps of both runs of the pair.
 2. scipy       solve_ivp's DOP853 and LSODA steppers on a strided subsample of the same grid (corners
                included), given the engine's own formulation (1-D ODE dxi/ds = E in contact-age time, the
                engine's tail test and closed-form tail), each at the loosest scanned tolerance whose max
                relative xi_inf error is <= 1e-6 against the engine at rtol 1e-10; ratio vs the engine. Then
                each method at its chosen tolerance on a uniformly random subsample (64 points, fixed seed):
                an unbiased estimate of scipy's mean cost per trajectory over the grid.
-3. numpy       the engine's RK4 (same per-point step h, state-dependent time map, per-point stop) written as
-               lockstep numpy over the whole grid; agreement with the engine and cost per RK4 stage evaluation.
+3. numpy       the engine's RK4 (same per-point steps h and 2h of the pair, state-dependent time map, per-run
+               stop) written as lockstep numpy over the grid points the plan gives to RK4 (points given to
+               another method, e.g. the Rosenbrock stiff points, are left out and the engine re-timed without
+               them); agreement with the engine and cost per RK4 stage evaluation (skipped, and said so, if the
+               plan's method is not explicit fixed-step).
 4. cold start  a new Python process: import sweep + a 10 x 10 sweep, JIT cache on disk (median of 3).
 5. estimate    sweep.engine.estimate_seconds vs the measured time, default scene and sample1 100 x 100.
+
+No longer measured (the code it measured is gone or internal): the parallel diagnostic that called the compiled
+per-point batch kernel (stop_batch) directly, in grid order and shuffled, to show the load imbalance of a static
+prange split. Relaxed-slip sweeps no longer run through that kernel (they run in SIMD lanes, in strided groups
+per thread) and its signature is internal; parallel_speedup of the public execute remains.
 
 Writes benchmarks/results/throughput.json (and throughput.png if matplotlib is present); prints a table.
 """
@@ -25,6 +36,7 @@ Writes benchmarks/results/throughput.json (and throughput.png if matplotlib is p
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import datetime as _dt
 import json
 import math
@@ -37,16 +49,17 @@ import time
 import warnings
 from pathlib import Path
 
+import _common as common
 import numba
 import numpy as np
-import scipy
 import scipy.special
 from scipy.integrate import DOP853, LSODA
 
 import sweep
 from sweep import physics
-from sweep.engine import estimate_seconds, execute, stop_batch
-from sweep.models.stop import E_TAIL_MAX, EXP_MAX, NONFINITE, OK, RATE_FLOOR, TAIL_SAFETY, tail_is_accurate, tail_slip
+from sweep.engine import estimate_seconds, execute
+from sweep.models.stop import E_TAIL_MAX, EXP_MAX, RATE_FLOOR, TAIL_SAFETY
+from sweep.solvers import METHODS
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_OUT = HERE / "results" / "throughput.json"
@@ -58,41 +71,16 @@ REF_RTOL = 1e-10
 RANDOM_POINTS = 64
 RANDOM_SEED = 20240611
 SQRT_PI = math.sqrt(math.pi)
+OK = int(sweep.Status.OK)
+OK_LIKE = (OK, int(sweep.Status.ERROR_ABOVE_TOL))  # a value was computed (error_above_tol: estimate > tol)
 
 
 # ----------------------------------------------------------------------------------------------- helpers
 
 def best_of(fn, repeats):
-    """(best seconds, all seconds, last result) of ``repeats`` calls of fn()."""
-    times, out = [], None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return min(times), times, out
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
-def git_commit() -> str | None:
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=HERE.parent, capture_output=True,
-                              text=True, timeout=10).stdout.strip() or None
-    except (OSError, subprocess.SubprocessError):
-        return None
-
-
-def with_rtol(scene: sweep.Scene, rtol: float) -> sweep.Scene:
-    return sweep.Scene(protocol=scene.protocol, params=scene.params, K_over_M=scene.K_over_M, V=scene.V,
-                       rtol=rtol, atol=scene.atol, observables=scene.observables, max_steps=scene.max_steps)
+    """(best wall seconds, wall seconds of every call, last result) of ``repeats`` calls of fn()."""
+    _, wall, out = common.timings(fn, repeats)
+    return min(wall), wall, out
 
 
 def percentiles(x) -> dict:
@@ -114,6 +102,45 @@ def random_indices(scene: sweep.Scene, n: int, seed: int = RANDOM_SEED) -> np.nd
     return np.sort(np.random.default_rng(seed).choice(n_points, size=min(n, n_points), replace=False))
 
 
+def evals_per_step(method: str) -> int:
+    """Right-hand-side evaluations per accepted step of a method of sweep.solvers.METHODS: the stages after the
+    first, whose derivative is the previous step's end, plus the end derivative (an FSAL tableau's last stage is
+    that derivative). A Rosenbrock stage with the same evaluation point as the one before reuses its value
+    (Shampine's ROS4: 3 evaluations for 4 stages)."""
+    tab = METHODS[method]
+    if getattr(tab, "implicit", False):
+        return len({(tuple(row), alpha) for row, alpha in zip(tab.a, tab.alpha_x)})
+    return tab.stages - (1 if tab.fsal else 0)
+
+
+def point_methods(plan) -> np.ndarray:
+    """The method of every point (a plan may give some points another method than plan.method, e.g. the stiff
+    points of an "auto" plan: Plan.point_methods / Plan.point_method where the plan has them)."""
+    names = getattr(plan, "point_methods", None)
+    if names is None:
+        return np.full(plan.n_points, plan.method, dtype=object)
+    return np.asarray(names, dtype=object)[plan.point_method]
+
+
+def point_evals(plan) -> np.ndarray:
+    """Right-hand-side evaluations per step of every point's method."""
+    names, inverse = np.unique(point_methods(plan).astype(str), return_inverse=True)
+    return np.array([evals_per_step(m) for m in names], dtype=np.int64)[inverse.ravel()]
+
+
+def pair_steps(scene, plan, res, idx=None):
+    """Steps per point of both runs of the engine's Richardson pair: (fine, coarse), int64.
+
+    execute returns the fine run's steps (ds["steps"]). The coarse run of a fixed-step method is the same run at
+    twice the step, i.e. the fine run of the same plan with its steps doubled (executed here, untimed); an
+    adaptive method's fine run replays the coarse run's accepted steps halved (exactly twice its steps)."""
+    fine = res.steps.astype(np.int64)
+    if plan.adaptive:
+        return fine, fine // 2
+    doubled = dataclasses.replace(plan, step=2.0 * plan.step)
+    return fine, execute(scene, doubled, idx, progress=False).steps.astype(np.int64)
+
+
 # ------------------------------------------------------------------------------------------- 1. engine
 
 def bench_engine(scene, plan, repeats, n_all):
@@ -121,18 +148,21 @@ def bench_engine(scene, plan, repeats, n_all):
     t0 = time.perf_counter()
     first = execute(scene, plan, progress=False)  # loads the kernel from the on-disk cache (or compiles)
     first_s = time.perf_counter() - t0
-    out = {"first_call_s": first_s}
+    out = {"first_call_s": first_s, "method": plan.method, "adaptive": plan.adaptive, "lanes": plan.lanes,
+           "dtype": plan.dtype.name}
     runs = {}
     for nt in sorted({1, n_all}):
         numba.set_num_threads(nt)
-        best, times, res = best_of(lambda: execute(scene, plan, progress=False), repeats)
+        cpu, wall, res = common.timings(lambda: execute(scene, plan, progress=False), repeats)
+        best = min(wall)
         runs[nt] = (best, res)
-        out[f"threads_{nt}"] = {"best_s": best, "all_s": times, "traj_per_s": n / best,
+        out[f"threads_{nt}"] = {"best_s": best, "all_s": wall, "best_cpu_s": min(cpu), "traj_per_s": n / best,
                                 "traj_per_s_per_core": n / best / nt, "us_per_traj_per_core": best * nt / n * 1e6}
     numba.set_num_threads(n_all)
     res = runs[1][1]
     assert np.array_equal(res.xi_inf, first.xi_inf, equal_nan=True), "engine is not deterministic"
-    steps = res.steps.astype(np.int64)
+    assert np.array_equal(res.xi_inf, runs[n_all][1].xi_inf, equal_nan=True), "result depends on the threads"
+    steps, coarse = pair_steps(scene, plan, res)
     total = int(steps.sum())
     out["points"] = n
     out["status_counts"] = {sweep.Status(int(c)).name: int(m) for c, m in zip(*np.unique(res.status,
@@ -149,49 +179,33 @@ def bench_engine(scene, plan, repeats, n_all):
     out["costliest_point"] = {"K_over_M": float(scene.K_over_M[ik]), "V": float(scene.V[iv]),
                               "chi_over_A": float(plan.k[i_max]), "mu1_over_A": float(plan.a[i_max]),
                               "steps": int(steps[i_max]), "xi_inf": float(res.xi_inf[i_max])}
+    evals = point_evals(plan)
+    run_steps = total + int(coarse.sum())
+    stage_evals = int((evals * (steps + coarse)).sum())
+    methods = point_methods(plan)
+    out["richardson_pair"] = {"fine_steps_total": total, "coarse_steps_total": int(coarse.sum()),
+                              "coarse_over_fine": float(coarse.sum() / total), "steps_total": run_steps,
+                              "stage_evals_total": stage_evals, "stage_evals_per_step": stage_evals / run_steps}
+    out["by_method"] = {m: {"points": int(np.count_nonzero(methods == m)), "evals_per_step": evals_per_step(m),
+                            "fine_steps_total": int(steps[methods == m].sum()),
+                            "coarse_steps_total": int(coarse[methods == m].sum())} for m in dict.fromkeys(methods)}
     for nt in sorted({1, n_all}):
         best = runs[nt][0]
-        out[f"threads_{nt}"]["ns_per_rk4_step_per_core"] = best * nt / total * 1e9
-        out[f"threads_{nt}"]["ns_per_stage_eval_per_core"] = best * nt / (4 * total) * 1e9
+        out[f"threads_{nt}"]["ns_per_step_per_core"] = best * nt / run_steps * 1e9
+        out[f"threads_{nt}"]["ns_per_stage_eval_per_core"] = best * nt / stage_evals * 1e9
     out["parallel_speedup"] = runs[1][0] / runs[n_all][0] if n_all > 1 else 1.0
     # the public path (plan + kernel + Dataset); its steps variable is what the distribution above describes
     best, _, ds = best_of(lambda: sweep.run_sweep(scene, progress=False), repeats)
     assert np.array_equal(ds["steps"].values.ravel(), res.steps), "ds['steps'] differs from the kernel's steps"
     out["run_sweep_s_all_threads"] = best
-    if n_all > 1:
-        out["parallel_diagnostic"] = shuffled_order_diagnostic(scene, plan, repeats, n_all, runs[1][0])
-    return out, res
-
-
-def shuffled_order_diagnostic(scene, plan, repeats, n_all, t1):
-    """The compiled batch called directly, once in grid order and once on a random permutation, all threads.
-
-    Diagnostic only (not the public path, which already visits the points in a fixed pseudo-random order):
-    separates the cost of the work from how prange splits it. The grid's costly points are contiguous in C
-    order (small K/M rows); if the split is static, one thread gets most of them in grid order."""
-    rng = np.random.default_rng(0)
-    perm = rng.permutation(plan.n_points)
-    n = perm.size
-
-    def call(g):
-        parts = [np.empty(n), np.empty(n, np.int8), np.empty(n, np.int32), np.empty((n, 0)), np.empty((n, 0)),
-                 np.empty((n, 2))]
-        with numba.parallel_chunksize(4):
-            stop_batch(plan.k[g], plan.a[g], plan.b[g], plan.s_c[g], plan.finite[g], plan.step[g], plan.max_steps,
-                       scene.rtol, scene.atol["xi_inf"], plan.tau_samples, np.zeros((n, 0)), False, *parts)
-    numba.set_num_threads(n_all)
-    t_sorted, _, _ = best_of(lambda: call(np.arange(n)), repeats)
-    t_perm, _, _ = best_of(lambda: call(perm), repeats)
-    return {"what": "stop_batch called directly, one call over all points, all threads",
-            "grid_order_s": t_sorted, "shuffled_order_s": t_perm,
-            "speedup_grid_order": t1 / t_sorted, "speedup_shuffled_order": t1 / t_perm}
+    return out, res, coarse
 
 
 # ----------------------------------------------------------------------------------- reference values
 
 def reference(scene, idx):
     """The engine at rtol 1e-10 on the points idx (flat); checked against the m2 = 0 closed form."""
-    ref_scene = with_rtol(scene, REF_RTOL)
+    ref_scene = dataclasses.replace(scene, rtol=REF_RTOL)
     res = execute(ref_scene, sweep.make_plan(ref_scene), idx, progress=False)
     assert np.all(res.status == OK), "reference run did not converge everywhere"
     return res
@@ -212,58 +226,8 @@ def closed_form_check(scene):
 
 # -------------------------------------------------------------------------------------------- 2. scipy
 
-def tail_ok(k, a, b, u, E, tol):
-    """sweep.models.stop.tail_is_accurate in plain Python (same expression, same order of operations).
-
-    Calling the njit original from Python costs ~1.7 us per call (dispatch), comparable to a scipy step;
-    scipy gets this copy so that the per-step test does not inflate its cost. check_tail_ok() verifies that
-    both agree."""
-    g = a + 2.0 * b * u
-    if g <= 0.0 or E > E_TAIL_MAX:
-        return False
-    return E * E * E * (1.0 / (3.0 * g) + k / (2.0 * g * g)) <= TAIL_SAFETY * tol
-
-
-def check_tail_ok(n=20000):
-    rng = np.random.default_rng(1)
-    args = np.column_stack([10 ** rng.uniform(-2, 2, n), rng.uniform(-4, 4, n), rng.uniform(0, 1, n),
-                            rng.uniform(-5, 20, n), 10 ** rng.uniform(-6, 0, n), 10 ** rng.uniform(-14, -4, n)])
-    bad = sum(tail_ok(*map(float, r)) != tail_is_accurate(*map(float, r)) for r in args)
-    assert bad == 0, f"plain-Python tail test disagrees with the engine's on {bad} of {n} inputs"
-    return n
-
-
-def scipy_point(cls, k, a, b, rtol, atol, tail_tol_rel, tail_tol_abs):
-    """One stop point with a scipy OdeSolver in the engine's formulation: dxi/ds = E(xi, s), u = s - xi,
-    xi(0) = 0, stepped until the engine's tail test passes, then the engine's closed-form tail is added.
-    Returns (xi_inf, steps, nfev)."""
-    def fun(s, y):
-        xi = y[0]
-        u = s - xi
-        return np.array([math.exp(min(-(k * xi + u * (a + b * u)), EXP_MAX))])
-
-    def jac(s, y):
-        xi = y[0]
-        u = s - xi
-        return np.array([[-math.exp(min(-(k * xi + u * (a + b * u)), EXP_MAX)) * (k - a - 2.0 * b * u)]])
-
-    extra = {"jac": jac} if cls is LSODA else {}
-    solver = cls(fun, 0.0, np.zeros(1), 1e12, rtol=rtol, atol=atol, **extra)
-    steps = 0
-    while True:
-        msg = solver.step()
-        steps += 1
-        if solver.status != "running":
-            raise RuntimeError(f"{cls.__name__} stopped before the tail test passed: {msg}")
-        xi, s = float(solver.y[0]), float(solver.t)
-        u = s - xi
-        E = math.exp(min(-(k * xi + u * (a + b * u)), EXP_MAX))
-        if tail_ok(k, a, b, u, E, tail_tol_rel * xi + tail_tol_abs):
-            return xi + tail_slip(k, a, b, u, E), steps, solver.nfev
-
-
 def scipy_run(cls, plan, idx, rtol, atol, tail_rel, tail_abs):
-    out = [scipy_point(cls, plan.k[i], plan.a[i], plan.b[i], rtol, atol, tail_rel, tail_abs) for i in idx]
+    out = [common.scipy_point(cls, plan.k[i], plan.a[i], plan.b[i], rtol, atol, tail_rel, tail_abs) for i in idx]
     return (np.array([o[0] for o in out]), np.array([o[1] for o in out]), np.array([o[2] for o in out]))
 
 
@@ -334,14 +298,17 @@ def bench_scipy_at_chosen(scene, plan, idx, ref_xi, methods, repeats):
 
 
 def bench_engine_subsample(scene, plan, idx, ref_xi, reps):
+    """The engine (1 thread) on the points idx: us per trajectory (both runs of the pair), error vs ref_xi."""
     numba.set_num_threads(1)
     execute(scene, plan, idx, progress=False)
     best, _, res = best_of(lambda: execute(scene, plan, idx, progress=False), reps)
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
     rel = np.abs(res.xi_inf / ref_xi - 1)
-    return {"threads": 1, "us_per_traj": best / idx.size * 1e6, "mean_steps": float(res.steps.mean()),
-            "mean_rhs_evals": float(4 * res.steps.mean() + 1), "max_rel_err": float(rel.max()),
-            "median_rel_err": float(np.median(rel))}
+    fine, coarse = pair_steps(scene, plan, res, idx)
+    evals = point_evals(plan)[idx] * (fine + coarse) + 2  # + the first derivative of each run
+    return {"threads": 1, "us_per_traj": best / idx.size * 1e6, "mean_steps": float(fine.mean()),
+            "mean_steps_coarse": float(coarse.mean()), "mean_rhs_evals": float(evals.mean()),
+            "max_rel_err": float(rel.max()), "median_rel_err": float(np.median(rel))}
 
 
 # ------------------------------------------------------------------------------------------- 3. numpy
@@ -366,19 +333,27 @@ def _tail_slip(k, a, b, u, E):
     return np.log1p(k * T) / k
 
 
-def numpy_rk4(plan, rtol, atol):
-    """The engine's stepper as lockstep numpy over all points: state (xi, s), ds/dsigma = w = 1/(1/(s + s_c) +
-    r(u)) with r = sqrt(g^2 + |b|/4) + RATE_FLOOR, g = a + 2 b u (sweep.models.stop.derivatives), the plan's
-    per-point fixed step h in sigma, RK4 with the end derivative reused as the next stage 1 (4 evaluations per
-    step), each point frozen (removed from the active set) once its tail test passes."""
-    n = plan.n_points
+def numpy_lockstep(plan, method, run_point, run_h, rtol, atol):
+    """The engine's fixed-step stepper as lockstep numpy over runs (a run = one point at one step h in sigma):
+    state (xi, s), ds/dsigma = w = 1/(1/(s + s_c) + r(u)) with r = sqrt(g^2 + |b|/4) + RATE_FLOOR, g = a + 2 b u
+    (sweep.models.stop.make_rate), the explicit tableau of ``method`` (RK4: stage i from stage i-1 only) with the end
+    derivative
+    reused as the next step's first stage, each run frozen (removed from the active set) once its tail test
+    passes (or it leaves the finite range), then the closed-form tail. Returns per run (xi_inf, status, steps),
+    the seconds, the number of lockstep steps and the cost split by the number of active runs."""
+    tab = METHODS[method]
+    _, A, bw, _ = tab.arrays()
+    stages, fsal = bw.size, tab.fsal
+    e_step = evals_per_step(method)
+    n = run_point.size
     xi_inf = np.full(n, np.nan)
-    status = np.full(n, 1, np.int8)  # max_steps unless finished
+    status = np.full(n, int(sweep.Status.MAX_STEPS), np.int8)  # unless finished
     steps = np.zeros(n, np.int32)
-    act = np.nonzero(plan.finite)[0]
-    status[~plan.finite] = int(sweep.Status.NO_FINITE_LIMIT)
-    k, a, b, s_c, h = (x[act].copy() for x in (plan.k, plan.a, plan.b, plan.s_c, plan.step))
-    hh, h6 = 0.5 * h, h / 6.0
+    finite = plan.finite[run_point]
+    status[~finite] = int(sweep.Status.NO_FINITE_LIMIT)
+    act = np.flatnonzero(finite)
+    k, a, b, s_c = (x[run_point[act]] for x in (plan.k, plan.a, plan.b, plan.s_c))
+    h = run_h[act].copy()
     xi = np.zeros(act.size)
     s = np.zeros(act.size)
 
@@ -399,12 +374,24 @@ def numpy_rk4(plan, rtol, atol):
         dxi, ds, E = deriv(xi, s)
         t0 = time.perf_counter()
         while act.size and n_step < plan.max_steps:
-            k2x, k2s, _ = deriv(xi + hh * dxi, s + hh * ds)
-            k3x, k3s, _ = deriv(xi + hh * k2x, s + hh * k2s)
-            k4x, k4s, _ = deriv(xi + h * k3x, s + h * k3s)
-            xi = xi + h6 * (dxi + 2.0 * (k2x + k3x) + k4x)
-            s = s + h6 * (ds + 2.0 * (k2s + k3s) + k4s)
-            dxi, ds, E = deriv(xi, s)
+            Kx, Ks = [dxi], [ds]
+            for i in range(1, stages):
+                xs, ss = xi, s
+                for j in range(i):
+                    if A[i, j] != 0.0:
+                        xs, ss = xs + A[i, j] * h * Kx[j], ss + A[i, j] * h * Ks[j]
+                kx, ks, _ = deriv(xs, ss)
+                Kx.append(kx)
+                Ks.append(ks)
+            sx, ss = bw[0] * Kx[0], bw[0] * Ks[0]
+            for j in range(1, stages):
+                sx, ss = sx + bw[j] * Kx[j], ss + bw[j] * Ks[j]
+            xi, s = xi + h * sx, s + h * ss
+            if fsal:
+                dxi, ds = Kx[-1], Ks[-1]
+                E = dxi / ds
+            else:
+                dxi, ds, E = deriv(xi, s)
             n_step += 1
             bad = ~(np.isfinite(xi) & np.isfinite(dxi))
             u = s - xi
@@ -418,44 +405,70 @@ def numpy_rk4(plan, rtol, atol):
                 ids = act[done]
                 xi_inf[ids] = xi[done] + _tail_slip(k[done], a[done], b[done], u[done], E[done])
                 status[ids] = OK
-                status[act[bad]] = NONFINITE
+                status[act[bad]] = int(sweep.Status.NONFINITE)
                 steps[act[stop]] = n_step
                 keep = ~stop
                 act, xi, s, dxi, ds, E = act[keep], xi[keep], s[keep], dxi[keep], ds[keep], E[keep]
-                k, a, b, s_c, h, hh, h6 = k[keep], a[keep], b[keep], s_c[keep], h[keep], hh[keep], h6[keep]
+                k, a, b, s_c, h = k[keep], a[keep], b[keep], s_c[keep], h[keep]
             t_step.append((time.perf_counter(), int(act.size) + int(stop.sum())))
         steps[act] = n_step
         seconds = time.perf_counter() - t0
-    # cost split: steps with >= 4096 active points (numpy's SIMD regime) and the long tail with few points
+    # cost split: steps with >= 4096 active runs (numpy's SIMD regime) and the long tail with few runs
     tt = np.array([t for t, _ in t_step])
     na = np.array([m for _, m in t_step], dtype=float)
     dt = np.diff(np.concatenate(([t0], tt)))
     big = na >= 4096
     phases = {}
     for name, m in (("active_ge_4096", big), ("active_lt_4096", ~big)):
-        evals = 4 * na[m].sum()
+        evals = e_step * na[m].sum()
         phases[name] = {"lockstep_steps": int(m.sum()), "seconds": float(dt[m].sum()),
                         "point_stage_evals": float(evals),
                         "ns_per_point_stage_eval": float(dt[m].sum() / evals * 1e9) if evals else None}
     return xi_inf, status, steps, seconds, n_step, phases
 
 
-def bench_numpy(scene, plan, engine_res, t_engine_1, repeats):
+def bench_numpy(scene, plan, engine_res, engine_coarse, t_engine_1, repeats):
+    """The Richardson pair (runs at 2h and h) of every grid point of the plan's explicit fixed-step method as
+    lockstep numpy, against the engine on the same points."""
+    tab = METHODS[plan.method]
+    if plan.adaptive or getattr(tab, "implicit", False):
+        return {"skipped": f"the default scene's plan method {plan.method} is not explicit fixed-step: no numpy "
+                           "replica"}
+    methods = point_methods(plan)
+    idx = np.flatnonzero(methods == plan.method)
+    if idx.size == plan.n_points:
+        t_engine = t_engine_1
+    else:  # other points run another method (e.g. stiff points): time the engine on the replicated ones only
+        numba.set_num_threads(1)
+        execute(scene, plan, idx, progress=False)
+        t_engine = best_of(lambda: execute(scene, plan, idx, progress=False), repeats + 1)[0]
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    run_point = np.repeat(idx, 2)
+    run_h = plan.step[run_point] * np.tile([2.0, 1.0], idx.size)  # as the engine: coarse run (2h), fine run (h)
     best, times, (xi, status, steps, _, n_lock, phases) = best_of(
-        lambda: numpy_rk4(plan, scene.rtol, scene.atol["xi_inf"]), repeats)
-    ok = (status == OK) & (engine_res.status == OK)
-    rel = np.abs(xi[ok] / engine_res.xi_inf[ok] - 1)
-    total = int(engine_res.steps.astype(np.int64).sum())
-    evals = 4 * int(steps.astype(np.int64).sum())
+        lambda: numpy_lockstep(plan, plan.method, run_point, run_h, scene.rtol, scene.atol["xi_inf"]), repeats)
+    coarse, fine = slice(0, None, 2), slice(1, None, 2)
+    pair_status = np.where(status[fine] != 0, status[fine], status[coarse])  # the engine's rule
+    e_status = engine_res.status[idx]
+    e_status = np.where(np.isin(e_status, OK_LIKE), OK, e_status)  # no error estimate here
+    ok = (pair_status == OK) & (e_status == OK)
+    rel = np.abs(xi[fine][ok] / engine_res.xi_inf[idx][ok] - 1)
+    e_step = evals_per_step(plan.method)
+    evals = e_step * int(steps.astype(np.int64).sum())
+    engine_evals = e_step * int(engine_res.steps[idx].astype(np.int64).sum() + engine_coarse[idx].sum())
     ns_np = best / evals * 1e9
-    ns_eng = t_engine_1 / (4 * total) * 1e9
-    return {"best_s": best, "all_s": times, "traj_per_s": plan.n_points / best, "lockstep_steps": n_lock,
-            "status_equal": bool(np.array_equal(status, engine_res.status)),
-            "steps_equal_points": int(np.count_nonzero(steps == engine_res.steps)),
-            "steps_differ_points": int(np.count_nonzero(steps != engine_res.steps)),
+    ns_eng = t_engine / engine_evals * 1e9
+    return {"method": plan.method, "points": int(idx.size), "points_other_methods": int(plan.n_points - idx.size),
+            "runs": int(run_point.size), "best_s": best, "all_s": times, "traj_per_s": idx.size / best,
+            "lockstep_steps": n_lock, "status_equal": bool(np.array_equal(pair_status, e_status)),
+            "steps_equal_points": int(np.count_nonzero(steps[fine] == engine_res.steps[idx])),
+            "steps_differ_points": int(np.count_nonzero(steps[fine] != engine_res.steps[idx])),
+            "coarse_steps_differ_points": int(np.count_nonzero(steps[coarse] != engine_coarse[idx])),
             "max_rel_diff_vs_engine": float(rel.max()), "median_rel_diff_vs_engine": float(np.median(rel)),
+            "evals_per_step": e_step, "point_stage_evals": evals, "engine_point_stage_evals": engine_evals,
+            "engine_s_1_thread_same_points": t_engine,
             "ns_per_point_stage_eval": ns_np, "engine_ns_per_point_stage_eval_1_thread": ns_eng,
-            "numpy_over_engine_1_thread_time": best / t_engine_1,
+            "numpy_over_engine_1_thread_time": best / t_engine,
             "numpy_over_engine_per_eval": ns_np / ns_eng, "phases": phases}
 
 
@@ -536,17 +549,16 @@ def bench_estimate(name, scene, repeats, measured=None, n_est=3):
 # ---------------------------------------------------------------------------------------------- main
 
 def machine_info():
-    return {"cpu_model": cpu_model(), "logical_cpus": os.cpu_count(),
-            "usable_cpus": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count(),
-            "numba_threading_layer": numba.threading_layer(),
+    return {"cpu_model": common.cpu_model(), "logical_cpus": os.cpu_count(),
+            "usable_cpus": common.usable_cpus() or os.cpu_count(),
+            "numba_threading_layer": common.threading_layer(),
             "NUMBA_NUM_THREADS": numba.config.NUMBA_NUM_THREADS,
             "NUMBA_NUM_THREADS_env": os.environ.get("NUMBA_NUM_THREADS"),
             "platform": platform.platform()}
 
 
-def versions():
-    return {"python": platform.python_version(), "numpy": np.__version__, "numba": numba.__version__,
-            "scipy": scipy.__version__, "sweep": sweep.__version__, "sweep_git_commit": git_commit()}
+def fmt(x, f="{:.3g}"):
+    return "-" if x is None else f.format(x)
 
 
 def verdict(ok):
@@ -568,7 +580,7 @@ def plot(result, path):
     ax1.stairs(h["counts"], edges, fill=True)
     ax1.set_xscale("log")
     ax1.set_yscale("log")
-    ax1.set_xlabel("RK4 steps per point (default scene, rtol 1e-6)")
+    ax1.set_xlabel(f"{result['engine']['method']} steps per point, fine run (default scene, rtol 1e-6)")
     ax1.set_ylabel("points")
     ax1.set_title("engine: steps per point")
     for name, m in result["scipy"]["methods"].items():
@@ -591,7 +603,8 @@ def plot(result, path):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--quick", action="store_true", help="fewer repeats and a coarser scipy scan (~30 s)")
+    ap.add_argument("--quick", action="store_true",
+                    help="1 repeat, 5 x 5 scipy subsample, every other tolerance, no full-grid error check")
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
     ap.add_argument("--no-png", action="store_true")
     args = ap.parse_args(argv)
@@ -600,17 +613,20 @@ def main(argv=None):
     n_all = numba.config.NUMBA_NUM_THREADS
     warnings.simplefilter("ignore", RuntimeWarning)
     t_start = time.perf_counter()
+    load0, digest0 = common.loadavg(), common.sweep_digest()
 
     scene = sweep.default_scene()
     plan = sweep.make_plan(scene)
     print(f"[1/5] engine: default scene {scene.shape[0]} x {scene.shape[1]}, rtol {scene.rtol:g}", flush=True)
-    eng, eng_res = bench_engine(scene, plan, repeats, n_all)
+    print(f"      plan: {plan.method}, {plan.describe()['stepper']}", flush=True)
+    eng, eng_res, eng_coarse = bench_engine(scene, plan, repeats, n_all)
     t_eng_1 = eng["threads_1"]["best_s"]
 
     print("[2/5] scipy DOP853 / LSODA on a strided subsample", flush=True)
     idx = subsample_indices(scene, 5 if quick else 7)
-    tail_checked = check_tail_ok()
+    tail_checked = common.check_tail_ok()
     ref = reference(scene, idx)
+    ref_method = sweep.make_plan(dataclasses.replace(scene, rtol=REF_RTOL)).method
     check = closed_form_check(scene)
     tols = [10.0 ** -e for e in (range(3, 14, 2) if quick else range(3, 14))]
     atol_factors = (1.0, 1e-3)
@@ -628,6 +644,7 @@ def main(argv=None):
     chosen_r = {k: v for k, v in rand.items() if v}
     best_r = min(chosen_r, key=lambda k: chosen_r[k]["ms_per_traj"]) if chosen_r else None
     scipy_us_r = chosen_r[best_r]["ms_per_traj"] * 1e3 if best_r else math.nan
+
     def ratios(scipy_us_per_traj, engine_same_points):
         """scipy cost per trajectory over the engine's: on the same points, and against the grid averages."""
         return {"ratio_same_points_1_core": scipy_us_per_traj / engine_same_points["us_per_traj"],
@@ -648,6 +665,7 @@ def main(argv=None):
         "tail_test_copy_checked_inputs": tail_checked,
         "error_target": ERROR_TARGET,
         "reference": f"engine at rtol {REF_RTOL:g} on the same points",
+        "reference_method": ref_method,
         "reference_closed_form_check_m2_0": check,
         "tolerance_rule": "per atol family (atol = rtol or 1e-3 rtol) the loosest scanned rtol from which every "
                           "tighter scanned rtol also has max rel error <= target; then the faster family",
@@ -679,8 +697,8 @@ def main(argv=None):
         eng["error_vs_rtol_1e-10_full_grid"] = {"max_rel_err": float(rel.max()), "median_rel_err": float(
             np.median(rel)), "p99_rel_err": float(np.percentile(rel, 99))}
 
-    print("[3/5] numpy lockstep RK4 over the whole grid", flush=True)
-    npy = bench_numpy(scene, plan, eng_res, t_eng_1, 1 if quick else 2)
+    print("[3/5] numpy lockstep RK4 over the whole grid (both runs of each Richardson pair)", flush=True)
+    npy = bench_numpy(scene, plan, eng_res, eng_coarse, t_eng_1, 1 if quick else 2)
 
     print("[4/5] cold start (new processes)", flush=True)
     cold = bench_cold(1 if quick else 3)
@@ -712,8 +730,12 @@ def main(argv=None):
         "benchmark": "benchmarks/throughput.py" + (" --quick" if quick else ""),
         "date": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
         "machine": machine_info(),
-        "versions": versions(),
+        "versions": {**common.versions(), "sweep_git_commit": common.git_commit(),
+                     "sweep_tree_dirty": common.sweep_tree_dirty()},
+        "sweep_source_digest_start_end": [digest0, common.sweep_digest()],
+        "loadavg_start_end": [load0, common.loadavg()],
         "scene": {"name": "sweep.default_scene()", "shape": list(scene.shape), "rtol": scene.rtol,
+                  "plan": plan.describe(),
                   "atol_xi_inf": scene.atol["xi_inf"], "step_h_sigma": {
                       "stable_sliding_k_gt_a": sorted({float(x) for x in plan.step[plan.k > plan.a]}),
                       "unstable_k_le_a": sorted({float(x) for x in plan.step[plan.k <= plan.a]}),
@@ -753,32 +775,37 @@ def print_table(r):
     n_all = m["NUMBA_NUM_THREADS"]
     print(f"\n== sweep throughput  {r['date']}  {m['cpu_model']}, {m['logical_cpus']} cpus, numba "
           f"{r['versions']['numba']} ({m['numba_threading_layer']}, {n_all} threads)")
-    sp = e["steps_per_point"]
+    sp, rp = e["steps_per_point"], e["richardson_pair"]
+    print(f"plan: {r['scene']['plan']['method']}; {r['scene']['plan']['stepper']}")
     print(f"default scene {r['scene']['shape'][0]}x{r['scene']['shape'][1]} rtol {r['scene']['rtol']:g}: steps/point "
           f"mean {sp['mean']:.0f}, median {sp['p50']:.0f}, p95 {sp['p95']:.0f}, max {sp['p100']:.0f}; "
           f"{100 * e['share_of_steps_in_points_over_1000_steps']:.0f}% of all steps in the "
-          f"{e['points_over_1000_steps']} points with > 1000 steps")
+          f"{e['points_over_1000_steps']} points with > 1000 steps (fine run; the coarse run of the Richardson "
+          f"pair adds {rp['coarse_over_fine']:.3f}x those steps, counted in ns/step below)")
+    if len(e["by_method"]) > 1:
+        print("points by method: " + ", ".join(f"{m} {v['points']} ({v['fine_steps_total']} fine steps)"
+                                               for m, v in e["by_method"].items()))
     hs = r["scene"]["step_h_sigma"]
     print(f"step h in sigma per point: {', '.join(f'{x:.4g}' for x in hs['stable_sliding_k_gt_a'])} on the "
           f"{hs['points_stable']} stable-sliding points (k > a), "
           f"{', '.join(f'{x:.4g}' for x in hs['unstable_k_le_a'])} on the others")
     rows = [("engine 1 thread", e["threads_1"]["best_s"], e["threads_1"]["traj_per_s"],
-             e["threads_1"]["traj_per_s_per_core"], e["threads_1"]["ns_per_rk4_step_per_core"])]
+             e["threads_1"]["traj_per_s_per_core"], e["threads_1"]["ns_per_step_per_core"],
+             e["threads_1"]["ns_per_stage_eval_per_core"])]
     if n_all > 1:
         t = e[f"threads_{n_all}"]
         rows.append((f"engine {n_all} threads", t["best_s"], t["traj_per_s"], t["traj_per_s_per_core"],
-                     t["ns_per_rk4_step_per_core"]))
-    rows.append(("numpy lockstep RK4", npy["best_s"], npy["traj_per_s"], npy["traj_per_s"],
-                 4 * npy["ns_per_point_stage_eval"]))
-    print(f"\n{'':24s}{'seconds':>10s}{'traj/s':>12s}{'traj/s/core':>13s}{'ns/step/core':>14s}")
-    for name, sec, tps, tpc, ns in rows:
-        print(f"{name:24s}{sec:10.3f}{tps:12.0f}{tpc:13.0f}{ns:14.1f}")
+                     t["ns_per_step_per_core"], t["ns_per_stage_eval_per_core"]))
+    if "skipped" not in npy:
+        label = f"numpy lockstep {npy['method']}" + (f" ({npy['points']} pts)" if npy["points_other_methods"] else "")
+        rows.append((label, npy["best_s"], npy["traj_per_s"], npy["traj_per_s"],
+                     npy["evals_per_step"] * npy["ns_per_point_stage_eval"], npy["ns_per_point_stage_eval"]))
+    print(f"\n{'':32s}{'seconds':>10s}{'traj/s':>12s}{'traj/s/core':>13s}{'ns/step/core':>14s}{'ns/eval/core':>14s}")
+    for name, sec, tps, tpc, ns, nse in rows:
+        print(f"{name:32s}{sec:10.3f}{tps:12.0f}{tpc:13.0f}{ns:14.1f}{nse:14.2f}")
     print(f"sweep.run_sweep (plan + kernel + Dataset), {n_all} threads: {e['run_sweep_s_all_threads']:.3f} s")
     if n_all > 1:
-        d = e["parallel_diagnostic"]
-        print(f"parallel speedup {e['parallel_speedup']:.2f}x on {n_all} threads (execute: fixed pseudo-random "
-              f"order); stop_batch called directly: {d['speedup_grid_order']:.2f}x in grid order, "
-              f"{d['speedup_shuffled_order']:.2f}x shuffled (diagnostic)")
+        print(f"parallel speedup {e['parallel_speedup']:.2f}x on {n_all} threads (execute)")
     if "error_vs_rtol_1e-10_full_grid" in e:
         print(f"engine rtol 1e-6 vs rtol 1e-10, full grid: max rel err "
               f"{e['error_vs_rtol_1e-10_full_grid']['max_rel_err']:.2e}")
@@ -797,13 +824,17 @@ def print_table(r):
     print(f"best scipy us/traj: strided {s['best_us_per_traj']:.0f} ({s['best_method']}), random "
           f"{rs['best_us_per_traj']:.0f} ({rs['best_method']}); engine per core over the grid ({n_all} threads) "
           f"{per_core:.2f}; same-points ratio on the random subsample {rs['ratio_same_points_1_core']:.1f}")
-    print(f"\nnumpy lockstep vs engine: {npy['steps_differ_points']} points with different step counts, max rel "
-          f"xi_inf diff {npy['max_rel_diff_vs_engine']:.1e}; per point-stage evaluation "
-          f"{npy['ns_per_point_stage_eval']:.1f} ns "
-          f"vs engine {npy['engine_ns_per_point_stage_eval_1_thread']:.1f} ns "
-          f"(x{npy['numpy_over_engine_per_eval']:.1f}); with >= 4096 points active numpy costs "
-          f"{npy['phases']['active_ge_4096']['ns_per_point_stage_eval']:.1f} ns, below "
-          f"{npy['phases']['active_lt_4096']['ns_per_point_stage_eval']:.1f} ns")
+    if "skipped" in npy:
+        print(f"\nnumpy lockstep: skipped ({npy['skipped']})")
+    else:
+        ph = npy["phases"]
+        print(f"\nnumpy lockstep vs engine: {npy['steps_differ_points']} points with different fine-run step counts "
+              f"({npy['coarse_steps_differ_points']} coarse), max rel xi_inf diff {npy['max_rel_diff_vs_engine']:.1e}, "
+              f"statuses equal: {npy['status_equal']}; per point-stage evaluation "
+              f"{npy['ns_per_point_stage_eval']:.1f} ns vs engine {npy['engine_ns_per_point_stage_eval_1_thread']:.2f} "
+              f"ns (x{npy['numpy_over_engine_per_eval']:.1f}); with >= 4096 runs active numpy costs "
+              f"{fmt(ph['active_ge_4096']['ns_per_point_stage_eval'], '{:.1f}')} ns, below "
+              f"{fmt(ph['active_lt_4096']['ns_per_point_stage_eval'], '{:.1f}')} ns")
     print(f"cold start (10x10 sweep in a new process): median {c['process_wall_s_median']:.2f} s "
           f"(import sweep alone {c['import_only_process_wall_s_median']:.2f} s as a process, "
           f"{c['in_process_import_s_median']:.2f} s in-process; bare python "

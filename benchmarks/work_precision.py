@@ -17,7 +17,7 @@ engine configuration and scipy's DOP853 / LSODA / Radau side by side, on one fix
   coarse mesh + the same mesh halved, fine result returned with its error estimate).
 * scipy: the OdeSolver classes DOP853, LSODA, Radau (what solve_ivp drives) on the engine's formulation at
   rtol 1e-3 .. 1e-11 (atol = ATOL_FACTOR * rtol), stopped by the engine's tail test and completed by its
-  closed-form tail (the approach of benchmarks/throughput.py, whose scipy_point this script reuses).
+  closed-form tail (benchmarks/_common.py's scipy_point, shared with benchmarks/throughput.py).
 * Error of a configuration = max over the problems of |xi_inf / ref - 1|; time per trajectory = mean over the
   problems of the best-of-repeats CPU time (time.process_time) per trajectory of each problem; the best wall
   time is recorded beside it (the two agree on an idle machine; CPU time stays meaningful on a shared one).
@@ -37,7 +37,6 @@ import json
 import math
 import os
 import platform
-import subprocess
 import sys
 import time
 import warnings
@@ -45,7 +44,6 @@ from pathlib import Path
 
 import numba
 import numpy as np
-import scipy
 from scipy.integrate import DOP853, LSODA, Radau
 
 HERE = Path(__file__).resolve().parent
@@ -54,13 +52,24 @@ sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(HERE))
 
 import reference as refmod  # noqa: E402  (tests/reference.py: scipy only, independent of sweep)
+from _common import (  # noqa: E402  (benchmarks/_common.py)
+    check_tail_ok,
+    cpu_model,
+    git_commit,
+    loadavg,
+    scipy_point,
+    sweep_digest,
+    sweep_tree_dirty,
+    threading_layer,
+    timed,
+    usable_cpus,
+    versions,
+)
 from cases import STOP_CASES, case_params  # noqa: E402
-from throughput import check_tail_ok, cpu_model, git_commit, scipy_point, tail_ok  # noqa: E402
 
 import sweep  # noqa: E402
 import sweep.plan  # noqa: E402
 from sweep.engine import execute  # noqa: E402
-from sweep.models.stop import EXP_MAX, tail_slip  # noqa: E402
 
 DEFAULT_OUT = HERE / "results" / "work_precision.json"
 PROBLEMS = (
@@ -153,20 +162,6 @@ def rtol_for_step(h: float, lo: float, hi: float) -> float:
     c = (getattr(sweep.plan, "STEP_SAFETY", 2.0) * getattr(sweep.plan, "ERROR_GAIN", 15.0)
          * getattr(sweep.plan, "C_STABLE", 6e-4))
     return float(min(hi, max(lo, c * h**4)))
-
-
-def timed(fn, repeats):
-    """Best of ``repeats`` calls of fn(): (best CPU seconds of this process, best wall seconds, last result).
-
-    CPU time (time.process_time) is the primary measure: on a shared machine it leaves out the time this process
-    waits while another one runs (uncontended, best CPU and best wall time agree to ~1 %)."""
-    cpu, wall, out = [], [], None
-    for _ in range(repeats):
-        c0, t0 = time.process_time(), time.perf_counter()
-        out = fn()
-        wall.append(time.perf_counter() - t0)
-        cpu.append(time.process_time() - c0)
-    return min(cpu), min(wall), out
 
 
 def time_engine(scene, plan, target_s, repeats, n_min=64, n_max=400_000):
@@ -282,35 +277,9 @@ def engine_configs(quick):
 
 # --------------------------------------------------------------------------------------------- scipy
 
-def scipy_point_radau(k, a, b, rtol, atol, tail_tol_rel, tail_tol_abs):
-    """throughput.scipy_point for Radau, with the analytic Jacobian (throughput's gives it to LSODA only)."""
-    def fun(s, y):
-        u = s - y[0]
-        return np.array([math.exp(min(-(k * y[0] + u * (a + b * u)), EXP_MAX))])
-
-    def jac(s, y):
-        u = s - y[0]
-        return np.array([[-math.exp(min(-(k * y[0] + u * (a + b * u)), EXP_MAX)) * (k - a - 2.0 * b * u)]])
-
-    solver = Radau(fun, 0.0, np.zeros(1), 1e12, rtol=rtol, atol=atol, jac=jac)
-    steps = 0
-    while True:
-        msg = solver.step()
-        steps += 1
-        if solver.status != "running":
-            raise RuntimeError(f"Radau stopped before the tail test passed: {msg}")
-        xi, s = float(solver.y[0]), float(solver.t)
-        u = s - xi
-        E = math.exp(min(-(k * xi + u * (a + b * u)), EXP_MAX))
-        if tail_ok(k, a, b, u, E, tail_tol_rel * xi + tail_tol_abs):
-            return xi + tail_slip(k, a, b, u, E), steps, solver.nfev
-
-
 def scipy_solve(method, pb, rtol):
     atol = ATOL_FACTOR * rtol
-    if method == "Radau":
-        return scipy_point_radau(pb["k"], pb["a"], pb["b"], rtol, atol, rtol, TAIL_ATOL)
-    cls = {"DOP853": DOP853, "LSODA": LSODA}[method]
+    cls = {"DOP853": DOP853, "LSODA": LSODA, "Radau": Radau}[method]
     return scipy_point(cls, pb["k"], pb["a"], pb["b"], rtol, atol, rtol, TAIL_ATOL)
 
 
@@ -374,16 +343,6 @@ def subset(cfg, names):
     return out
 
 
-def sweep_digest():
-    """sha256 (16 hex) of the sweep package's sources: other people may edit sweep/ while this runs."""
-    import hashlib
-
-    h = hashlib.sha256()
-    for f in sorted((ROOT / "sweep").rglob("*.py")):
-        h.update(f.relative_to(ROOT).as_posix().encode() + b"\0" + f.read_bytes())
-    return h.hexdigest()[:16]
-
-
 def diagnostics(engine, scipy_cfgs, table):
     """What the speed-up is made of: cost per stage evaluation per engine family, scipy's cost per RHS evaluation,
     and the costly corner's share of the best engine configuration's time at each error level."""
@@ -408,13 +367,6 @@ def diagnostics(engine, scipy_cfgs, table):
     return {"engine_ns_per_stage_eval_median_by_family": {k: float(np.median(v)) for k, v in fam.items()},
             "scipy_us_per_rhs_eval_median_by_method": {k: float(np.median(v)) for k, v in sc.items()},
             "corner_share_of_time_of_best_configs": share}
-
-
-def _loadavg():
-    try:
-        return [float(x) for x in Path("/proc/loadavg").read_text().split()[:3]]
-    except OSError:
-        return None
 
 
 def cheapest(configs, level):
@@ -488,22 +440,10 @@ def summary(engine, scipy_cfgs):
 # -------------------------------------------------------------------------------------------- output
 
 def machine_info():
-    try:
-        layer = numba.threading_layer()
-    except ValueError:
-        layer = None
-    try:
-        dirty = bool(subprocess.run(["git", "status", "--porcelain", "sweep"], cwd=ROOT, capture_output=True,
-                                    text=True, timeout=10).stdout.strip())
-    except (OSError, subprocess.SubprocessError):
-        dirty = None
-    return {"cpu": cpu_model(), "logical_cpus": os.cpu_count(),
-            "usable_cpus": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
-            "numba_threading_layer": layer, "NUMBA_NUM_THREADS": numba.config.NUMBA_NUM_THREADS,
+    return {"cpu": cpu_model(), "logical_cpus": os.cpu_count(), "usable_cpus": usable_cpus(),
+            "numba_threading_layer": threading_layer(), "NUMBA_NUM_THREADS": numba.config.NUMBA_NUM_THREADS,
             "platform": platform.platform(),
-            "versions": {"python": platform.python_version(), "numpy": np.__version__, "numba": numba.__version__,
-                         "scipy": scipy.__version__, "sweep": getattr(sweep, "__version__", None),
-                         "git_commit": git_commit(), "sweep_tree_dirty": dirty}}
+            "versions": {**versions(), "git_commit": git_commit(), "sweep_tree_dirty": sweep_tree_dirty()}}
 
 
 FAMILY_STYLE = {
@@ -587,7 +527,7 @@ def main(argv=None):
     passes = 1 if args.quick else 2
     threads2 = not args.no_threads2 and numba.config.NUMBA_NUM_THREADS >= 2
 
-    load0 = _loadavg()
+    load0 = loadavg()
     digest0 = sweep_digest()
     pbs = problems()
     print(f"[1/4] reference (rtol {REF_RTOL:g}, closed form where m2 = 0)", flush=True)
@@ -650,9 +590,8 @@ def main(argv=None):
                                  "in contact-age time s; scipy OdeSolver classes stepped until the engine's tail "
                                  "test (plain-Python copy tail_ok, verified) passes at a step end with tolerance "
                                  f"rtol xi + {TAIL_ATOL:g}, then + the engine's closed-form tail_slip "
-                                 "(benchmarks/throughput.py scipy_point for DOP853 and LSODA, the same with the "
-                                 f"analytic Jacobian for Radau); atol = {ATOL_FACTOR:g} rtol; LSODA and Radau get "
-                                 "the analytic Jacobian",
+                                 "(benchmarks/_common.py scipy_point, for DOP853, LSODA and Radau); "
+                                 f"atol = {ATOL_FACTOR:g} rtol; LSODA and Radau get the analytic Jacobian",
             "tail_test_copy_checked_inputs": tail_checked,
             "reference": f"closed form where m2 = 0; else tests/reference.py at rtol {REF_RTOL:g}; "
                          "uncertainty_estimate per problem = disagreement with the independent engine-form "
@@ -671,7 +610,7 @@ def main(argv=None):
                     "speedup_goal_met_all_levels": all(r["meets_goal"] for r in table),
                     "auto_target_met_all_rtols": all(r["within_target"] for r in auto if r["rtol"] <= 1e-3)},
         "elapsed_s": None,
-        "loadavg_start_end": [load0, _loadavg()],
+        "loadavg_start_end": [load0, loadavg()],
     }
     result["elapsed_s"] = time.perf_counter() - t_start
     args.out.parent.mkdir(parents=True, exist_ok=True)
