@@ -12,7 +12,8 @@ engine configuration and scipy's DOP853 / LSODA / Radau side by side, on one fix
   and against DOP853 at rtol 1e-13 in the engine's own formulation.
 * Engine configurations (one thread, numba.set_num_threads(1); two threads per core as well): RK4 at fixed
   steps h in sigma (a sqrt(2) ladder, 2 .. 0.011: mean steps from ~tens to thousands), RK4 with the plan's
-  step rule, DP5 and DOP853 (adaptive) at rtol 1e-2 .. 1e-10, float32 RK4 (steps and rule, rtol >= 1e-5) and
+  step rule, DP5 and DOP853 (adaptive) at rtol 1e-2 .. 1e-10, float32 RK4 (steps and rule, rtol >= 1e-5),
+  method="auto" with fixed steps (RK4, and the Rosenbrock ros4 at the stiff corner; float64 and float32) and
   method="auto" at rtol 1e-2 .. 1e-10. Each point is solved as the engine always does (a Richardson pair:
   coarse mesh + the same mesh halved, fine result returned with its error estimate).
 * scipy: the OdeSolver classes DOP853, LSODA, Radau (what solve_ivp drives) on the engine's formulation at
@@ -261,6 +262,13 @@ def engine_configs(quick):
     for h in (STEPS_H_F32[::2] if quick else STEPS_H_F32):
         cfgs.append((f"rk4 f32 h={h:.4g}", "engine rk4 float32 fixed h",
                      lambda pb, h=h: dict(method="rk4", step=h, precision="float32",
+                                          rtol=rtol_for_step(h, 1e-5, 1e-2))))
+    for h in hs:  # method auto with a fixed step: RK4, and ros4 at the stiff points (sweep.plan.stiff_points)
+        cfgs.append((f"auto h={h:.4g}", "engine auto (rk4 + ros4) fixed h",
+                     lambda pb, h=h: dict(method="auto", step=h, rtol=rtol_for_step(h, 1e-10, 1e-2))))
+    for h in (STEPS_H_F32[::2] if quick else STEPS_H_F32):
+        cfgs.append((f"auto f32 h={h:.4g}", "engine auto (rk4 + ros4) float32 fixed h",
+                     lambda pb, h=h: dict(method="auto", step=h, precision="float32",
                                           rtol=rtol_for_step(h, 1e-5, 1e-2))))
     for rt in RTOLS_ENGINE:
         cfgs.append((f"rk4 rule rtol={rt:g}", "engine rk4 plan rule", lambda pb, rt=rt: dict(method="rk4", rtol=rt)))
