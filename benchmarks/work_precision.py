@@ -256,20 +256,14 @@ def engine_configs(quick):
     """(label, family, kw_for(problem)) of every engine configuration."""
     cfgs = []
     hs = STEPS_H[::2] if quick else STEPS_H
-    for h in hs:
-        cfgs.append((f"rk4 h={h:.4g}", "engine rk4 fixed h",
-                     lambda pb, h=h: dict(method="rk4", step=h, rtol=rtol_for_step(h, 1e-10, 1e-2))))
-    for h in (STEPS_H_F32[::2] if quick else STEPS_H_F32):
-        cfgs.append((f"rk4 f32 h={h:.4g}", "engine rk4 float32 fixed h",
-                     lambda pb, h=h: dict(method="rk4", step=h, precision="float32",
-                                          rtol=rtol_for_step(h, 1e-5, 1e-2))))
-    for h in hs:  # method auto with a fixed step: RK4, and ros4 at the stiff points (sweep.plan.stiff_points)
-        cfgs.append((f"auto h={h:.4g}", "engine auto (rk4 + ros4) fixed h",
-                     lambda pb, h=h: dict(method="auto", step=h, rtol=rtol_for_step(h, 1e-10, 1e-2))))
-    for h in (STEPS_H_F32[::2] if quick else STEPS_H_F32):
-        cfgs.append((f"auto f32 h={h:.4g}", "engine auto (rk4 + ros4) float32 fixed h",
-                     lambda pb, h=h: dict(method="auto", step=h, precision="float32",
-                                          rtol=rtol_for_step(h, 1e-5, 1e-2))))
+    hs32 = STEPS_H_F32[::2] if quick else STEPS_H_F32
+    # fixed steps: rk4 alone, and method auto (RK4, and ros4 at the stiff points: sweep.plan.stiff_points)
+    for method, name, family in (("rk4", "rk4", "engine rk4"), ("auto", "auto", "engine auto (rk4 + ros4)")):
+        for precision, tag, steps, rtol_min in (("float64", "", hs, 1e-10), ("float32", " f32", hs32, 1e-5)):
+            for h in steps:
+                cfgs.append((f"{name}{tag} h={h:.4g}", f"{family}{' float32' if tag else ''} fixed h",
+                             lambda pb, h=h, m=method, p=precision, lo=rtol_min: dict(
+                                 method=m, step=h, precision=p, rtol=rtol_for_step(h, lo, 1e-2))))
     for rt in RTOLS_ENGINE:
         cfgs.append((f"rk4 rule rtol={rt:g}", "engine rk4 plan rule", lambda pb, rt=rt: dict(method="rk4", rtol=rt)))
     for rt in RTOLS_F32:
