@@ -23,7 +23,7 @@ from numba import njit, prange
 
 from ..solvers import METHODS, RosenbrockTableau
 from .stop import EXP_MAX, FAST, MAX_STEPS, NONFINITE, OK, TAIL_SAFETY, make_rate, tail_error, tail_slip
-from .stop_stiff import STIFF_RATE_FLOOR, make_stiff_rate
+from .stop_stiff import make_stiff_rate
 
 LANES = 16
 """Runs in flight per thread (8 and 32 measured within 10 %: benchmarks/throughput.py)."""
@@ -68,7 +68,7 @@ def _rosenbrock_step(f, tableau):
     """step_all(st) for a four-stage Rosenbrock tableau whose stage 4 reuses stage 3's f (Shampine's ROS4
     structure), on the scalar form in s of :mod:`sweep.models.stop_stiff`: three exponentials per step (stages
     2 and 3 and the step's end; E at the start is the previous step's end, kept in the _E field)."""
-    rate = make_stiff_rate(f)
+    rate, step_factor = make_stiff_rate(f)
     W = LANES
     a, c = np.array(tableau.a), np.array(tableau.c)
     if tableau.stages != 4 or np.any(a[3] != a[2]) or tableau.alpha_x[3] != tableau.alpha_x[2]:
@@ -89,20 +89,19 @@ def _rosenbrock_step(f, tableau):
             x0, s0, E0 = st[_X * W + l], st[_S * W + l], st[_E * W + l]
             u0 = s0 - x0
             g0 = a + (bb + bb) * u0
-            r0 = f(0.5) * (g0 + math.sqrt(g0 * g0 + f(0.25) * abs(bb))) + f(STIFF_RATE_FLOOR)
-            H = h * (s0 + s_c) / (one + r0 * (s0 + s_c))
+            H = h * step_factor(s0, g0, bb, s_c)
             iH = one / H
             d = one / (inv_gamma * iH - E0 * (g0 - k))  # (1/(gamma H) - J)^-1
             ft = -g0 * E0  # dE/ds
             u1 = d * (E0 + H * gx1 * ft)
-            E2, _, _, o2 = rate(x0 + a21 * u1, s0 + al2 * H, k, a, bb, s_c)
+            E2, o2 = rate(x0 + a21 * u1, s0 + al2 * H, k, a, bb)
             u2 = d * (E2 + H * gx2 * ft + c21 * iH * u1)
-            E3, _, _, o3 = rate(x0 + a31 * u1 + a32 * u2, s0 + al3 * H, k, a, bb, s_c)
+            E3, o3 = rate(x0 + a31 * u1 + a32 * u2, s0 + al3 * H, k, a, bb)
             u3 = d * (E3 + H * gx3 * ft + iH * (c31 * u1 + c32 * u2))
             u4 = d * (E3 + H * gx4 * ft + iH * (c41 * u1 + c42 * u2 + c43 * u3))
             x1 = x0 + m1 * u1 + m2 * u2 + m3 * u3 + m4 * u4
             s1 = s0 + H
-            E1, _, _, o4 = rate(x1, s1, k, a, bb, s_c)
+            E1, o4 = rate(x1, s1, k, a, bb)
             st[_X * W + l], st[_S * W + l] = x1, s1
             st[_E * W + l], st[_EXPO * W + l] = E1, max(max(o2, o3), o4)
 
