@@ -170,9 +170,11 @@ def mark_error_above_tol(scene: Scene, out: RawResult) -> None:
 
 
 def warm_up(scene: Scene, plan: Plan) -> float:
-    """Compile the kernel (or load it from numba's on-disk cache) on one point; returns the seconds taken."""
+    """Compile the kernels (or load them from numba's on-disk cache) on one point per method of the plan;
+    returns the seconds taken."""
     t0 = time.perf_counter()
-    execute(scene, plan, np.arange(1), progress=False)
+    firsts = [int(np.argmax(plan.point_method == m)) for m in range(len(plan.point_methods))]
+    execute(scene, plan, np.array(firsts), progress=False)
     return time.perf_counter() - t0
 
 
