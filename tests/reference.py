@@ -7,17 +7,27 @@ Equations, in the paper's own form (reduced units, ' = d/dtau, u = ln psi, mu1 =
     xi' = exp(-(chi xi + mu1 u + m2 u^2)/A - u),    u' = exp(-u) - xi',    xi(0) = 0, u(0) = 0.
 
 They are integrated in the log time S = ln(1 + tau) (d/dS = (1 + tau) d/dtau = e^S d/dtau) with
-``scipy.integrate.solve_ivp`` at rtol 1e-12, state (xi, v) with v = u - S = ln(psi/(1 + tau)) <= 0
-(psi' <= 1 so psi <= 1 + tau). The factor e^S is folded into the exponents,
+``scipy.integrate.solve_ivp`` at rtol 1e-13, in two phases whose second state variable is the one that carries
+u = ln psi without cancellation (the factor e^S is folded into the exponents, so nothing overflows even where
+tau = e^S - 1 itself would exceed the float range):
 
-    dxi/dS = exp(-v - (chi xi + mu1 u + m2 u^2)/A),    dv/dS = expm1(-v) - dxi/dS,     u = v + S,
+* early, while u < S/2 (psi < sqrt(1 + tau)), state (xi, u):
 
-so nothing overflows even where tau = e^S - 1 itself would exceed the float range (the horizon in S is not
-limited by tau <= 1e308), and since v -> 0 late on (psi ~ tau) psi keeps a relative accuracy ~1e-14 at any
-tau (integrating u = ln psi itself would leave an error rtol * u in psi/tau, 1e-10 at tau = 1e40).
+      dxi/dS = exp(S - u - (chi xi + mu1 u + m2 u^2)/A),    du/dS = exp(S - u) - dxi/dS;
+
+  here psi ~ 1 and u is small: deep on the stick-slip side (chi << mu1) the slider leaves the unstable steady
+  state u* = -chi xi/mu1 ~ 1e-7 at a rate mu1/A, so xi_inf depends on u to ~1e-19 absolute. Written as
+  u = v + S, with v = ln(psi/(1 + tau)) ~ -S, that offset drowns in the rounding and the tolerance of v (the
+  one-phase DOP853 form was off by 2.4e-7 relative at chi/A = 1e-5, mu1/A = 10);
+* late, once u >= S/2 (event), state (xi, v) with v = u - S = ln(psi/(1 + tau)) <= 0 (psi' <= 1):
+
+      dxi/dS = exp(-v - (chi xi + mu1 u + m2 u^2)/A),    dv/dS = expm1(-v) - dxi/dS,     u = v + S;
+
+  since v -> 0 late on (psi ~ tau) psi keeps a relative accuracy ~1e-14 at any tau (integrating u itself would
+  leave an error rtol * u in psi/tau, 1e-10 at tau = 1e40).
 
 Method: DOP853 (explicit, order 8) with a budget of right-hand-side evaluations; where that budget runs out
-(the stiff "costly corner", small chi/A with mu1 < 0, where psi << tau and dv/dS relaxes at the rate
+(the stiff "costly corner", small chi/A with mu1 < 0, where psi << tau and u relaxes at the rate
 (1 + tau)/psi), the same problem is re-solved with Radau (implicit, order 5) and the analytic Jacobian.
 
 Horizon (finite cases): late on (xi' psi << 1, so du = dtau/psi), exp(chi xi/A) dxi = exp(-dmu(u)/A) du with
@@ -30,7 +40,9 @@ dmu(u) = mu1 u + m2 u^2, so the slip still to come after the horizon is
 the bound is not met at the end. The remaining tail is then *added* to xi_end (it is the leading-order
 correction; its own error is relative O(xi' psi, psi/tau - 1), i.e. utterly negligible) and reported in
 ``tail``: it is < 1e-14 relative in every case we run, so xi_inf carries the integrator's error only
-(~1e-12 relative, verified against the m2 = 0 closed form in tests/test_reference.py).
+(< 1e-13 relative: against the m2 = 0 closed form in tests/test_reference.py and, over chi/A 1e-5..1e4 and
+m1/A 0.1..10, in tests/test_extremes.py; DOP853 and Radau agree to 1e-13 on the case table. The engine's error
+estimates are checked down to rtol 1e-9 with an atol floor of 1e-12, so the reference must be well below both).
 
 No finite limit (PHYSICS.md 6: m2 < 0, or m2 = 0 with mu1 <= 0): ``finite`` is False, ``xi_inf`` is NaN and
 xi(tau), psi(tau) are available up to ``tau_horizon`` (1e12); asking beyond raises ValueError.
@@ -48,13 +60,13 @@ from scipy.integrate import OdeSolution, solve_ivp
 from scipy.optimize import brentq
 from scipy.special import erfcx
 
-RTOL = 1e-12
+RTOL = 1e-13
 S_MIN_FINITE = 460.0  # tau ~ 1e200
 TAU_HORIZON_NO_LIMIT = 1e12
 TAIL_TARGET = 1e-17  # T(u_end) target, times min(1, A/chi)
 DOP853_MAX_NFEV = 120_000  # ~10^4 steps; beyond that the problem is stiff: switch to Radau
 
-__all__ = ["ReferenceSolution", "reference_stop", "has_finite_limit", "tail_integral"]
+__all__ = ["ReferenceSolution", "TwoPhaseSolution", "reference_stop", "has_finite_limit", "tail_integral"]
 
 
 def has_finite_limit(mu1: float, m2: float) -> bool:
@@ -93,10 +105,32 @@ def _u_for_tail(A: float, chi: float, mu1: float, m2: float) -> float:
     return brentq(g, lo, hi, xtol=1e-6)
 
 
+class TwoPhaseSolution:
+    """Dense output over S of the two phases (module docstring), as the state (xi, u = ln psi); ``ts`` are the
+    step points of both phases (increasing)."""
+
+    def __init__(self, early: OdeSolution, late: OdeSolution | None):
+        self.early, self.late = early, late
+        self.S_switch = late.t_min if late is not None else math.inf
+        self.ts = early.ts if late is None else np.concatenate((early.ts, late.ts[1:]))
+
+    def __call__(self, S) -> np.ndarray:
+        S = np.asarray(S, dtype=float)
+        flat = np.atleast_1d(S).ravel()
+        y = np.empty((2, flat.size))
+        first = flat <= self.S_switch
+        if np.any(first):
+            y[:, first] = self.early(flat[first])
+        if np.any(~first):
+            xi, v = self.late(flat[~first])
+            y[:, ~first] = xi, v + flat[~first]
+        return y.reshape((2,) + S.shape)
+
+
 @dataclass(frozen=True)
 class ReferenceSolution:
-    """Reference stop transient for (chi, A, mu1, m2). ``sol`` is a scipy OdeSolution in S = ln(1 + tau),
-    state (xi, v = ln(psi/(1 + tau)))."""
+    """Reference stop transient for (chi, A, mu1, m2). ``sol`` gives the state (xi, u = ln psi) at S = ln(1 + tau)
+    (:class:`TwoPhaseSolution`)."""
 
     chi: float
     A: float
@@ -111,7 +145,7 @@ class ReferenceSolution:
     method: str  # "DOP853" or "Radau"
     nfev: int
     seconds: float
-    sol: OdeSolution = field(repr=False, compare=False)
+    sol: TwoPhaseSolution = field(repr=False, compare=False)
 
     def _S(self, tau) -> np.ndarray:
         tau = np.asarray(tau, dtype=float)
@@ -123,10 +157,11 @@ class ReferenceSolution:
         return S
 
     def _state(self, tau):
+        """(S, xi, u) at tau; beyond the horizon xi and u - S are frozen at their values there."""
         S = self._S(tau)
         Sc = np.minimum(S, self.S_end)
-        y = self.sol(Sc.ravel()).reshape((2,) + S.shape)
-        return S, y[0], y[1]
+        y = self.sol(Sc)
+        return S, y[0], y[1] + (S - Sc)
 
     def xi(self, tau):
         """Reduced slip xi(tau) (vectorised). Beyond the horizon of a finite case: the remaining tail is
@@ -141,8 +176,8 @@ class ReferenceSolution:
     def psi(self, tau):
         """Reduced contact age psi(tau) = V phi/D0 (vectorised). Beyond a finite case's horizon psi/(1 + tau) is
         frozen at its value there (d(psi - tau)/dtau = -xi' psi ~ 0, so psi/(1 + tau) = 1 to ~1e-14)."""
-        S, _, v = self._state(tau)  # v frozen beyond the horizon: psi/(1 + tau) -> const there
-        p = np.exp(v + S)
+        _, _, u = self._state(tau)
+        p = np.exp(u)
         return p[()] if p.ndim == 0 else p
 
     def tau_at_fraction(self, f: float) -> float:
@@ -162,23 +197,29 @@ class ReferenceSolution:
         return float(np.expm1(S_root))
 
 
-def _rhs_factory(chi, A, mu1, m2):
-    """Right-hand side and Jacobian in S for the state (xi, v), v = u - S = ln(psi/(1 + tau)) <= 0."""
+def _rhs_factory(chi, A, mu1, m2, late):
+    """Right-hand side and Jacobian in S for the early state (xi, u) or, if ``late``, the late state (xi, v),
+    v = u - S (module docstring)."""
     c = 1.0 / A
 
+    def parts(S, y):
+        """(u, lag = S - u = ln((1 + tau)/psi), q = (chi xi + dmu(u))/A, e = (1 + tau) xi' = exp(lag - q)); late,
+        the lag is -v itself (S - (v + S) would round v away where it is tiny)."""
+        xi, w = y
+        u, lag = (w + S, -w) if late else (w, S - w)
+        q = (chi * xi + mu1 * u + m2 * u * u) * c
+        return u, lag, q, math.exp(lag - q)
+
     def rhs(S, y):
-        xi, v = y
-        u = v + S
-        e = math.exp(-v - (chi * xi + mu1 * u + m2 * u * u) * c)  # (1 + tau) xi'
-        return np.array([e, math.expm1(-v) - e])  # expm1(-v) = (1 + tau)/psi - 1
+        _, lag, q, e = parts(S, y)
+        # early: du/dS = e^lag (1 - e^-q) with expm1, since q ~ 1e-7 where the slider leaves the unstable state
+        return np.array([e, math.expm1(lag) - e if late else -math.exp(lag) * math.expm1(-q)])
 
     def jac(S, y):
-        xi, v = y
-        u = v + S
-        e = math.exp(-v - (chi * xi + mu1 * u + m2 * u * u) * c)
+        u, lag, _, e = parts(S, y)
         de_dxi = -chi * c * e
-        de_dv = -(1.0 + (mu1 + 2.0 * m2 * u) * c) * e
-        return np.array([[de_dxi, de_dv], [-de_dxi, -math.exp(-v) - de_dv]])
+        de_dw = -(1.0 + (mu1 + 2.0 * m2 * u) * c) * e
+        return np.array([[de_dxi, de_dw], [-de_dxi, -math.exp(lag) - de_dw]])
 
     return rhs, jac
 
@@ -187,25 +228,44 @@ class _Budget(Exception):
     pass
 
 
-def _solve(chi, A, mu1, m2, S_end, method, budget):
-    rhs, jac = _rhs_factory(chi, A, mu1, m2)
-    atol = np.array([1e-16 * min(1.0, A / chi), 1e-14])
-    if method == "DOP853":
-        count = [0]
+def _switch(S, y):
+    """Event of the hand-over to the late state: u = S/2 (crossed upwards)."""
+    return y[1] - 0.5 * S
 
-        def f(S, y):
-            count[0] += 1
-            if count[0] > budget:
-                raise _Budget
-            return rhs(S, y)
 
-        res = solve_ivp(f, (0.0, S_end), [0.0, 0.0], method="DOP853", rtol=RTOL, atol=atol, dense_output=True)
-    else:
-        res = solve_ivp(rhs, (0.0, S_end), [0.0, 0.0], method="Radau", jac=jac, rtol=RTOL, atol=atol,
-                        dense_output=True)
+_switch.terminal = True
+_switch.direction = 1.0
+
+
+def _solve_phase(chi, A, mu1, m2, S0, S_end, y0, method, count, budget, late):
+    rhs, jac = _rhs_factory(chi, A, mu1, m2, late)
+    # u early: nearly relative (1e-20 resolves the 1e-7 offset from the unstable state to 1e-13; a smaller floor
+    # makes the steps vanish where u = O(S^2) at the start)
+    atol = np.array([1e-16 * min(1.0, A / chi), 1e-14 if late else 1e-20])
+
+    def f(S, y):
+        count[0] += 1
+        if count[0] > budget:
+            raise _Budget
+        return rhs(S, y)
+
+    options = {"jac": jac} if method == "Radau" else {}
+    res = solve_ivp(f, (S0, S_end), y0, method=method, rtol=RTOL, atol=atol, dense_output=True,
+                    events=None if late else _switch, **options)
     if not res.success:
         raise RuntimeError(f"{method} failed for chi={chi}, A={A}, mu1={mu1}, m2={m2}: {res.message}")
     return res
+
+
+def _solve(chi, A, mu1, m2, S_end, method, budget):
+    """Both phases up to S_end; returns (TwoPhaseSolution, (xi, u) at S_end, evaluations)."""
+    count = [0]
+    early = _solve_phase(chi, A, mu1, m2, 0.0, S_end, [0.0, 0.0], method, count, budget, late=False)
+    if early.status != 1:  # u stayed below S/2 up to the horizon
+        return TwoPhaseSolution(early.sol, None), early.y[:, -1], count[0]
+    S_sw, (xi_sw, u_sw) = float(early.t_events[0][0]), early.y_events[0][0]
+    late = _solve_phase(chi, A, mu1, m2, S_sw, S_end, [xi_sw, u_sw - S_sw], method, count, budget, late=True)
+    return TwoPhaseSolution(early.sol, late.sol), late.y[:, -1] + [0.0, S_end], count[0]
 
 
 @functools.cache
@@ -229,21 +289,21 @@ def reference_stop(chi: float, A: float, mu1: float, m2: float, method: str = "a
         res = None
         for m in methods:
             try:
-                res = _solve(chi, A, mu1, m2, S_end, m, DOP853_MAX_NFEV if method == "auto" else math.inf)
+                res = _solve(chi, A, mu1, m2, S_end, m, DOP853_MAX_NFEV if m == "DOP853" and method == "auto"
+                             else math.inf)
                 used = m
                 break
             except _Budget:
                 continue
         if res is None:
             raise RuntimeError("DOP853 step budget exhausted and no fallback")
-        u_end = float(res.y[1, -1]) + S_end
+        sol, (xi_end, u_end), nfev = res
         if not finite or u_end >= u_need:
             break
         S_end += 2.0 * (u_need - u_end) + 10.0
     else:
         raise RuntimeError("could not reach the horizon needed for the tail bound")
 
-    xi_end = float(res.y[0, -1])
     if finite:
         T = tail_integral(u_end, A, mu1, m2)
         tail = (A / chi) * math.log1p((chi / A) * math.exp(-chi * xi_end / A) * T)
@@ -253,5 +313,5 @@ def reference_stop(chi: float, A: float, mu1: float, m2: float, method: str = "a
         xi_inf = math.nan
     tau_h = math.expm1(S_end) if S_end < 709.0 else math.inf
     return ReferenceSolution(chi=chi, A=A, mu1=mu1, m2=m2, finite=finite, xi_inf=xi_inf, xi_end=xi_end,
-                             tail=tail, S_end=S_end, tau_horizon=tau_h, method=used, nfev=int(res.nfev),
-                             seconds=time.perf_counter() - t0, sol=res.sol)
+                             tail=tail, S_end=S_end, tau_horizon=tau_h, method=used, nfev=int(nfev),
+                             seconds=time.perf_counter() - t0, sol=sol)

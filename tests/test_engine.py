@@ -15,16 +15,22 @@ def scene(**kw):
 
 
 def test_lanes_path_matches_the_per_point_path():
-    """xi_inf-only sweeps run in vectorised lanes (models/stop_lanes.py); asking for slip_at at t = 0 forces the
-    per-point path (models/stop_march.py) with the same steps in sigma. The per-point path starts its closed-form
-    tail later (TAIL_TIGHTENING), so it takes a few more steps; the values agree within their error estimates."""
+    """xi_inf-only sweeps run in vectorised lanes (models/stop_lanes.py, fine run of the pair returned); asking for
+    slip_at at t = 0 forces the per-point path (models/stop_march.py, coarse run returned with 2|coarse - fine|).
+    The values agree within both error estimates, and each path's status follows its own estimate."""
     lanes = sweep.run_sweep(scene(max_steps=3000, method="rk4"))
     per_point = sweep.run_sweep(scene(max_steps=3000, method="rk4", observables=("xi_inf", "slip_at"), t_obs=(0.0,)))
-    np.testing.assert_array_equal(lanes["status"], per_point["status"])
-    ok = lanes["status"].values == sweep.Status.OK
-    assert np.all(per_point["steps"].values[ok] >= lanes["steps"].values[ok])
-    diff = np.abs(lanes["xi_inf"] - per_point["xi_inf"]).values[ok]
-    assert np.all(diff <= (lanes["xi_inf_error"] + per_point["xi_inf_error"]).values[ok])
+    finished = np.isin(lanes["status"].values, [sweep.Status.OK, sweep.Status.ERROR_ABOVE_TOL]) & np.isin(
+        per_point["status"].values, [sweep.Status.OK, sweep.Status.ERROR_ABOVE_TOL])
+    assert finished.sum() > 0.5 * finished.size
+    diff = np.abs(lanes["xi_inf"] - per_point["xi_inf"]).values[finished]
+    assert np.all(diff <= (lanes["xi_inf_error"] + per_point["xi_inf_error"]).values[finished])
+    for ds in (lanes, per_point):
+        # scene() keeps the default rtol = 1e-6
+        st, val, err = ds["status"].values, ds["xi_inf"].values, ds["xi_inf_error"].values
+        over = err > 1e-6 * np.abs(val) + sweep.scene.DEFAULT_ATOL["xi_inf"]
+        assert np.all(st[finished & over] == sweep.Status.ERROR_ABOVE_TOL)
+        assert np.all(st[finished & ~over] == sweep.Status.OK)
     statuses = set(np.unique(lanes["status"]).tolist())
     assert {sweep.Status.OK, sweep.Status.MAX_STEPS} <= statuses, statuses
 

@@ -7,15 +7,30 @@ with its FSAL flag and error order q. One step fills the stage derivatives K[i] 
 Step sequences (a *mesh* of step sizes in sigma):
 
 * ``ADAPTIVE``: a PI controller (Gustafsson; exponents 0.7/(q+1) and 0.4/(q+1)) keeps the embedded local error
-  estimate below ``ctrl_tol`` (relative, with the atol floor, over xi and s), and records the accepted steps;
+  estimate below ``ctrl_tol`` (:func:`error_norm`: xi relative with the atol floor, u = ln psi, and tau when
+  time-resolved observables are asked for), and records the accepted steps;
 * ``REPLAY``: steps mesh[i]/split, each mesh step taken as ``split`` equal substeps (the last size repeated if the
   run needs more steps than the mesh has). A fixed step h is the one-element mesh (h,).
 
-Error estimate (Richardson): each point is solved twice, on a coarse mesh and on the same mesh with every step
-halved. The fine solution is returned; since the global error of an order-p method scales as h^p, the difference
-is (2^p - 1) times the fine solution's error, and ``ERROR_GAIN`` / (2^p - 1) times the difference, plus the tail's
-own error bound, is its estimate: it bounds the true error by a factor ~ERROR_GAIN while the mesh resolves the
-solution (tests/test_error_estimates.py checks 1 <= estimate/true error <= 100 on a table of points).
+Error estimate: each point is solved twice, on a coarse mesh and on the same mesh with every step halved. The
+coarse solution is returned, with COARSE_GAIN times its difference from the fine one as its estimate: this needs
+only that the fine run be at least twice as accurate, not that the pair be asymptotic (the Richardson estimate of
+the fine solution, difference / (2^p - 1), which this path used before and the relaxed-slip lanes still use, does).
+The asymptotic ratio fails here in three ways: the controller's steps reach the stability boundary along the creep
+manifold and at the end of the decaying tail, where halving a step changes its error by anything from 2 to 2^12;
+where the error contributions of the stiff start and of the tail cancel in xi_inf (stiff points with m2 = 0, slow
+tails), the fine error is a small remainder of higher-order terms; and a sample inside a step has no asymptotic
+ratio unless both runs reach it the same way (:func:`state_where`). Dividing by 2^p - 1 (31 for dp5, 255 for dop853)
+gave estimates from 0.04x to 1.8e3x the true error. Where contributions of opposite sign cancel in the coarse run
+instead, its error need not exceed the fine run's; a bound on the fine run's error from the sum of the
+|contributions| is added (:func:`cancelled`, and :func:`crossing_error` for t50/t90). Each run's closed-form tail
+error bound is added (negligible: the per-point path integrates until it is below TAIL_SAFETY (atol + TAIL_RTOL
+|xi|)), and for samples taken from the closed-form continuation its bound
+(:func:`sweep.models.stop.continuation_error`). On tests/test_error_estimates.py's table the estimate is
+1.2x..50x the true error for every method at rtol 1e-3..1e-9 (t50/t90 up to 130x where the two shares of their
+error cancel). The price is accuracy: the returned solution is the less accurate of the two, so the step rules must
+make the coarse run meet rtol (``CTRL_TOL_FACTOR`` of :mod:`sweep.plan` for the adaptive methods; rk4 per point,
+used for time-resolved observables, has its rule's TIME_RESOLVED_FACTOR).
 """
 
 from __future__ import annotations
@@ -33,6 +48,7 @@ from .stop import (
     NONFINITE,
     OK,
     TAIL_SAFETY,
+    continuation_error,
     continue_in_closed_form,
     derivatives,
     tail_error,
@@ -42,20 +58,29 @@ from .stop import (
 STEP_UNDERFLOW = int(Status.STEP_UNDERFLOW)
 ADAPTIVE, REPLAY = 0, 1
 ERROR_GAIN = 15.0
-"""Nominal ratio of the error estimate to the true error (the estimate errs on the safe side)."""
+"""Nominal ratio of the Richardson estimate of a fine solution, ERROR_GAIN/(2^p - 1) |fine - coarse|, to its true
+error: the estimate of the relaxed-slip lanes (sweep.engine), whose step rules (sweep.plan) are calibrated on it."""
+COARSE_GAIN = 2.0
+"""Estimate of the returned coarse solution = COARSE_GAIN |coarse - fine| (+ the hedges): it bounds the coarse error
+whenever the fine one is at most half of it (or of the other sign), and exceeds it by at most 3x then
+(asymptotically the fine error is 2^-p of the coarse one: 1/16 for rk4, 1/32 for dp5, 1/256 for dop853)."""
+TAIL_RTOL = 2.0**-52
+"""The per-point path integrates until the closed-form tail's error bound is below TAIL_SAFETY (atol + TAIL_RTOL
+|xi|): a few steps more (E decays exponentially there), and the bound, not sharp where the two neglected terms of
+the tail series cancel (up to 1e3x the true tail error), stays negligible next to any integration error."""
 TAIL_TIGHTENING = 0.01
-"""The per-point path starts the closed-form tail (and continuation) at TAIL_TIGHTENING x rtol: a few steps more,
-and the tail's error bound, not sharp where its two neglected terms cancel, then stays small next to the
-integration error, so that the estimate of an over-resolved xi_inf (steps set by t50/t90) stays within 100x."""
+"""Samples beyond the transient come from the closed-form continuation once E < TAIL_SAFETY TAIL_TIGHTENING rtol."""
 H_FLOOR = 1e-12
 """Smallest adaptive step in sigma, relative to max(1, sigma): below it the point gets status step_underflow."""
+U_ROUNDING = 8.0 * 2.0**-52
+"""Resolution of u = s - xi relative to s (a few roundings of s): the floor of u's weight in :func:`error_norm`."""
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
 def erk_step(c, A, b, e, K, xi, s, tau, h, k, a, bb, s_c, with_tau):
     """One explicit RK step of size h from (xi, s, tau), with K[0] the derivative there; fills K[1:].
 
-    Returns (xi1, s1, tau1, err_xi, err_s): the new state and the embedded error estimate h sum_j e_j K[j]
+    Returns (xi1, s1, tau1, err_xi, err_s, err_tau): the new state and the embedded error estimate h sum_j e_j K[j]
     (zero for a method without an embedded pair). For an FSAL method K[-1] is the derivative at the new state.
     """
     stages = b.size
@@ -66,14 +91,15 @@ def erk_step(c, A, b, e, K, xi, s, tau, h, k, a, bb, s_c, with_tau):
             ds += A[i, j] * K[j, 1]
             dt += A[i, j] * K[j, 2]
         K[i, 0], K[i, 1], K[i, 2], _ = derivatives(xi + h * dx, s + h * ds, k, a, bb, s_c, with_tau)
-    dx, ds, dt, ex, es = 0.0, 0.0, 0.0, 0.0, 0.0
+    dx, ds, dt, ex, es, et = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for j in range(stages):
         dx += b[j] * K[j, 0]
         ds += b[j] * K[j, 1]
         dt += b[j] * K[j, 2]
         ex += e[j] * K[j, 0]
         es += e[j] * K[j, 1]
-    return xi + h * dx, s + h * ds, tau + h * dt, h * ex, h * es
+        et += e[j] * K[j, 2]
+    return xi + h * dx, s + h * ds, tau + h * dt, h * ex, h * es, h * et
 
 
 @njit(cache=True, fastmath=FAST)
@@ -108,18 +134,20 @@ def hermite_crossing(y0, y1, m0, m1, target):
 
 @njit(cache=True, fastmath=FAST)
 def state_where(method, K, component, target, theta, xi, s, tau, d0x, d0s, d0t, h, split, k, a, bb, s_c):
-    """State (xi, s, tau) and slip rate dxi/dtau inside a step where ``component`` (0: xi, 2: tau) equals
-    ``target``: Newton on theta in [0, 1] with exact partial steps of size theta*h from the step's start (the
-    method's own local order), started from the Hermite estimate ``theta``. The partial step is taken as ``split``
-    equal substeps, like the run's own steps, so that the Richardson pair also differs on targets that fall inside
-    a first step shared by the coarse and the fine run."""
+    """State (xi, s, tau) and slip rate dxi/dtau inside a mesh step h where ``component`` (0: xi, 2: tau) equals
+    ``target``: Newton on theta in [0, 1] with exact partial steps of size theta*h from the mesh step's start (the
+    method's own local order), started from the estimate ``theta``. The partial step is taken as ``split`` equal
+    substeps, like the run's own steps: the fine run's path to a sample is then the coarse run's path with every
+    step halved, as for the values at mesh points, and the pair keeps its h^p ratio there too. (Located from the
+    fine run's own last substep instead, a sample just past the middle of a coarse step came out of a partial
+    step barely longer than the fine run's full one: as accurate, and estimates 0.14x the true error.)"""
     c, A, b, e, _, _ = method
     x1, s1, t1, dx1, dt1 = xi, s, tau, d0x, d0t
     for _ in range(8):
         x1, s1, t1 = xi, s, tau
         K[0, 0], K[0, 1], K[0, 2] = d0x, d0s, d0t
         for _ in range(split):
-            x1, s1, t1, _, _ = erk_step(c, A, b, e, K, x1, s1, t1, theta * h / split, k, a, bb, s_c, True)
+            x1, s1, t1, _, _, _ = erk_step(c, A, b, e, K, x1, s1, t1, theta * h / split, k, a, bb, s_c, True)
             dx1, ds1, dt1, _ = derivatives(x1, s1, k, a, bb, s_c, True)
             K[0, 0], K[0, 1], K[0, 2] = dx1, ds1, dt1
         value = x1 if component == 0 else t1
@@ -131,6 +159,32 @@ def state_where(method, K, component, target, theta, xi, s, tau, d0x, d0s, d0t, 
     return x1, s1, t1, dx1 / dt1
 
 
+@njit(cache=True, fastmath=FAST)
+def error_norm(ex, es, et, xi, xi1, s1, tau1, ctrl_tol, atol, with_tau):
+    """Weighted RMS norm of an embedded local error estimate (ex, es, et) of (xi, s, tau) over a step ending at
+    (xi1, s1, tau1) [1].
+
+    The components are xi, relative with the atol floor, and u = s - xi = ln psi (error es - ex), relative to
+    min(|s|, max(1, |u|)) with the rounding floor U_ROUNDING |s|: u is what the rates depend on (E = exp(-(k xi +
+    a u + b u^2)), an error du changes E by g du) and its error is the relative error of psi. Weighting s relative
+    to |s| (as before; still so early on, s < 1) let u drift by ctrl_tol |s| per step where s >> u: in the costly
+    corner (chi/A = 1e-5, mu1/A = -1, m2/A = 0.05, s ~ xi ~ 5e5, u ~ 10) dop853 crossed the fold of the creep
+    manifold and the whole fall-off in one step of 10 in sigma, 1.35e-6 off at rtol 1e-6 with status ok and an
+    estimate 28x too small, and 0.76 off at rtol 1e-4 (tests/test_extremes.py); with u weighted by max(1, |u|)
+    dp5 and dop853 are within 1e-3 rtol there at rtol 1e-4..1e-8 (at up to 2x the steps in the corners at
+    rtol 1e-9, where the creep manifold's stability limits the steps).
+    When time-resolved observables are asked for, tau is a third component, relative: the error of psi at a given
+    tau is the relative error of tau late on (psi ~ tau), and the steps that integrate tau = int e^u ds across
+    the tail were otherwise limited by xi and u alone (late psi samples 0.35x underestimated with dp5).
+    """
+    sx = atol + ctrl_tol * max(abs(xi), abs(xi1))
+    su = ctrl_tol * min(abs(s1), max(1.0, abs(s1 - xi1))) + U_ROUNDING * abs(s1)
+    sum_sq = (ex / sx) ** 2 + ((es - ex) / su) ** 2
+    if not with_tau:
+        return math.sqrt(0.5 * sum_sq)
+    return math.sqrt((sum_sq + (et / (ctrl_tol * tau1)) ** 2) / 3.0)
+
+
 @njit(cache=True, fastmath=FAST, error_model="numpy")
 def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_limit, rtol, atol, ctrl_tol,
           tau_targets, xi_at, u_at, xi_targets, tau_at, rate_at):
@@ -138,13 +192,16 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
 
     Records xi and u = ln psi where tau crosses each increasing ``tau_targets`` (into xi_at, u_at) and tau and
     the slip rate dxi/dtau where xi crosses each increasing ``xi_targets`` (into tau_at, rate_at); tau targets
-    beyond the transient (E < TAIL_SAFETY rtol, relaxed slip known) come from the closed form. Stops when the
-    tail test passes (if ``want_limit``) and all targets are recorded.
+    beyond the transient (E < TAIL_SAFETY rtol, relaxed slip known) come from the closed form. The closed-form
+    tail is taken once its error bound is below TAIL_SAFETY (atol + TAIL_RTOL |xi|); stops when the tail is taken
+    (if ``want_limit``) and all targets are recorded.
 
-    Returns (status, xi_inf, steps, tail error bound, mesh, n_mesh, first continued target, its bound): xi_inf is
-    NaN unless the tail was reached; in ADAPTIVE mode the returned mesh holds the n_mesh accepted steps; targets
-    from the first continued one on carry the closed form's own error in u = ln psi, bounded by
-    int E du ~ E_e A/(mu1 + 2 m2 u_e), the slip rate neglected by :func:`continue_in_closed_form`.
+    Returns (status, xi_inf, steps, tail error bound, mesh, n_mesh, continuation, track, n_track, at_mesh):
+    xi_inf is NaN unless the tail was reached; in ADAPTIVE mode the returned mesh holds the n_mesh accepted steps;
+    continuation = (first continued target, E, g = (mu1 + 2 m2 u)/A, u where it starts): targets from the first
+    continued one on carry the closed form's own error in u = ln psi (:func:`sweep.models.stop.continuation_error`);
+    track[:n_track] is (xi, s, E) at the end of each mesh step, at_mesh the mesh step in which each tau target was
+    located (-1: continued).
     """
     c, A, b, e, fsal, q = method
     stages = b.size
@@ -152,9 +209,9 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
     with_tau = tau_targets.size > 0 or xi_targets.size > 0
     xi, s, tau = 0.0, 0.0, 0.0
     dxi, ds, dtau, E = derivatives(xi, s, k, a, bb, s_c, with_tau)
-    it, ix = 0, 0
+    it, ix, at_mesh = 0, 0, np.full(tau_targets.size, -1)
     while it < tau_targets.size and tau_targets[it] <= 0.0:
-        xi_at[it], u_at[it] = 0.0, 0.0
+        xi_at[it], u_at[it], at_mesh[it] = 0.0, 0.0, 0
         it += 1
     xi_inf, tail_err = math.nan, math.nan
     tail_done = not want_limit
@@ -162,13 +219,20 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
         mesh = np.empty(256)
         n_mesh = 0
     h, sigma, err_prev, rejected_nonfinite = h0, 0.0, 1e-4, False
-    cont_from, cont_bound = tau_targets.size, 0.0
-    n = 0
+    cont = (tau_targets.size, 0.0, 1.0, 0.0)
+    track, n_track = np.empty((256, 3)), 0
+    n, sub = 0, 0
+    xm, sm, tm, dxm, dsm, dtm = xi, s, tau, dxi, ds, dtau  # state at the start of the current mesh step
     while n < max_steps:
         if mode == REPLAY:
             h = mesh[min(n // split, n_mesh - 1)] / split
+            sub = n % split
+            if sub == 0:
+                xm, sm, tm, dxm, dsm, dtm = xi, s, tau, dxi, ds, dtau
+        else:
+            xm, sm, tm, dxm, dsm, dtm = xi, s, tau, dxi, ds, dtau
         K[0, 0], K[0, 1], K[0, 2] = dxi, ds, dtau
-        xi1, s1, tau1, ex, es = erk_step(c, A, b, e, K, xi, s, tau, h, k, a, bb, s_c, with_tau)
+        xi1, s1, tau1, ex, es, et = erk_step(c, A, b, e, K, xi, s, tau, h, k, a, bb, s_c, with_tau)
         if fsal:
             dxi1, ds1, dtau1 = K[stages - 1, 0], K[stages - 1, 1], K[stages - 1, 2]
             E = dxi1 / ds1
@@ -176,15 +240,13 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
             dxi1, ds1, dtau1, E = derivatives(xi1, s1, k, a, bb, s_c, with_tau)
         finite = math.isfinite(xi1) and math.isfinite(dxi1) and math.isfinite(tau1) and math.isfinite(dtau1)
         if mode == ADAPTIVE:
-            sx = atol + ctrl_tol * max(abs(xi), abs(xi1))
-            ss = atol + ctrl_tol * max(abs(s), abs(s1))
-            err = math.sqrt(0.5 * ((ex / sx) ** 2 + (es / ss) ** 2)) if finite else math.inf
+            err = error_norm(ex, es, et, xi, xi1, s1, tau1, ctrl_tol, atol, with_tau) if finite else math.inf
             if not err <= 1.0:  # rejected (also when a stage left the finite range)
                 rejected_nonfinite = not finite
                 h *= max(0.2, 0.9 * err ** (-1.0 / (q + 1))) if finite else 0.25
                 if h < H_FLOOR * max(1.0, sigma):
                     return (NONFINITE if rejected_nonfinite else STEP_UNDERFLOW), math.nan, n, tail_err, mesh, n_mesh, \
-                        cont_from, cont_bound
+                        cont, track, n_track, at_mesh
                 continue
             if n_mesh == mesh.size:
                 mesh = np.concatenate((mesh, np.empty(mesh.size)))
@@ -192,17 +254,23 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
             n_mesh += 1
         n += 1
         if not finite:
-            return NONFINITE, math.nan, n, tail_err, mesh, n_mesh, cont_from, cont_bound
+            return NONFINITE, math.nan, n, tail_err, mesh, n_mesh, cont, track, n_track, at_mesh
+        if (n - 1) % split == split - 1:  # the end of a mesh step
+            if n_track == track.shape[0]:
+                track = np.concatenate((track, np.empty(track.shape)))
+            track[n_track, 0], track[n_track, 1], track[n_track, 2] = xi1, s1, E
+            n_track += 1
+        # targets crossed in this substep, located from the mesh step's start (theta relative to the mesh step)
         while it < tau_targets.size and tau_targets[it] <= tau1:
-            th = hermite_crossing(tau, tau1, h * dtau, h * dtau1, tau_targets[it])
-            xt, st, _, _ = state_where(method, K, 2, tau_targets[it], th, xi, s, tau, dxi, ds, dtau, h, split, k, a,
-                                       bb, s_c)
-            xi_at[it], u_at[it] = xt, st - xt
+            th = (sub + hermite_crossing(tau, tau1, h * dtau, h * dtau1, tau_targets[it])) / split
+            xt, st, _, _ = state_where(method, K, 2, tau_targets[it], th, xm, sm, tm, dxm, dsm, dtm, h * split, split,
+                                       k, a, bb, s_c)
+            xi_at[it], u_at[it], at_mesh[it] = xt, st - xt, (n - 1) // split
             it += 1
         while ix < xi_targets.size and xi_targets[ix] <= xi1:
-            th = hermite_crossing(xi, xi1, h * dxi, h * dxi1, xi_targets[ix])
-            _, _, tau_at[ix], rate_at[ix] = state_where(method, K, 0, xi_targets[ix], th, xi, s, tau, dxi, ds, dtau,
-                                                        h, split, k, a, bb, s_c)
+            th = (sub + hermite_crossing(xi, xi1, h * dxi, h * dxi1, xi_targets[ix])) / split
+            _, _, tau_at[ix], rate_at[ix] = state_where(method, K, 0, xi_targets[ix], th, xm, sm, tm, dxm, dsm, dtm,
+                                                        h * split, split, k, a, bb, s_c)
             ix += 1
         xi, s, tau, dxi, ds, dtau = xi1, s1, tau1, dxi1, ds1, dtau1
         sigma += h
@@ -210,18 +278,122 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
             err = max(err, 1e-10)
             h *= min(5.0, max(0.2, 0.9 * err ** (-0.7 / (q + 1)) * err_prev ** (0.4 / (q + 1))))
             err_prev = err
+        u = s - xi
         if not tail_done:
-            u = s - xi
             bound = tail_error(k, a, bb, u, E)
-            if bound <= TAIL_SAFETY * (rtol * xi + atol):
+            if bound <= TAIL_SAFETY * (atol + TAIL_RTOL * abs(xi)):
                 xi_inf, tail_err, tail_done = xi + tail_slip(k, a, bb, u, E), bound, True
         if it < tau_targets.size and E < TAIL_SAFETY * rtol and math.isfinite(xi_inf):
-            continue_in_closed_form(k, a, bb, xi_inf, s - xi, tau, tau_targets[it:], xi_at[it:], u_at[it:])
-            cont_from, cont_bound = it, E / (a + 2.0 * bb * (s - xi))
+            continue_in_closed_form(k, a, bb, xi_inf, u, tau, tau_targets[it:], xi_at[it:], u_at[it:])
+            cont = (it, E, a + 2.0 * bb * u, u)
             it = tau_targets.size
         if tail_done and it == tau_targets.size and ix == xi_targets.size:
-            return OK, xi_inf, n, tail_err, mesh, n_mesh, cont_from, cont_bound
-    return MAX_STEPS, xi_inf, n, tail_err, mesh, n_mesh, cont_from, cont_bound
+            return OK, xi_inf, n, tail_err, mesh, n_mesh, cont, track, n_track, at_mesh
+    return MAX_STEPS, xi_inf, n, tail_err, mesh, n_mesh, cont, track, n_track, at_mesh
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def richardson_pair(method, adaptive, h, k, a, bb, s_c, max_steps, want_limit, cont_rtol, atol, ctrl_tol, tau_targets,
+                    xc_at, uc_at, xf_at, uf_at):
+    """(coarse, fine) results of :func:`march`: the coarse run (adaptive from the first trial step h, building the
+    mesh; fixed: step 2h) and the fine run on the same mesh halved, recording the samples into (xc_at, uc_at) and
+    (xf_at, uf_at). Where the adaptive run fails on its first step there is no mesh, and the coarse result stands
+    for both."""
+    none = np.empty(0)
+    coarse = march(method, ADAPTIVE if adaptive else REPLAY, h, np.full(1, 2.0 * h), 1, 1, k, a, bb, s_c, max_steps,
+                   want_limit, cont_rtol, atol, ctrl_tol, tau_targets, xc_at, uc_at, none, none, none)
+    if coarse[5] == 0:
+        return coarse, coarse
+    fine = march(method, REPLAY, h, coarse[4], coarse[5], 2, k, a, bb, s_c, max_steps, want_limit, cont_rtol, atol,
+                 ctrl_tol, tau_targets, xf_at, uf_at, none, none, none)
+    return coarse, fine
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def crossings(method, h, mesh, n_mesh, split, k, a, bb, s_c, max_steps, targets, tau_at, rate_at):
+    """Status of a replay of ``mesh`` (``split`` substeps per step) recording tau and dxi/dtau where xi crosses the
+    increasing ``targets``."""
+    none = np.empty(0)
+    return march(method, REPLAY, h, mesh, n_mesh, split, k, a, bb, s_c, max_steps, False, 0.0, 0.0, 0.0, none, none,
+                 none, targets, tau_at, rate_at)[0]
+
+
+@njit(cache=True, fastmath=FAST)
+def continued_error(run, j, u):
+    """Bound on the closed-form continuation's error in u at sample j of a :func:`march` result (0 before it)."""
+    first, E_e, g_e, u_e = run[6]
+    return continuation_error(E_e, g_e, u - u_e) if j >= first else 0.0
+
+
+@njit(cache=True, fastmath=FAST)
+def fine_share(order):
+    """Bound on the fine run's error per unit of the pair's difference in a share of the error that converges at
+    no less than half the asymptotic rate: 1/(2^(p-1) - 1) (asymptotically the fine error is 1/(2^p - 1) of it)."""
+    return 1.0 / (2.0 ** (order - 1) - 1.0)
+
+
+@njit(cache=True, fastmath=FAST)
+def contributions(coarse, fine, k, a, bb):
+    """(d, c, ln G) over the common mesh points t of a pair (:func:`march`'s tracks): the pair's difference in the
+    slip d[t], the contribution c[t] of mesh step t to it, and the log of the propagation G[t] of a difference at t
+    to the last common mesh point [1].
+
+    The slip's error is the sum of the contributions of every step, each carried on by the 1-D equation
+    dxi/ds = E(xi, s), whose sensitivity to xi is dE/dxi = E (g - k), g = a + 2 b u: a difference carried over a
+    step ds is multiplied by exp(E (g - k) ds) (damped along the creep manifold, g < 0; amplified from the unstable
+    start on the stick-slip side). The runs are compared at equal contact-age time s, d = dxi - E ds at equal sigma
+    (first order): at equal sigma they differ by a shift along the trajectory that is no error of the slip.
+    """
+    n = min(coarse[8], fine[8])
+    tc, tf = coarse[7], fine[7]
+    d, c, log_g = np.empty(n), np.empty(n), np.empty(n)
+    d_prev, s_prev = 0.0, 0.0
+    for t in range(n):
+        xi, s, E = tc[t, 0], tc[t, 1], tc[t, 2]
+        d[t] = (xi - tf[t, 0]) - E * (s - tf[t, 1])
+        log_g[t] = E * (a + 2.0 * bb * (s - xi) - k) * (s - s_prev)  # this step's propagation, for now
+        c[t] = d[t] - d_prev * math.exp(log_g[t])
+        d_prev, s_prev = d[t], s
+    after = 0.0
+    for t in range(n - 1, -1, -1):
+        after, log_g[t] = after + log_g[t], after
+    return d, c, log_g
+
+
+@njit(cache=True, fastmath=FAST)
+def cancelled(pair_slip, m, d):
+    """Sum of the |contributions| (:func:`contributions`) to the pair's slip difference d at a sample in mesh step
+    m, each carried to it (m = -1 or beyond the common mesh: after its end, like xi_inf) [1].
+
+    Where contributions of opposite signs cancel in the coarse run (the stiff start and the tail for m2 = 0 with
+    chi/A >~ 1, slow tails), its error need not exceed the fine run's (chi/A = 3.16, mu1/A = 0.1, m2 = 0, dp5,
+    rtol 1e-4: 1.4 % of the contributions left, estimate 0.05x the true error); the fine run's share of each
+    (:func:`fine_share`) bounds its error whatever their signs.
+    """
+    dd, c, log_g = pair_slip
+    upto = c.size if m < 0 or m > c.size else m  # the common mesh points before the sample
+    if upto == 0:
+        return abs(d)
+    total = abs(d - dd[upto - 1])
+    for t in range(upto):
+        total += abs(c[t]) * math.exp(log_g[t] - log_g[upto - 1])
+    return total
+
+
+@njit(cache=True, fastmath=FAST)
+def crossing_error(d_tau, d_target, order):
+    """Estimate of the coarse run's error in t_f (reduced), from the pair's difference d_tau = tau_c - tau_f of
+    the crossings of each run's own f xi_inf and the part of it due to the difference of those targets,
+    d_target = f (xi_inf_c - xi_inf_f) / xi'(t_f).
+
+    The error of t_f has two shares, the trajectory's near t_f and the relaxed slip's; late crossings see nearly
+    the same error in both (xi(t) - xi_inf -> 0), so they cancel to ~10 %, and where the coarse run's cancel
+    further its error need not exceed the fine run's: COARSE_GAIN |d_tau| alone came out at 0.5x the true error.
+    The fine run's error is at most the sum of its two shares, each at most :func:`fine_share` of the pair's
+    difference in that share [1]; that bound is added to |d_tau|.
+    """
+    hedge = (abs(d_tau - d_target) + abs(d_target)) * fine_share(order)
+    return COARSE_GAIN * (abs(d_tau) + hedge)
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
@@ -231,65 +403,57 @@ def solve_stop_point(method, order, adaptive, h, k, a, bb, s_c, max_steps, finit
     samples with their error estimates; if ``fractions`` is not empty a second pass (same meshes) finds tau
     where xi = fraction * xi_inf (t50, t90).
 
-    t_f is ill-conditioned where the slip creeps: an error d in xi_inf moves it by f d / xi'(t_f), i.e.
-    relatively by G = f xi_inf / (t_f xi'(t_f)) times rtol (G ~ 30 for t90 with m1/A = 0.3). Where G > 1 the
-    relaxed slip is recomputed with tolerances / G before the crossings are located again.
+    t_f is ill-conditioned where the slip creeps: an error d in xi_inf, or in xi near t_f, moves it by
+    d / xi'(t_f), i.e. relatively by up to G = f xi_inf / (t_f xi'(t_f)) times rtol (G ~ 30 for t90 with
+    m1/A = 0.3). Where G > 1 the pair is run again with tolerances / G (fixed steps: h G^(-1/p)) and the crossings
+    are located on its meshes. Each run crosses the fraction of its own xi_inf (:func:`crossing_error`).
 
     ``method`` = (c, a, b, e, fsal, error order q) of the tableau, ``order`` its order p; ``h``: the fine step
     (fixed-step methods) or the first trial step of the coarse run (adaptive).
-    Returns (status, xi_inf, xi_inf error estimate, steps of the fine pass 1).
+    Returns (status, xi_inf, xi_inf error estimate, steps of the fine run of pass 1).
     """
     none = np.empty(0)
-    gain = ERROR_GAIN / (2.0**order - 1.0)
-    tail_rtol = TAIL_TIGHTENING * rtol
-    n_t = tau_targets.size
-    xc_at, uc_at = np.full(n_t, math.nan), np.full(n_t, math.nan)
+    cont_rtol = TAIL_TIGHTENING * rtol
     tau_at_fraction[:] = math.nan
     tau_at_fraction_err[:] = math.nan
-    # pass 1, coarse then fine on the coarse mesh halved
-    fixed = np.full(1, 2.0 * h)
-    st_c, x_c, _, _, mesh, n_mesh, c_from, c_bound = march(
-        method, ADAPTIVE if adaptive else REPLAY, h, fixed, 1, 1, k, a, bb, s_c, max_steps, finite, tail_rtol, atol,
-        ctrl_tol, tau_targets, xc_at, uc_at, none, none, none)
+    # pass 1: the coarse run is returned, the fine one's samples go to (xf_at, uf_at)
+    xf_at, uf_at = np.full(tau_targets.size, math.nan), np.full(tau_targets.size, math.nan)
+    ret, partner = richardson_pair(method, adaptive, h, k, a, bb, s_c, max_steps, finite, cont_rtol, atol, ctrl_tol,
+                                   tau_targets, xi_at, u_at, xf_at, uf_at)
+    mesh, n_mesh = ret[4], ret[5]
     if n_mesh == 0:
-        return st_c, math.nan, math.nan, 0
-    st, x_f, n, tail_err, _, _, f_from, f_bound = march(
-        method, REPLAY, h, mesh, n_mesh, 2, k, a, bb, s_c, max_steps, finite, tail_rtol, atol, ctrl_tol, tau_targets,
-        xi_at, u_at, none, none, none)
-    for j in range(n_t):
-        xi_at_err[j] = gain * abs(xi_at[j] - xc_at[j])
-        u_at_err[j] = gain * abs(u_at[j] - uc_at[j]) + (c_bound if j >= c_from else 0.0) + (
-            f_bound if j >= f_from else 0.0)
-    if st == OK and st_c != OK:
-        st = st_c
+        return ret[0], math.nan, math.nan, 0
+    x_r, x_p = ret[1], partner[1]
+    pair_slip = contributions(ret, partner, k, a, bb)
+    share = fine_share(order)
+    for j in range(tau_targets.size):
+        d = xi_at[j] - xf_at[j]
+        xi_at_err[j] = COARSE_GAIN * (abs(d) + share * cancelled(pair_slip, ret[9][j], d))
+        u_at_err[j] = COARSE_GAIN * abs(u_at[j] - uf_at[j]) + continued_error(ret, j, u_at[j]) + continued_error(
+            partner, j, uf_at[j])
+    st, n = (ret[0] if ret[0] != OK else partner[0]), partner[2]
     if not finite:
         return (NO_FINITE_LIMIT if st == OK else st), math.nan, math.nan, n
-    xi_err = gain * abs(x_f - x_c) + 2.0 * tail_err
+    xi_err = COARSE_GAIN * (abs(x_r - x_p) + share * cancelled(pair_slip, -1, x_r - x_p)) + ret[3] + partner[3]
     if fractions.size == 0 or st != OK:
-        return st, x_f, xi_err, n
-    # pass 2: the crossings, on the same meshes
-    rate_c, rate_f, tau_c = np.empty(fractions.size), np.empty(fractions.size), np.empty(fractions.size)
-    xi_ref_f, xi_ref_c, cross_err = x_f, x_c, 0.0
-    st2 = march(method, REPLAY, h, mesh, n_mesh, 2, k, a, bb, s_c, max_steps, False, tail_rtol, atol, ctrl_tol, none,
-                none, none, fractions * x_f, tau_at_fraction, rate_f)[0]
-    cond = np.max(fractions * x_f / (tau_at_fraction * rate_f)) if st2 == OK else 0.0
-    if cond > 1.0:  # ill-conditioned crossings: a more accurate relaxed slip for both runs' targets
-        shrink = cond**-0.25
-        st3, x_c3, _, _, mesh3, n_mesh3, _, _ = march(
-            method, ADAPTIVE if adaptive else REPLAY, h * shrink, fixed * shrink, 1, 1, k, a, bb, s_c, max_steps, True,
-            tail_rtol / cond, atol / cond, ctrl_tol / cond, none, none, none, none, none, none)
-        st4, x_f3, _, tail3, _, _, _, _ = march(
-            method, REPLAY, h, mesh3, n_mesh3, 2, k, a, bb, s_c, max_steps, True, tail_rtol / cond, atol / cond,
-            ctrl_tol / cond, none, none, none, none, none, none)
-        if st3 != OK or st4 != OK:
-            return max(st3, st4), x_f, xi_err, n
-        xi_ref_f, xi_ref_c, cross_err = x_f3, x_f3, gain * abs(x_f3 - x_c3) + 2.0 * tail3
-        st2 = march(method, REPLAY, h, mesh, n_mesh, 2, k, a, bb, s_c, max_steps, False, tail_rtol, atol, ctrl_tol,
-                    none, none, none, fractions * xi_ref_f, tau_at_fraction, rate_f)[0]
-    st2c = march(method, REPLAY, h, mesh, n_mesh, 1, k, a, bb, s_c, max_steps, False, tail_rtol, atol, ctrl_tol, none,
-                 none, none, fractions * xi_ref_c, tau_c, rate_c)[0]
-    if st2 != OK or st2c != OK:
-        return max(st2, st2c), x_f, xi_err, n
+        return st, ret[1], xi_err, n
+    # pass 2: the crossings, on the same meshes, each run of the fractions of its own xi_inf
+    rate_r, rate_p, tau_p = np.empty(fractions.size), np.empty(fractions.size), np.empty(fractions.size)
+    st2 = crossings(method, h, mesh, n_mesh, 1, k, a, bb, s_c, max_steps, fractions * x_r, tau_at_fraction, rate_r)
+    cond = np.max(fractions * x_r / (tau_at_fraction * rate_r)) if st2 == OK else 0.0
+    if cond > 1.0:  # ill-conditioned crossings: the whole pair again with tolerances / cond
+        h = h * cond ** (-1.0 / order)
+        c3, f3 = richardson_pair(method, adaptive, h, k, a, bb, s_c, max_steps, True, cont_rtol, atol / cond,
+                                 ctrl_tol / cond, none, none, none, none, none)
+        if c3[0] != OK or f3[0] != OK:
+            return (c3[0] if c3[0] != OK else f3[0]), x_r, xi_err, n
+        mesh, n_mesh, x_r, x_p = c3[4], c3[5], c3[1], f3[1]
+        st2 = crossings(method, h, mesh, n_mesh, 1, k, a, bb, s_c, max_steps, fractions * x_r, tau_at_fraction,
+                        rate_r)
+    st2p = crossings(method, h, mesh, n_mesh, 2, k, a, bb, s_c, max_steps, fractions * x_p, tau_p, rate_p)
+    if st2 != OK or st2p != OK:
+        return (st2 if st2 != OK else st2p), ret[1], xi_err, n
     for j in range(fractions.size):
-        tau_at_fraction_err[j] = gain * abs(tau_at_fraction[j] - tau_c[j]) + fractions[j] * cross_err / rate_f[j]
-    return st, x_f, xi_err, n
+        tau_at_fraction_err[j] = crossing_error(tau_at_fraction[j] - tau_p[j], fractions[j] * (x_r - x_p) / rate_r[j],
+                                                order)
+    return st, ret[1], xi_err, n
