@@ -192,7 +192,7 @@ def run_engine_config(pbs, refs, label, family, kw_for, threads2, target_s, repe
         status = int(ds["status"].values.item())
         steps = int(ds["steps"].values.item())
         row = {"problem": pb["name"], "scene_rtol": scene.rtol, "method": plan.method,
-               "step": float(plan.step[0]) if not plan.adaptive else None, "xi_inf": x,
+               "step": float(plan.step[0]) if not plan.adaptive else None,  # lanes on auto: the pilot step "xi_inf": x,
                "rel_err": abs(x / ref["xi_inf"] - 1), "rel_err_estimate": est / abs(x) if x else math.nan,
                "status": sweep.Status(status).name.lower(), "steps_fine": steps}
         row["estimate_over_true"] = row["rel_err_estimate"] / max(row["rel_err"], 1e-300)
@@ -214,7 +214,9 @@ def time_row(row, scene, plan, threads2, target_s, repeats):
     same = bool(np.all(xb == x) or np.allclose(xb, x, rtol=1e-15, atol=0))
     row["batch_matches_single"] = row.get("batch_matches_single", True) and same
     tab = plan.tableau
-    evals = 1.5 * row["steps_fine"] * (len(tab.b) - (1 if tab.fsal else 0))  # coarse (half the steps) + fine
+    # lanes: steps of the finest run; the ladder's runs (4h, 2h, h with a fixed step; pilot pair + rungs on auto)
+    # add ~0.75x that; the per-point path adds its coarse run, 0.5x
+    evals = (1.75 if plan.lanes else 1.5) * row["steps_fine"] * (len(tab.b) - (1 if tab.fsal else 0))
     row["ns_per_stage_eval_approx"] = row["us_per_traj_1thread"] * 1e3 / evals if evals else None
     if threads2:
         numba.set_num_threads(2)

@@ -18,12 +18,14 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from .ladder import climb
 from .models.stop import NO_FINITE_LIMIT, OK
 from .models.stop_lanes import lane_kernels
 from .models.stop_march import solve_stop_point
 from .plan import Plan, make_plan
 from .progress import Progress
 from .scene import Scene
+from .solvers import METHODS
 from .status import Status
 
 __all__ = ["RawResult", "estimate_seconds", "execute", "warm_up"]
@@ -96,9 +98,23 @@ def _obs_tau(scene: Scene) -> np.ndarray:
     return np.broadcast_to(tau_v[None, :, :], (*scene.shape, t.size)).reshape(scene.n_points, t.size)
 
 
+def _lane_runner(scene: Scene, plan: Plan, method: str):
+    """run(points, steps) -> (xi_inf, tail bound, status, steps taken): one fixed-step run per entry, in lanes."""
+    relax_batch = lane_kernels(plan.dtype, method)[1]
+
+    def run(points, steps):
+        r_xi, r_tail = np.full(points.size, np.nan), np.full(points.size, np.nan)
+        r_status, r_steps = np.zeros(points.size, np.int8), np.zeros(points.size, np.int32)
+        relax_batch(plan.k, plan.a, plan.b, plan.s_c, points, steps, plan.max_steps, scene.rtol,
+                    scene.atol["xi_inf"], 4 * numba.get_num_threads(), r_xi, r_tail, r_status, r_steps)
+        return r_xi, r_tail, r_status, r_steps
+
+    return run
+
+
 def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
-    """Relaxed slip of the points g through the lane kernels (one per method of the plan): two runs per point
-    (steps 2h and h)."""
+    """Relaxed slip of the points g through the lane kernels (one per method of the plan), each point down its own
+    step ladder (sweep/ladder.py: a pilot pair, then rungs until a checked estimate meets the tolerance)."""
     out = RawResult.empty(g.size, 0)
     out.status[~plan.finite[g]] = NO_FINITE_LIMIT
     out.steps[~plan.finite[g]] = 0
@@ -106,19 +122,10 @@ def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
         live = np.flatnonzero(plan.finite[g] & (plan.point_method[g] == m))
         if live.size == 0:
             continue
-        run_point = np.repeat(g[live], 2)
-        run_h = plan.step[run_point] * np.tile([2.0, 1.0], live.size)
-        r_xi, r_tail = np.full(run_point.size, np.nan), np.full(run_point.size, np.nan)
-        r_status, r_steps = np.zeros(run_point.size, np.int8), np.zeros(run_point.size, np.int32)
-        relax_batch = lane_kernels(plan.dtype, method)[1]
-        relax_batch(plan.k, plan.a, plan.b, plan.s_c, run_point, run_h, plan.max_steps, scene.rtol,
-                    scene.atol["xi_inf"], 4 * numba.get_num_threads(), r_xi, r_tail, r_status, r_steps)
-        coarse, fine = slice(0, None, 2), slice(1, None, 2)
-        out.xi_inf[live] = r_xi[fine]
-        out.xi_inf_err[live] = (plan.error_gain * np.abs(r_xi[fine] - r_xi[coarse]) + 2.0 * r_tail[fine]
-                                + plan.roundoff * r_steps[fine] * np.abs(r_xi[fine]))
-        out.status[live] = np.where(r_status[fine] != 0, r_status[fine], r_status[coarse])
-        out.steps[live] = r_steps[fine]
+        res = climb(_lane_runner(scene, plan, method), g[live], plan.step[g[live]], METHODS[method].order,
+                    scene.rtol, scene.atol["xi_inf"], plan.roundoff, fixed=plan.step_source == "override")
+        out.xi_inf[live], out.xi_inf_err[live], out.status[live], out.steps[live] = (res.xi, res.error, res.status,
+                                                                                      res.steps)
     return out
 
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import physics
+from . import ladder, physics
 from .models.stop import RATE_FLOOR, TAIL_SAFETY
 from .models.stop_march import ERROR_GAIN
 from .models.stop_stiff import STIFF_RATE_FLOOR
@@ -55,6 +55,9 @@ benchmarks/work_precision.py that meets each rtol."""
 STEP_SAFETY = 2.0
 """Margin of the fixed-step rule: the error estimate (~ERROR_GAIN times the error) stays below rtol / STEP_SAFETY on
 the calibration set."""
+PILOT_FACTOR = 2.5
+H_PILOT = 1.0
+"""Pilot step of the lanes / the step meeting rtol at the largest error constant (see :func:`pilot_step_for`)."""
 STIFF_K_MAX = 0.03
 """Stiff points (Rosenbrock ros4 in the lanes, models/stop_stiff.py): chi/A <= STIFF_K_MAX, mu1 < 0, m2 > 0 and a
 slow creep manifold of length x attraction rate |mu1/A|^3 / (4 (m2/A)(chi/A)) >= STIFF_WORK_MIN. There, on the
@@ -67,21 +70,27 @@ ROUNDOFF = {np.dtype(np.float64): 2.0 * np.finfo(np.float64).eps, np.dtype(np.fl
 """Rounding error per step, relative (added to the estimate as steps * ROUNDOFF * |xi_inf|)."""
 
 
-def _step_rule(method: str) -> str:
+def _step_rule(method: str, lanes: bool) -> str:
     tab = METHODS[method]
     common = (f"time map ds/dsigma = 1/(1/(s + s_c) + r), s = int dtau/psi, u = ln psi = s - xi, "
               f"r = sqrt(((mu1 + 2 m2 u)/A)^2 + |m2|/(4 A)) + {RATE_FLOOR}, s_c = 1/(1 + (chi + |mu1|)/A); stop when "
               f"the closed-form tail is accurate to {TAIL_SAFETY}*(rtol*xi + atol)")
-    if tab.implicit:
-        return (f"{method}: Rosenbrock steps H = h w in contact-age time s, w = 1/(1/(s + s_c) + (g + sqrt(g^2 + "
-                f"|m2|/(4A)))/2 + {STIFF_RATE_FLOOR}), g = (mu1 + 2 m2 u)/A, h = min({H_MAX / 2}, (rtol/"
-                f"({STEP_SAFETY * ERROR_GAIN:g} C))**0.25), C = {C_STIFF} (coarse step 2h); " + common)
     if tab.adaptive:
         return (f"{method}: adaptive steps in sigma, PI controller on the embedded order-{tab.order_hat} estimate, "
                 f"local tolerance {CTRL_TOL_FACTOR[method]:g} rtol; " + common)
-    return (f"{method}: fixed step h in sigma, h = min({H_MAX / 2}, (rtol/({STEP_SAFETY * ERROR_GAIN:g} C))**0.25), "
-            f"C = {C_STABLE} where chi > mu1 (stable sliding) else {C_UNSTABLE}, times {TIME_RESOLVED_FACTOR:g} "
-            f"when trajectory, slip_at, t50 or t90 are asked for (coarse step 2h); " + common)
+    if lanes:
+        step = (f"step ladder per point (sweep/ladder.py): pilot pair 2 h0, h0, h0 = min({H_PILOT}, "
+                f"{PILOT_FACTOR:g} ({ladder.TARGET:g} rtol/({ladder.SHARP_GAIN:g} C))**0.25), then rungs "
+                f"{ladder.MIN_RATIO:g}..{ladder.MAX_RATIO:g}x finer aimed at {ladder.TARGET:g} x tolerance from the "
+                f"point's measured error, at most {ladder.MAX_RUNS} runs")
+    else:
+        step = (f"fixed step h = min({H_MAX / 2}, (rtol/({STEP_SAFETY * ERROR_GAIN:g} C))**0.25), coarse step 2h, "
+                f"C times {TIME_RESOLVED_FACTOR:g} when trajectory, slip_at, t50 or t90 are asked for")
+    if tab.implicit:
+        return (f"{method}: Rosenbrock steps H = h w in contact-age time s, w = 1/(1/(s + s_c) + (g + sqrt(g^2 + "
+                f"|m2|/(4A)))/2 + {STIFF_RATE_FLOOR}), g = (mu1 + 2 m2 u)/A; {step}, C = {C_STIFF}; " + common)
+    return (f"{method}: steps h in sigma; {step}, C = {C_STABLE} where chi > mu1 (stable sliding) else "
+            f"{C_UNSTABLE}; " + common)
 
 
 def time_scale(k, a):
@@ -97,9 +106,12 @@ def stiff_points(k, a, b) -> np.ndarray:
     return (k <= STIFF_K_MAX) & (work >= STIFF_WORK_MIN)
 
 
-def stiff_step_for(rtol: float) -> float:
-    """Fine step h of the ros4 step rule meeting ``rtol`` (relaxed slip) with error constant C_STIFF."""
-    return min(H_MAX / 2, (rtol / (STEP_SAFETY * ERROR_GAIN * C_STIFF)) ** 0.25)
+def pilot_step_for(rtol: float, error_constant):
+    """Fine step h0 of the pilot pair (2 h0, h0) of the lanes' step ladder (sweep/ladder.py): PILOT_FACTOR times
+    the step whose checked estimate (SHARP_GAIN x the error) meets TARGET x rtol at the error constant
+    ``error_constant`` (the largest measured), so that the point's own next rung is 2..8x finer."""
+    sharp = (ladder.TARGET * rtol / (ladder.SHARP_GAIN * np.asarray(error_constant))) ** 0.25
+    return np.minimum(H_PILOT, PILOT_FACTOR * sharp)
 
 
 def rk4_step_for(rtol: float, stable_sliding, time_resolved: bool = False):
@@ -167,10 +179,6 @@ class Plan:
         return c, a, b, e, self.tableau.fsal, self.tableau.error_order
 
     @property
-    def error_gain(self) -> float:
-        return ERROR_GAIN / (2.0**self.order - 1.0)
-
-    @property
     def roundoff(self) -> float:
         return float(ROUNDOFF[np.dtype(self.dtype)])
 
@@ -188,11 +196,13 @@ class Plan:
                         + (f", {self.dtype.name} lanes" if self.lanes else ", one point per thread")),
             "step": (f"first trial {step} in sigma, local tolerance {self.ctrl_tol:.3g}" if self.adaptive
                      else f"{step} in sigma ({self.step_source})"),
-            "error_estimate": ("Richardson pair per point (coarse mesh, same mesh halved): "
-                               + ("fine run returned, 15/(2^p - 1) |fine - coarse| + 2 x tail bound + roundoff"
-                                  if self.lanes else
-                                  "coarse run returned, 2 |coarse - fine| + bound on cancelled contributions "
-                                  "(models/stop_march.py)") + ": <name>_error variables"),
+            "error_estimate": (("step ladder per point (sweep/ladder.py): finest run returned, "
+                                f"{ladder.SHARP_GAIN:g} x Richardson at the order q observed on the last three "
+                                f"runs where |q - p| <= {ladder.ORDER_WINDOW:g}, else {ladder.CONSERVATIVE_GAIN:g} "
+                                "max(|x_b - x_a|, |x_c - x_b|); + 2 x tail bound + roundoff" if self.lanes else
+                                "Richardson pair per point (coarse mesh, same mesh halved): coarse run returned, "
+                                "2 |coarse - fine| + bound on cancelled contributions (models/stop_march.py)")
+                               + ": <name>_error variables"),
             "step_rule": self.rule,
             "max_steps": str(self.max_steps),
             "horizon": "per point: until the closed-form tail is accurate (and all requested times are passed)",
@@ -228,23 +238,24 @@ def make_plan(scene: Scene) -> Plan:
     method, reason = choose_method(scene)
     tab = METHODS[method]
     ctrl_tol = scene.rtol * CTRL_TOL_FACTOR.get(method, 1.0)
+    lanes = not tab.adaptive and not scene.time_resolved
+    stable = physics.stable_sliding(chi, mu1, p.A)
     if tab.adaptive:
         step, source = np.full(k.size, min(0.5, ctrl_tol ** (1.0 / (tab.error_order + 1)))), "controller"
     elif scene.step is not None:
         step, source = np.full(k.size, scene.step), "override"
-    elif tab.implicit:
-        step, source = np.full(k.size, stiff_step_for(scene.rtol)), "rule"
+    elif lanes:
+        constant = np.full(k.size, C_STIFF) if tab.implicit else np.where(stable, C_STABLE, C_UNSTABLE)
+        step, source = pilot_step_for(scene.rtol, constant), "rule"
     else:
-        stable = physics.stable_sliding(chi, mu1, p.A)
         step, source = rk4_step_for(scene.rtol, stable, scene.time_resolved), "rule"
-    lanes = not tab.adaptive and not scene.time_resolved
     point_methods, point_method = (method,), np.zeros(k.size, np.int8)
     if scene.method == "auto" and lanes and method == "rk4":
         stiff = stiff_points(k, a, b) & finite
         if stiff.any():
             point_methods, point_method = ("rk4", "ros4"), stiff.astype(np.int8)
             if scene.step is None:
-                step = np.where(stiff, stiff_step_for(scene.rtol), step)
+                step = np.where(stiff, pilot_step_for(scene.rtol, C_STIFF), step)
     return Plan(
         model="quasistatic",
         method=method,
@@ -257,7 +268,7 @@ def make_plan(scene: Scene) -> Plan:
         step=step,
         step_source=source,
         ctrl_tol=ctrl_tol,
-        rule="; ".join(_step_rule(m) for m in point_methods),
+        rule="; ".join(_step_rule(m, lanes) for m in point_methods),
         max_steps=int(scene.max_steps),
         chi=chi,
         mu1=mu1,
