@@ -191,10 +191,12 @@ def run_engine_config(pbs, refs, label, family, kw_for, threads2, target_s, repe
         est = float(ds["xi_inf_error"].values.item())
         status = int(ds["status"].values.item())
         steps = int(ds["steps"].values.item())
+        # "step": the plan's step (lanes on auto: the pilot step h0 of the ladder, sweep/ladder.py)
         row = {"problem": pb["name"], "scene_rtol": scene.rtol, "method": plan.method,
-               "step": float(plan.step[0]) if not plan.adaptive else None,  # lanes on auto: the pilot step "xi_inf": x,
+               "step": float(plan.step[0]) if not plan.adaptive else None, "xi_inf": x,
                "rel_err": abs(x / ref["xi_inf"] - 1), "rel_err_estimate": est / abs(x) if x else math.nan,
-               "status": sweep.Status(status).name.lower(), "steps_fine": steps}
+               "status": sweep.Status(status).name.lower(), "steps_fine": steps,
+               "work": int(execute(scene, plan, np.zeros(1, np.int64), progress=False).work[0])}
         row["estimate_over_true"] = row["rel_err_estimate"] / max(row["rel_err"], 1e-300)
         time_row(row, scene, plan, threads2, target_s, repeats)
         rows.append(row)
@@ -214,9 +216,7 @@ def time_row(row, scene, plan, threads2, target_s, repeats):
     same = bool(np.all(xb == x) or np.allclose(xb, x, rtol=1e-15, atol=0))
     row["batch_matches_single"] = row.get("batch_matches_single", True) and same
     tab = plan.tableau
-    # lanes: steps of the finest run; the ladder's runs (4h, 2h, h with a fixed step; pilot pair + rungs on auto)
-    # add ~0.75x that; the per-point path adds its coarse run, 0.5x
-    evals = (1.75 if plan.lanes else 1.5) * row["steps_fine"] * (len(tab.b) - (1 if tab.fsal else 0))
+    evals = row["work"] * (len(tab.b) - (1 if tab.fsal else 0))  # all runs of the point (RawResult.work)
     row["ns_per_stage_eval_approx"] = row["us_per_traj_1thread"] * 1e3 / evals if evals else None
     if threads2:
         numba.set_num_threads(2)

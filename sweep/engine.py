@@ -65,7 +65,9 @@ def stop_batch(method, order, adaptive, k, a, b, s_c, finite, h, max_steps, rtol
 @dataclass
 class RawResult:
     """Flat per-point outputs of the kernel (numpy only), in reduced units; ``*_err`` are the absolute error
-    estimates of the same quantities (u = ln psi: its error is the relative error of psi)."""
+    estimates of the same quantities (u = ln psi: its error is the relative error of psi). ``steps``: of the
+    returned run (lanes) or of the fine run of pass 1 (per point); ``work``: steps of all runs of the point
+    (lanes: the whole ladder; per point: counted as 1.5 x steps, the coarse run taking about half as many)."""
 
     xi_inf: np.ndarray
     xi_inf_err: np.ndarray
@@ -77,13 +79,14 @@ class RawResult:
     u_at_err: np.ndarray
     tau_at_fraction: np.ndarray
     tau_at_fraction_err: np.ndarray
+    work: np.ndarray
     seconds: float = 0.0
 
     @classmethod
     def empty(cls, n: int, n_t: int) -> RawResult:
         nan = lambda *shape: np.full(shape, np.nan)  # noqa: E731
         return cls(nan(n), nan(n), np.zeros(n, np.int8), np.zeros(n, np.int32), nan(n, n_t), nan(n, n_t),
-                   nan(n, n_t), nan(n, n_t), nan(n, 2), nan(n, 2))
+                   nan(n, n_t), nan(n, n_t), nan(n, 2), nan(n, 2), np.zeros(n, np.int64))
 
     def assign(self, sel: np.ndarray, part: RawResult) -> None:
         for name, value in vars(part).items():
@@ -124,8 +127,8 @@ def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
             continue
         res = climb(_lane_runner(scene, plan, method), g[live], plan.step[g[live]], METHODS[method].order,
                     scene.rtol, scene.atol["xi_inf"], plan.roundoff, fixed=plan.step_source == "override")
-        out.xi_inf[live], out.xi_inf_err[live], out.status[live], out.steps[live] = (res.xi, res.error, res.status,
-                                                                                      res.steps)
+        out.xi_inf[live], out.xi_inf_err[live], out.status[live], out.steps[live], out.work[live] = (
+            res.xi, res.error, res.status, res.steps, res.work)
     return out
 
 
@@ -153,6 +156,7 @@ def execute(scene: Scene, plan: Plan, indices: np.ndarray | None = None, progres
                            scene.atol["xi_inf"], plan.ctrl_tol, plan.tau_samples, np.ascontiguousarray(obs_tau[g]),
                            want_fractions, part.xi_inf, part.xi_inf_err, part.status, part.steps, part.xi_at,
                            part.u_at, part.xi_at_err, part.u_at_err, part.tau_at_fraction, part.tau_at_fraction_err)
+                part.work[:] = 3 * part.steps.astype(np.int64) // 2
             out.assign(sel, part)
             bar.update(sel.size)
     mark_error_above_tol(scene, out)

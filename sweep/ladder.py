@@ -38,6 +38,7 @@ from .models.stop import MAX_STEPS, NONFINITE, OK
 
 ORDER_WINDOW = 1.0
 """Largest distance of the observed order from the method's order for the ladder to count as asymptotic."""
+NEWTON_ITERATIONS = 6
 SHARP_GAIN = 2.0
 """Estimate / Richardson error of an asymptotic ladder (covers the o(h^q) terms)."""
 CONSERVATIVE_GAIN = 2.0
@@ -57,8 +58,8 @@ Runner = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray, np.nda
 
 @dataclass
 class LadderResult:
-    """Per point: the returned (finest) run's value, its error estimate, status, steps and step size, and the
-    runs taken."""
+    """Per point: the returned (finest) run's value, its error estimate, status, steps and step size, the runs
+    taken and the steps of all of them (``work``)."""
 
     xi: np.ndarray
     error: np.ndarray
@@ -66,6 +67,7 @@ class LadderResult:
     steps: np.ndarray
     step: np.ndarray
     runs: np.ndarray
+    work: np.ndarray
 
 
 def ratio_of_differences(q, h_a, h_b, h_c):
@@ -75,17 +77,21 @@ def ratio_of_differences(q, h_a, h_b, h_c):
 
 def observed_order(d_ab, d_bc, h_a, h_b, h_c, p):
     """Order q solving eq. (1) for the differences d_ab = x_b - x_a, d_bc = x_c - x_b, where it lies within
-    ORDER_WINDOW of p (bisection, 40 halvings: q to 1e-12); NaN where it does not."""
+    ORDER_WINDOW of p; NaN where it does not. Newton's method on the logarithm of eq. (1), which is decreasing and
+    nearly linear in q, from q = p (NEWTON_ITERATIONS: q to ~1e-10 inside the window; a bisection costs ~10x
+    more numpy work per point, comparable to the runs themselves at coarse steps)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        measured = d_bc / d_ab
-    lo, hi = np.full(measured.shape, p - ORDER_WINDOW), np.full(measured.shape, p + ORDER_WINDOW)
-    inside = (measured <= ratio_of_differences(lo, h_a, h_b, h_c)) & (measured >= ratio_of_differences(hi, h_a, h_b,
-                                                                                                         h_c))
-    for _ in range(40):
-        mid = 0.5 * (lo + hi)
-        above = ratio_of_differences(mid, h_a, h_b, h_c) > measured
-        lo, hi = np.where(above, mid, lo), np.where(above, hi, mid)
-    return np.where(inside, 0.5 * (lo + hi), np.nan)
+        log_measured = np.log(d_bc / d_ab)
+    log_c, log_a = np.log(h_c / h_b), np.log(h_a / h_b)
+    q = np.full(log_measured.shape, float(p))
+    for _ in range(NEWTON_ITERATIONS):
+        cq, aq = np.exp(q * log_c), np.exp(q * log_a)
+        residual = np.log1p(-cq) - np.log(aq - 1.0) - log_measured
+        slope = -cq * log_c / (1.0 - cq) - aq * log_a / (aq - 1.0)
+        q = np.clip(q - residual / slope, p - 2.0 * ORDER_WINDOW, p + 2.0 * ORDER_WINDOW)
+    with np.errstate(invalid="ignore"):
+        solved = np.abs(np.log(ratio_of_differences(q, h_a, h_b, h_c)) - log_measured) < 1e-6
+    return np.where(solved & (np.abs(q - p) <= ORDER_WINDOW), q, np.nan)
 
 
 def richardson(d_bc, h_b, h_c, q):
@@ -109,10 +115,10 @@ def climb(run: Runner, points: np.ndarray, h0: np.ndarray, p: int, rtol: float, 
     (finer rungs take more steps still)."""
     n = points.size
     h_a, h_b = (4.0 * h0, 2.0 * h0) if fixed else (2.0 * h0, h0.copy())
-    x_a, _, s_a, _ = run(points, h_a)
+    x_a, _, s_a, n_a = run(points, h_a)
     x_b, t_b, s_b, n_b = run(points, h_b)
     out = LadderResult(x_b.copy(), np.full(n, np.inf), np.where(s_b != OK, s_b, s_a), n_b.copy(), h_b.copy(),
-                       np.full(n, 2, np.int8))
+                       np.full(n, 2, np.int8), n_a.astype(np.int64) + n_b)
     todo = (s_a != MAX_STEPS) & (s_b != MAX_STEPS)
     guess = _finite_or_inf(SHARP_GAIN * richardson(x_b - x_a, h_a, h_b, p) + 2.0 * t_b + roundoff * n_b * np.abs(x_b))
     h_c = h0.copy() if fixed else next_step(h_b, guess, rtol * np.abs(x_b) + atol, p)
@@ -129,6 +135,7 @@ def climb(run: Runner, points: np.ndarray, h0: np.ndarray, p: int, rtol: float, 
         out.xi[i], out.error[i], out.steps[i], out.step[i] = x_c, estimate, n_c, h_c[i]
         out.status[i] = np.where(s_c != OK, s_c, np.where(np.isfinite(estimate), OK, NONFINITE))
         out.runs[i] += 1
+        out.work[i] += n_c
         more = (s_c != MAX_STEPS) & ~(estimate <= tol_c) & (out.runs[i] < MAX_RUNS) & (not fixed)
         todo[:] = False
         todo[i[more]] = True

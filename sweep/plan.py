@@ -7,8 +7,11 @@ scaled log time sigma of :mod:`sweep.models.stop`, and the step count is chosen 
 * the time map is scaled to the point: s_c = 1/(1 + (chi + |mu1|)/A) (stiff start) and the late step follows
   the local rate (mu1 + 2 m2 u)/A (:mod:`sweep.models.stop`), so that the RK4 error constant is nearly the
   same at every point;
-* the step h in sigma then meets ``rtol`` at each point: h = min(H_MAX, (rtol / (SAFETY * C))^(1/4)), with C
-  the largest error constant err/h^4 measured on a calibration set spanning chi/A 1e-2..1e3, mu1/A -3..3,
+* relaxed-slip sweeps (lanes) choose each point's step at run time, down a step ladder (sweep/ladder.py) from the
+  pilot step h0 = min(H_PILOT, PILOT_FACTOR (TARGET rtol / (SHARP_GAIN C))^(1/4)) given here;
+* otherwise (per-point path) the step h in sigma meets ``rtol`` at each point:
+  h = min(H_MAX, (rtol / (SAFETY * C))^(1/4)); in both rules C is the largest error constant err/h^4 measured
+  on a calibration set spanning chi/A 1e-2..1e3, mu1/A -3..3,
   m2/A 0..3 (benchmarks/calibrate_rk4.py): C_STABLE where steady sliding is stable (chi > mu1; measured
   max 4.4e-4 as h -> 0, 7.4e-4 at h = 0.7) and C_UNSTABLE on the stick-slip side, where the stop starts on an
   unstable fixed point and the error constant is ~3x larger (measured max 1.7e-3); C is multiplied by
