@@ -5,23 +5,29 @@
 
 Every engine number goes through the public path (sweep.make_plan + sweep.engine.execute, what run_sweep runs,
 or run_sweep itself), so the script does not depend on the kernels' internals. Every point is solved as the
-engine always solves it: a Richardson pair (a coarse run and a fine run, the fine result returned with its
-error estimate), and the timings include both runs. Sections (benchmarks/README.md explains every number):
+engine always solves it: down its step ladder (sweep/ladder.py: a pilot pair at 2 h0, h0, then up to three
+finer runs at steps chosen from the point's own error; with a step given by the user, Scene(step=h), the fixed
+runs 4h, 2h, h), the finest run's result returned with its error estimate, and the timings include every run.
+execute's RawResult.steps are the returned run's steps (the per-point distribution below), RawResult.work the
+steps of all runs of the point (all step and evaluation counts below; exact on the lanes, 1.5 x steps on the
+per-point path). Sections (benchmarks/README.md explains every number):
 
 1. engine      trajectories/s on the default scene (sweep.default_scene(): sample2, 200 x 100, rtol 1e-6),
-               warm (one call first, then best of 3), with 1 thread and all threads; steps per point; ns per
-               step and per stage evaluation per core, counting the steps of both runs of the pair.
+               warm (one call first, then best of 3), with 1 thread and all threads; steps per point (returned
+               run); ns per step and per stage evaluation per core, counting the steps of all runs (work).
 2. scipy       solve_ivp's DOP853 and LSODA steppers on a strided subsample of the same grid (corners
                included), given the engine's own formulation (1-D ODE dxi/ds = E in contact-age time, the
                engine's tail test and closed-form tail), each at the loosest scanned tolerance whose max
                relative xi_inf error is <= 1e-6 against the engine at rtol 1e-10; ratio vs the engine. Then
                each method at its chosen tolerance on a uniformly random subsample (64 points, fixed seed):
                an unbiased estimate of scipy's mean cost per trajectory over the grid.
-3. numpy       the engine's RK4 (same per-point steps h and 2h of the pair, state-dependent time map, per-run
-               stop) written as lockstep numpy over the grid points the plan gives to RK4 (points given to
-               another method, e.g. the Rosenbrock stiff points, are left out and the engine re-timed without
-               them); agreement with the engine and cost per RK4 stage evaluation (skipped, and said so, if the
-               plan's method is not explicit fixed-step).
+3. numpy       the engine's RK4 with a fixed step (Scene(step=h, method="rk4"): every point's ladder is the
+               fixed 4h, 2h, h, the run at h returned; h = the default plan's smallest RK4 pilot step) against
+               the same three runs per point (same state-dependent time map, per-run stop) written as lockstep
+               numpy, over the grid points the default plan gives to RK4 (points it gives another method, e.g.
+               the Rosenbrock stiff points, are left out), both on one core: agreement of numpy's run at h with
+               the engine's xi_inf, and cost per RK4 stage evaluation from numpy's own step counts and the
+               engine's work (target: engine >= 3x cheaper per evaluation).
 4. cold start  a new Python process: import sweep + a 10 x 10 sweep, JIT cache on disk (median of 3).
 5. estimate    sweep.engine.estimate_seconds vs the measured time, default scene and sample1 100 x 100.
 
@@ -66,6 +72,7 @@ DEFAULT_OUT = HERE / "results" / "throughput.json"
 TARGET_RATIO = 50.0
 TARGET_COLD_S = 2.0
 TARGET_ESTIMATE = 2.0
+TARGET_NUMPY_PER_EVAL = 3.0
 ERROR_TARGET = 1e-6
 REF_RTOL = 1e-10
 RANDOM_POINTS = 64
@@ -128,19 +135,6 @@ def point_evals(plan) -> np.ndarray:
     return np.array([evals_per_step(m) for m in names], dtype=np.int64)[inverse.ravel()]
 
 
-def pair_steps(scene, plan, res, idx=None):
-    """Steps per point of both runs of the engine's Richardson pair: (fine, coarse), int64.
-
-    execute returns the fine run's steps (ds["steps"]). The coarse run of a fixed-step method is the same run at
-    twice the step, i.e. the fine run of the same plan with its steps doubled (executed here, untimed); an
-    adaptive method's fine run replays the coarse run's accepted steps halved (exactly twice its steps)."""
-    fine = res.steps.astype(np.int64)
-    if plan.adaptive:
-        return fine, fine // 2
-    doubled = dataclasses.replace(plan, step=2.0 * plan.step)
-    return fine, execute(scene, doubled, idx, progress=False).steps.astype(np.int64)
-
-
 # ------------------------------------------------------------------------------------------- 1. engine
 
 def bench_engine(scene, plan, repeats, n_all):
@@ -162,7 +156,8 @@ def bench_engine(scene, plan, repeats, n_all):
     res = runs[1][1]
     assert np.array_equal(res.xi_inf, first.xi_inf, equal_nan=True), "engine is not deterministic"
     assert np.array_equal(res.xi_inf, runs[n_all][1].xi_inf, equal_nan=True), "result depends on the threads"
-    steps, coarse = pair_steps(scene, plan, res)
+    steps, work = res.steps.astype(np.int64), res.work.astype(np.int64)  # returned run; all runs of the ladder
+    assert np.all(work >= steps), "RawResult.work below the returned run's steps"
     total = int(steps.sum())
     out["points"] = n
     out["status_counts"] = {sweep.Status(int(c)).name: int(m) for c, m in zip(*np.unique(res.status,
@@ -179,16 +174,18 @@ def bench_engine(scene, plan, repeats, n_all):
     out["costliest_point"] = {"K_over_M": float(scene.K_over_M[ik]), "V": float(scene.V[iv]),
                               "chi_over_A": float(plan.k[i_max]), "mu1_over_A": float(plan.a[i_max]),
                               "steps": int(steps[i_max]), "xi_inf": float(res.xi_inf[i_max])}
+    out["all_runs_steps_per_point"] = {"mean": float(work.mean()), **percentiles(work)}
     evals = point_evals(plan)
-    run_steps = total + int(coarse.sum())
-    stage_evals = int((evals * (steps + coarse)).sum())
+    run_steps = int(work.sum())
+    stage_evals = int((evals * work).sum())
     methods = point_methods(plan)
-    out["richardson_pair"] = {"fine_steps_total": total, "coarse_steps_total": int(coarse.sum()),
-                              "coarse_over_fine": float(coarse.sum() / total), "steps_total": run_steps,
-                              "stage_evals_total": stage_evals, "stage_evals_per_step": stage_evals / run_steps}
+    out["ladder"] = {"returned_run_steps_total": total, "all_runs_steps_total": run_steps,
+                     "all_runs_over_returned": run_steps / total, "stage_evals_total": stage_evals,
+                     "stage_evals_per_step": stage_evals / run_steps,
+                     "work_exact": bool(plan.lanes)}  # per-point path: RawResult.work is 1.5 x steps, not counted
     out["by_method"] = {m: {"points": int(np.count_nonzero(methods == m)), "evals_per_step": evals_per_step(m),
-                            "fine_steps_total": int(steps[methods == m].sum()),
-                            "coarse_steps_total": int(coarse[methods == m].sum())} for m in dict.fromkeys(methods)}
+                            "returned_run_steps_total": int(steps[methods == m].sum()),
+                            "all_runs_steps_total": int(work[methods == m].sum())} for m in dict.fromkeys(methods)}
     for nt in sorted({1, n_all}):
         best = runs[nt][0]
         out[f"threads_{nt}"]["ns_per_step_per_core"] = best * nt / run_steps * 1e9
@@ -198,7 +195,7 @@ def bench_engine(scene, plan, repeats, n_all):
     best, _, ds = best_of(lambda: sweep.run_sweep(scene, progress=False), repeats)
     assert np.array_equal(ds["steps"].values.ravel(), res.steps), "ds['steps'] differs from the kernel's steps"
     out["run_sweep_s_all_threads"] = best
-    return out, res, coarse
+    return out, res
 
 
 # ----------------------------------------------------------------------------------- reference values
@@ -298,16 +295,17 @@ def bench_scipy_at_chosen(scene, plan, idx, ref_xi, methods, repeats):
 
 
 def bench_engine_subsample(scene, plan, idx, ref_xi, reps):
-    """The engine (1 thread) on the points idx: us per trajectory (both runs of the pair), error vs ref_xi."""
+    """The engine (1 thread) on the points idx: us per trajectory (all runs of each ladder), error vs ref_xi.
+    RHS evaluations: evaluations per step x the steps of all runs (RawResult.work); the first derivative of each
+    run (2..5 per point: RawResult does not say how many runs) is not counted."""
     numba.set_num_threads(1)
     execute(scene, plan, idx, progress=False)
     best, _, res = best_of(lambda: execute(scene, plan, idx, progress=False), reps)
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
     rel = np.abs(res.xi_inf / ref_xi - 1)
-    fine, coarse = pair_steps(scene, plan, res, idx)
-    evals = point_evals(plan)[idx] * (fine + coarse) + 2  # + the first derivative of each run
-    return {"threads": 1, "us_per_traj": best / idx.size * 1e6, "mean_steps": float(fine.mean()),
-            "mean_steps_coarse": float(coarse.mean()), "mean_rhs_evals": float(evals.mean()),
+    evals = point_evals(plan)[idx] * res.work
+    return {"threads": 1, "us_per_traj": best / idx.size * 1e6, "mean_steps": float(res.steps.mean()),
+            "mean_steps_all_runs": float(res.work.mean()), "mean_rhs_evals": float(evals.mean()),
             "max_rel_err": float(rel.max()), "median_rel_err": float(np.median(rel))}
 
 
@@ -427,46 +425,56 @@ def numpy_lockstep(plan, method, run_point, run_h, rtol, atol):
     return xi_inf, status, steps, seconds, n_step, phases
 
 
-def bench_numpy(scene, plan, engine_res, engine_coarse, t_engine_1, repeats):
-    """The Richardson pair (runs at 2h and h) of every grid point of the plan's explicit fixed-step method as
-    lockstep numpy, against the engine on the same points."""
-    tab = METHODS[plan.method]
-    if plan.adaptive or getattr(tab, "implicit", False):
-        return {"skipped": f"the default scene's plan method {plan.method} is not explicit fixed-step: no numpy "
-                           "replica"}
-    methods = point_methods(plan)
-    idx = np.flatnonzero(methods == plan.method)
-    if idx.size == plan.n_points:
-        t_engine = t_engine_1
-    else:  # other points run another method (e.g. stiff points): time the engine on the replicated ones only
-        numba.set_num_threads(1)
-        execute(scene, plan, idx, progress=False)
-        t_engine = best_of(lambda: execute(scene, plan, idx, progress=False), repeats + 1)[0]
-        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
-    run_point = np.repeat(idx, 2)
-    run_h = plan.step[run_point] * np.tile([2.0, 1.0], idx.size)  # as the engine: coarse run (2h), fine run (h)
+LADDER_FIXED = np.array([4.0, 2.0, 1.0])
+"""The runs of a fixed ladder (Scene(step=h), sweep/ladder.py) in units of h; the last one is returned."""
+
+
+def bench_numpy(scene, plan, repeats, method="rk4"):
+    """The engine with a fixed step h (Scene(step=h, method=method): every point's ladder is the fixed 4h, 2h, h,
+    the run at h returned) and the same three runs per point as lockstep numpy, on one core each, over the points
+    the default plan gives to ``method`` (h: their smallest pilot step in the default plan)."""
+    idx = np.flatnonzero(point_methods(plan) == method)
+    if idx.size == 0:
+        return {"skipped": f"the default scene's plan gives no point to {method}: no numpy replica"}
+    h = float(plan.step[idx].min())
+    fixed = dataclasses.replace(scene, step=h, method=method)
+    fplan = sweep.make_plan(fixed)
+    assert fplan.step_source == "override" and fplan.lanes and set(fplan.point_methods) == {method}
+    numba.set_num_threads(1)
+    execute(fixed, fplan, idx, progress=False)
+    t_engine, t_engine_all, eng = best_of(lambda: execute(fixed, fplan, idx, progress=False), repeats + 1)
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    n_runs = LADDER_FIXED.size
+    run_point = np.repeat(idx, n_runs)
+    run_h = h * np.tile(LADDER_FIXED, idx.size)
     best, times, (xi, status, steps, _, n_lock, phases) = best_of(
-        lambda: numpy_lockstep(plan, plan.method, run_point, run_h, scene.rtol, scene.atol["xi_inf"]), repeats)
-    coarse, fine = slice(0, None, 2), slice(1, None, 2)
-    pair_status = np.where(status[fine] != 0, status[fine], status[coarse])  # the engine's rule
-    e_status = engine_res.status[idx]
-    e_status = np.where(np.isin(e_status, OK_LIKE), OK, e_status)  # no error estimate here
-    ok = (pair_status == OK) & (e_status == OK)
-    rel = np.abs(xi[fine][ok] / engine_res.xi_inf[idx][ok] - 1)
-    e_step = evals_per_step(plan.method)
-    evals = e_step * int(steps.astype(np.int64).sum())
-    engine_evals = e_step * int(engine_res.steps[idx].astype(np.int64).sum() + engine_coarse[idx].sum())
+        lambda: numpy_lockstep(fplan, method, run_point, run_h, fixed.rtol, fixed.atol["xi_inf"]), repeats)
+    xi, status, steps = (x.reshape(idx.size, n_runs) for x in (xi, status, steps))
+    # the engine's rule (sweep/ladder.py): the returned run's status, else nonfinite where a coarser run left no
+    # value to estimate the error from
+    ladder_status = np.where(status[:, -1] != OK, status[:, -1],
+                             np.where(np.all(status == OK, axis=1), OK, int(sweep.Status.NONFINITE)))
+    e_status = np.where(np.isin(eng.status, OK_LIKE), OK, eng.status)  # numpy makes no error estimate
+    ok = (ladder_status == OK) & (e_status == OK)
+    rel = np.abs(xi[ok, -1] / eng.xi_inf[ok] - 1)
+    work = steps.astype(np.int64).sum(axis=1)
+    e_step = evals_per_step(method)
+    evals = e_step * int(work.sum())
+    engine_evals = e_step * int(eng.work.sum())
     ns_np = best / evals * 1e9
     ns_eng = t_engine / engine_evals * 1e9
-    return {"method": plan.method, "points": int(idx.size), "points_other_methods": int(plan.n_points - idx.size),
+    return {"method": method, "step_h_sigma": h, "ladder_steps_over_h": LADDER_FIXED.tolist(),
+            "points": int(idx.size), "points_other_methods": int(plan.n_points - idx.size),
             "runs": int(run_point.size), "best_s": best, "all_s": times, "traj_per_s": idx.size / best,
-            "lockstep_steps": n_lock, "status_equal": bool(np.array_equal(pair_status, e_status)),
-            "steps_equal_points": int(np.count_nonzero(steps[fine] == engine_res.steps[idx])),
-            "steps_differ_points": int(np.count_nonzero(steps[fine] != engine_res.steps[idx])),
-            "coarse_steps_differ_points": int(np.count_nonzero(steps[coarse] != engine_coarse[idx])),
+            "lockstep_steps": n_lock, "status_equal": bool(np.array_equal(ladder_status, e_status)),
+            "status_counts_engine": {sweep.Status(int(c)).name: int(m) for c, m in zip(*np.unique(
+                eng.status, return_counts=True))},
+            "returned_run_steps_differ_points": int(np.count_nonzero(steps[:, -1] != eng.steps)),
+            "all_runs_steps_differ_points": int(np.count_nonzero(work != eng.work)),
+            "compared_points": int(ok.sum()),
             "max_rel_diff_vs_engine": float(rel.max()), "median_rel_diff_vs_engine": float(np.median(rel)),
             "evals_per_step": e_step, "point_stage_evals": evals, "engine_point_stage_evals": engine_evals,
-            "engine_s_1_thread_same_points": t_engine,
+            "engine_s_1_thread_same_points": t_engine, "engine_all_s": t_engine_all,
             "ns_per_point_stage_eval": ns_np, "engine_ns_per_point_stage_eval_1_thread": ns_eng,
             "numpy_over_engine_1_thread_time": best / t_engine,
             "numpy_over_engine_per_eval": ns_np / ns_eng, "phases": phases}
@@ -580,7 +588,7 @@ def plot(result, path):
     ax1.stairs(h["counts"], edges, fill=True)
     ax1.set_xscale("log")
     ax1.set_yscale("log")
-    ax1.set_xlabel(f"{result['engine']['method']} steps per point, fine run (default scene, rtol 1e-6)")
+    ax1.set_xlabel(f"{result['engine']['method']} steps per point, returned run (default scene, rtol 1e-6)")
     ax1.set_ylabel("points")
     ax1.set_title("engine: steps per point")
     for name, m in result["scipy"]["methods"].items():
@@ -619,7 +627,7 @@ def main(argv=None):
     plan = sweep.make_plan(scene)
     print(f"[1/5] engine: default scene {scene.shape[0]} x {scene.shape[1]}, rtol {scene.rtol:g}", flush=True)
     print(f"      plan: {plan.method}, {plan.describe()['stepper']}", flush=True)
-    eng, eng_res, eng_coarse = bench_engine(scene, plan, repeats, n_all)
+    eng, eng_res = bench_engine(scene, plan, repeats, n_all)
     t_eng_1 = eng["threads_1"]["best_s"]
 
     print("[2/5] scipy DOP853 / LSODA on a strided subsample", flush=True)
@@ -697,8 +705,8 @@ def main(argv=None):
         eng["error_vs_rtol_1e-10_full_grid"] = {"max_rel_err": float(rel.max()), "median_rel_err": float(
             np.median(rel)), "p99_rel_err": float(np.percentile(rel, 99))}
 
-    print("[3/5] numpy lockstep RK4 over the whole grid (both runs of each Richardson pair)", flush=True)
-    npy = bench_numpy(scene, plan, eng_res, eng_coarse, t_eng_1, 1 if quick else 2)
+    print("[3/5] numpy lockstep RK4 vs the engine at a fixed step (runs 4h, 2h, h per point)", flush=True)
+    npy = bench_numpy(scene, plan, 1 if quick else 2)
 
     print("[4/5] cold start (new processes)", flush=True)
     cold = bench_cold(1 if quick else 3)
@@ -723,6 +731,10 @@ def main(argv=None):
         "cold_start_s": {"value": cold["process_wall_s_median"], "target": "< 2 s",
                          "result": verdict(cold["process_wall_s_median"] < TARGET_COLD_S)},
     }
+    if "skipped" not in npy:
+        targets["numpy_over_engine_per_rk4_stage_eval"] = {
+            "value": npy["numpy_over_engine_per_eval"], "target": ">= 3",
+            "result": verdict(npy["numpy_over_engine_per_eval"] >= TARGET_NUMPY_PER_EVAL)}
     for e in est:
         targets[f"estimate_ratio[{e['scene']}]"] = {"value": e["estimate_over_measured"], "target": "0.5..2",
                                                     "result": verdict(e["within_2x"])}
@@ -736,10 +748,12 @@ def main(argv=None):
         "loadavg_start_end": [load0, common.loadavg()],
         "scene": {"name": "sweep.default_scene()", "shape": list(scene.shape), "rtol": scene.rtol,
                   "plan": plan.describe(),
-                  "atol_xi_inf": scene.atol["xi_inf"], "step_h_sigma": {
+                  "atol_xi_inf": scene.atol["xi_inf"], "plan_step_sigma": {
                       "stable_sliding_k_gt_a": sorted({float(x) for x in plan.step[plan.k > plan.a]}),
                       "unstable_k_le_a": sorted({float(x) for x in plan.step[plan.k <= plan.a]}),
-                      "points_stable": int(np.count_nonzero(plan.k > plan.a))}, "preset": "sample2"},
+                      "points_stable": int(np.count_nonzero(plan.k > plan.a))},
+                  "plan_step_is": ("pilot step h0 of each point's step ladder (runs 2 h0, h0, then finer)"
+                                   if plan.lanes else f"step ({plan.step_source})"), "preset": "sample2"},
         "engine": eng,
         "scipy": scipy_out,
         "numpy_rk4": npy,
@@ -775,18 +789,19 @@ def print_table(r):
     n_all = m["NUMBA_NUM_THREADS"]
     print(f"\n== sweep throughput  {r['date']}  {m['cpu_model']}, {m['logical_cpus']} cpus, numba "
           f"{r['versions']['numba']} ({m['numba_threading_layer']}, {n_all} threads)")
-    sp, rp = e["steps_per_point"], e["richardson_pair"]
+    sp, lad = e["steps_per_point"], e["ladder"]
     print(f"plan: {r['scene']['plan']['method']}; {r['scene']['plan']['stepper']}")
     print(f"default scene {r['scene']['shape'][0]}x{r['scene']['shape'][1]} rtol {r['scene']['rtol']:g}: steps/point "
           f"mean {sp['mean']:.0f}, median {sp['p50']:.0f}, p95 {sp['p95']:.0f}, max {sp['p100']:.0f}; "
           f"{100 * e['share_of_steps_in_points_over_1000_steps']:.0f}% of all steps in the "
-          f"{e['points_over_1000_steps']} points with > 1000 steps (fine run; the coarse run of the Richardson "
-          f"pair adds {rp['coarse_over_fine']:.3f}x those steps, counted in ns/step below)")
+          f"{e['points_over_1000_steps']} points with > 1000 steps (returned run; all runs of the step ladders "
+          f"take {lad['all_runs_over_returned']:.3f}x those steps, counted in ns/step below)")
     if len(e["by_method"]) > 1:
-        print("points by method: " + ", ".join(f"{m} {v['points']} ({v['fine_steps_total']} fine steps)"
+        print("points by method: " + ", ".join(f"{m} {v['points']} ({v['all_runs_steps_total']} steps, all runs)"
                                                for m, v in e["by_method"].items()))
-    hs = r["scene"]["step_h_sigma"]
-    print(f"step h in sigma per point: {', '.join(f'{x:.4g}' for x in hs['stable_sliding_k_gt_a'])} on the "
+    hs = r["scene"]["plan_step_sigma"]
+    print(f"plan step in sigma per point ({r['scene']['plan_step_is']}): "
+          f"{', '.join(f'{x:.4g}' for x in hs['stable_sliding_k_gt_a'])} on the "
           f"{hs['points_stable']} stable-sliding points (k > a), "
           f"{', '.join(f'{x:.4g}' for x in hs['unstable_k_le_a'])} on the others")
     rows = [("engine 1 thread", e["threads_1"]["best_s"], e["threads_1"]["traj_per_s"],
@@ -828,9 +843,11 @@ def print_table(r):
         print(f"\nnumpy lockstep: skipped ({npy['skipped']})")
     else:
         ph = npy["phases"]
-        print(f"\nnumpy lockstep vs engine: {npy['steps_differ_points']} points with different fine-run step counts "
-              f"({npy['coarse_steps_differ_points']} coarse), max rel xi_inf diff {npy['max_rel_diff_vs_engine']:.1e}, "
-              f"statuses equal: {npy['status_equal']}; per point-stage evaluation "
+        print(f"\nnumpy lockstep vs engine, {npy['method']} at the fixed step h = {npy['step_h_sigma']:.4g} "
+              f"(runs 4h, 2h, h per point, 1 core each): {npy['returned_run_steps_differ_points']} points with "
+              f"different step counts at h ({npy['all_runs_steps_differ_points']} over all runs), rel xi_inf diff max "
+              f"{npy['max_rel_diff_vs_engine']:.1e}, median {npy['median_rel_diff_vs_engine']:.1e} "
+              f"({npy['compared_points']} points), statuses equal: {npy['status_equal']}; per point-stage evaluation "
               f"{npy['ns_per_point_stage_eval']:.1f} ns vs engine {npy['engine_ns_per_point_stage_eval_1_thread']:.2f} "
               f"ns (x{npy['numpy_over_engine_per_eval']:.1f}); with >= 4096 runs active numpy costs "
               f"{fmt(ph['active_ge_4096']['ns_per_point_stage_eval'], '{:.1f}')} ns, below "

@@ -5,7 +5,8 @@ written once by one thread. The costly points cluster in one corner of the grid 
 numba's prange splits a batch into equal contiguous shares, so the points are visited in a fixed
 pseudo-random order: every chunk, and every thread's share of it, then mixes cheap and costly points
 (2 threads: 1.2x -> 1.96x speed-up on the default scene). Results do not depend on the order. Sweeps of the
-relaxed slip alone go through ``relax_batch`` instead (two points in flight per thread, models/stop_lanes.py).
+relaxed slip alone go through the lane kernels instead (16 runs in flight per thread, models/stop_lanes.py), each
+point down its own step ladder (ladder.py).
 """
 
 from __future__ import annotations
