@@ -59,8 +59,10 @@ STEP_SAFETY = 2.0
 """Margin of the fixed-step rule: the error estimate (~ERROR_GAIN times the error) stays below rtol / STEP_SAFETY on
 the calibration set."""
 PILOT_FACTOR = 2.5
-H_PILOT = 1.0
 """Pilot step of the lanes / the step meeting rtol at the largest error constant (see :func:`pilot_step_for`)."""
+H_PILOT = 1.0
+"""Largest pilot step h0 (its coarse run has 2 h0, inside RK4's stability interval along the decay; a coarser
+pilot that goes non-finite only sends the point down the ladder)."""
 STIFF_K_MAX = 0.03
 """Stiff points (Rosenbrock ros4 in the lanes, models/stop_stiff.py): chi/A <= STIFF_K_MAX, mu1 < 0, m2 > 0 and a
 slow creep manifold of length x attraction rate |mu1/A|^3 / (4 (m2/A)(chi/A)) >= STIFF_WORK_MIN. There, on the
