@@ -23,6 +23,7 @@ from .ladder import climb
 from .models.stop import NO_FINITE_LIMIT, OK
 from .models.stop_lanes import lane_kernels
 from .models.stop_march import solve_stop_point
+from .physics import perturbation_growth
 from .plan import Plan, make_plan
 from .progress import Progress
 from .scene import Scene
@@ -126,8 +127,10 @@ def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
         live = np.flatnonzero(plan.finite[g] & (plan.point_method[g] == m))
         if live.size == 0:
             continue
-        res = climb(_lane_runner(scene, plan, method), g[live], plan.step[g[live]], METHODS[method].order,
-                    scene.rtol, scene.atol["xi_inf"], plan.roundoff, fixed=plan.step_source == "override")
+        pts = g[live]
+        res = climb(_lane_runner(scene, plan, method), pts, plan.step[pts], METHODS[method].order,
+                    scene.rtol, scene.atol["xi_inf"], plan.roundoff, fixed=plan.step_source == "override",
+                    growth=perturbation_growth(plan.k[pts], plan.a[pts], 1.0))
         out.xi_inf[live], out.xi_inf_err[live], out.status[live], out.steps[live], out.work[live] = (
             res.xi, res.error, res.status, res.steps, res.work)
     return out

@@ -21,10 +21,11 @@ and with the order q in place of p for an error C h^q. Each point climbs down a 
    the steps the plan takes, RK4 on the stop model shows orders from ~3.5 to 4, which the fixed p = 4 would
    turn into estimates 0.6x the error); otherwise the ladder is not asymptotic and the estimate
    is CONSERVATIVE_GAIN max(|x_b - x_a|, |x_c - x_b|); either way, a point whose estimate exceeds its tolerance
-   takes the next rung (at most MAX_RUNS runs in all), chosen from that estimate.
+   takes the next rung (at most MAX_RUNS runs in all, none where rounding alone exceeds the tolerance), chosen
+   from that estimate.
 
 With a step given by the user (Scene(step=h)) the ladder is fixed: 4h, 2h, h, and the run at h is returned.
-The estimate adds the closed-form tail bound (2x) and rounding (steps x unit roundoff x |xi|).
+The estimate adds the closed-form tail bound (2x) and rounding (:func:`rounding_error`).
 """
 
 from __future__ import annotations
@@ -106,13 +107,22 @@ def next_step(h, estimate, tol, p):
     return h * np.clip(ratio, 1.0 / MAX_RATIO, 1.0 / MIN_RATIO)
 
 
+def rounding_error(roundoff, steps, x, growth):
+    """Bound on the rounding error of a run's result x [same units]: each of the ``steps`` steps rounds at
+    ``roundoff`` relative, and a rounding made early grows with the run by up to exp(growth |x|), where ``growth``
+    is the rate at which perturbations of xi grow per unit of xi (:func:`sweep.physics.perturbation_growth`; the
+    weakening stop amplifies them by mu1/chi, 1e10 at mu1/chi = 1e10, where errors measured over step sizes 1e-7
+    apart scatter by 2e-7 relative while a Richardson difference divides that scatter by r^q - 1)."""
+    return roundoff * (steps + np.exp(np.minimum(growth * np.abs(x), 700.0))) * np.abs(x)
+
+
 def climb(run: Runner, points: np.ndarray, h0: np.ndarray, p: int, rtol: float, atol: float, roundoff: float,
-          fixed: bool) -> LadderResult:
+          fixed: bool, growth: np.ndarray | float = 0.0) -> LadderResult:
     """Climb the ladder for ``points`` from pilot step ``h0`` (fixed: the user's step, rungs 4h, 2h, h).
 
     A run that goes non-finite (e.g. a coarse step beyond the stability limit) leaves no difference to estimate
     from; the point then takes the next rung, MAX_RATIO times finer. A run that hits max_steps ends the point
-    (finer rungs take more steps still)."""
+    (finer rungs take more steps still). ``growth`` per point: see :func:`rounding_error`."""
     n = points.size
     h_a, h_b = (4.0 * h0, 2.0 * h0) if fixed else (2.0 * h0, h0.copy())
     x_a, _, s_a, n_a = run(points, h_a)
@@ -120,7 +130,9 @@ def climb(run: Runner, points: np.ndarray, h0: np.ndarray, p: int, rtol: float, 
     out = LadderResult(x_b.copy(), np.full(n, np.inf), np.where(s_b != OK, s_b, s_a), n_b.copy(), h_b.copy(),
                        np.full(n, 2, np.int8), n_a.astype(np.int64) + n_b)
     todo = (s_a != MAX_STEPS) & (s_b != MAX_STEPS)
-    guess = _finite_or_inf(SHARP_GAIN * richardson(x_b - x_a, h_a, h_b, p) + 2.0 * t_b + roundoff * n_b * np.abs(x_b))
+    growth = np.broadcast_to(np.asarray(growth, dtype=float), (n,))
+    guess = _finite_or_inf(SHARP_GAIN * richardson(x_b - x_a, h_a, h_b, p) + 2.0 * t_b
+                           + rounding_error(roundoff, n_b, x_b, growth))
     h_c = h0.copy() if fixed else next_step(h_b, guess, rtol * np.abs(x_b) + atol, p)
     while todo.any():
         i = np.flatnonzero(todo)
@@ -128,15 +140,18 @@ def climb(run: Runner, points: np.ndarray, h0: np.ndarray, p: int, rtol: float, 
         d_ab, d_bc = x_b[i] - x_a[i], x_c - x_b[i]
         q = observed_order(d_ab, d_bc, h_a[i], h_b[i], h_c[i], p)
         sure = np.isfinite(q)
+        rounding = rounding_error(roundoff, n_c, x_c, growth[i])
         estimate = _finite_or_inf(np.where(sure, SHARP_GAIN * richardson(d_bc, h_b[i], h_c[i], np.where(sure, q, p)),
                                            CONSERVATIVE_GAIN * np.maximum(np.abs(d_ab), np.abs(d_bc)))
-                                  + 2.0 * t_c + roundoff * n_c * np.abs(x_c))
+                                  + 2.0 * t_c + rounding)
         tol_c = rtol * np.abs(x_c) + atol
         out.xi[i], out.error[i], out.steps[i], out.step[i] = x_c, estimate, n_c, h_c[i]
         out.status[i] = np.where(s_c != OK, s_c, np.where(np.isfinite(estimate), OK, NONFINITE))
         out.runs[i] += 1
         out.work[i] += n_c
-        more = (s_c != MAX_STEPS) & ~(estimate <= tol_c) & (out.runs[i] < MAX_RUNS) & (not fixed)
+        # rounding over the tolerance: finer rungs (more steps) cannot help
+        more = ((s_c != MAX_STEPS) & ~(estimate <= tol_c) & (rounding <= tol_c) & (out.runs[i] < MAX_RUNS)
+                & (not fixed))
         todo[:] = False
         todo[i[more]] = True
         # one rung down for the points that go on

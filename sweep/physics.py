@@ -99,6 +99,18 @@ def physical_time(tau, V, D0):
 
 # --- stability of steady sliding (driven scene) ----------------------------------------------------
 
+def perturbation_growth(chi, mu1, A):
+    """Rate at which a perturbation of the slip grows per unit of slip during a quasi-static stop [1].
+
+    In contact-age time s (models/stop.py) dxi/ds = E, and dE/dxi = ((mu1 + 2 m2 u) - chi) E/A at fixed s, so a
+    perturbation grows by exp(int (mu1 - chi)/A dxi) = exp((mu1 - chi) xi_inf/A) over the stop for m2 = 0: by
+    mu1/chi exactly (eq. 10 with m2 = 0), e.g. 1e10 at chi/A = 1e-4, mu1/A = 1e6, where rounding then shows as
+    scatter of 2e-7 relative. Returns max(0, (mu1 - chi)/A), the m2 = 0 part (m2 > 0 adds 2 m2 u/A late in the
+    stop, where E and the slip still to come are small).
+    """
+    return _out(np.maximum(0.0, (np.asarray(mu1, dtype=float) - np.asarray(chi, dtype=float)) / np.asarray(A)))
+
+
 def chi_c_quasistatic(mu1):
     """Critical reduced stiffness of the quasi-static model, chi_c = mu1 [1] (eq. 3); NaN where mu1 <= 0."""
     return chi_c_inertial(mu1, 1.0, 0.0)

@@ -120,3 +120,31 @@ def test_error_variables_are_in_the_file_with_units():
         assert err.attrs["units"] == pt[name].attrs["units"]
         assert pt[name].attrs["ancillary_variables"] == f"{name}_error"
         assert np.all(np.asarray(err) >= 0)
+
+
+@pytest.mark.parametrize("chi_over_A, mu1_over_A", [(1e-4, 1e6), (1e-4, 1e4), (1e-2, 1e3), (0.1, 30.0)])
+def test_rounding_bound_covers_the_amplified_scatter(chi_over_A, mu1_over_A):
+    """A weakening stop amplifies rounding made early by mu1/chi (sweep.physics.perturbation_growth): runs at
+    steps 1e-7 apart (truncation errors equal to ~1e-7 relative of each other) scatter by the amplified rounding.
+    The ladder's rounding term must cover that scatter, and not by more than 100x."""
+    from sweep.ladder import rounding_error
+    from sweep.models.stop_lanes import lane_kernels
+    from sweep.plan import ROUNDOFF
+
+    relax_runs = lane_kernels(np.dtype(np.float64), "rk4")[0]
+    k, a, b = np.array([chi_over_A]), np.array([mu1_over_A]), np.zeros(1)
+    s_c = 1.0 / (1.0 + k + np.abs(a))
+    values, steps = [], []
+    for j in range(16):
+        out = [np.zeros(1), np.zeros(1), np.zeros(1, np.int8), np.zeros(1, np.int32)]
+        relax_runs(k, a, b, s_c, np.array([0]), np.array([0.02 * (1.0 + 1e-7 * j)]), np.array([0]), 10**6, 1e-10,
+                   1e-16, *out)
+        assert out[2][0] == sweep.Status.OK
+        values.append(out[0][0])
+        steps.append(out[3][0])
+    x = np.array(values)
+    assert abs(x.mean() / (math.log(mu1_over_A / chi_over_A) / (mu1_over_A - chi_over_A)) - 1) < 1e-5
+    scatter = np.ptp(x)
+    bound = rounding_error(ROUNDOFF[np.dtype(np.float64)], max(steps), x.mean(),
+                           sweep.physics.perturbation_growth(chi_over_A, mu1_over_A, 1.0))
+    assert scatter <= bound <= 100.0 * max(scatter, 1e-16 * abs(x.mean()))

@@ -96,6 +96,16 @@ def test_an_error_that_never_shrinks_is_reported_over_tolerance():
     assert res.error[0] > 1e-6 * abs(res.xi[0])
 
 
+def test_rounding_over_tolerance_ends_the_ladder():
+    """Where amplified rounding alone exceeds the tolerance, finer rungs cannot help: the point stops after the
+    first rung with that rounding in its estimate (over tolerance: the engine marks it error_above_tol)."""
+    growth = np.array([0.0, 50.0])  # exp(50 * 3) * 2e-16 * 3 >> 1e-6 * 3
+    res = ladder.climb(runner(lambda p, h: 1e-3 * h**P), np.arange(2), np.full(2, 0.3), P, 1e-6, 1e-12, 2e-16,
+                       False, growth=growth)
+    assert res.runs[1] == 3 and res.error[1] >= ladder.rounding_error(2e-16, 0, X, 50.0) > 1e-6 * X
+    assert res.error[0] <= 1e-6 * X and res.runs[0] >= 3
+
+
 @pytest.mark.parametrize("q", [3.2, 4.0, 4.9])
 def test_observed_order_of_a_power_law(q):
     """eq. (1) solved for q recovers the order of e = C h^q on uneven ladders; orders farther than ORDER_WINDOW
