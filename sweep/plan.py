@@ -71,6 +71,14 @@ stability-limited along the manifold) at equal error; elsewhere RK4 is cheaper (
 STIFF_WORK_MIN = 300.0
 C_STIFF = 0.01
 """Bound on the ros4 error constant |err/xi_inf| / h^4 over the stiff region (measured max 6.0e-3)."""
+STIFF_PILOT_FACTOR = 6.0
+"""PILOT_FACTOR of the ros4 lanes: larger than RK4's because C_STIFF bounds constants spread over ~60x (median
+1.1e-4, benchmarks/results/calibrate_stiff.json), so the rule's step is ~2.8x finer than a typical stiff point
+needs (measured on the costly corner of benchmarks/work_precision.py: 2.5 -> 6 takes 25-30 % off its ladder at
+rtol 1e-7..1e-10, next rung 1.5x -> 2.5x below the pilot)."""
+STIFF_H_PILOT = 0.6
+"""H_PILOT of the ros4 lanes: coarser pilot pairs are not yet asymptotic there (on the corner at rtol 1e-4, h0 = 0.97
+takes 396 steps in all against 168 from h0 = 0.6)."""
 ROUNDOFF = {np.dtype(np.float64): 2.0 * np.finfo(np.float64).eps, np.dtype(np.float32): 2.0 * np.finfo(np.float32).eps}
 """Rounding error per step, relative (added to the estimate as steps * ROUNDOFF * |xi_inf|)."""
 
@@ -84,8 +92,9 @@ def _step_rule(method: str, lanes: bool) -> str:
         return (f"{method}: adaptive steps in sigma, PI controller on the embedded order-{tab.order_hat} estimate, "
                 f"local tolerance {CTRL_TOL_FACTOR[method]:g} rtol; " + common)
     if lanes:
-        step = (f"step ladder per point (sweep/ladder.py): pilot pair 2 h0, h0, h0 = min({H_PILOT}, "
-                f"{PILOT_FACTOR:g} ({ladder.TARGET:g} rtol/({ladder.SHARP_GAIN:g} C))**0.25), then rungs "
+        cap, factor = (STIFF_H_PILOT, STIFF_PILOT_FACTOR) if tab.implicit else (H_PILOT, PILOT_FACTOR)
+        step = (f"step ladder per point (sweep/ladder.py): pilot pair 2 h0, h0, h0 = min({cap:g}, "
+                f"{factor:g} ({ladder.TARGET:g} rtol/({ladder.SHARP_GAIN:g} C))**0.25), then rungs "
                 f"{ladder.MIN_RATIO:g}..{ladder.MAX_RATIO:g}x finer aimed at {ladder.TARGET:g} x tolerance from the "
                 f"point's measured error, at most {ladder.MAX_RUNS} runs")
     else:
@@ -111,12 +120,12 @@ def stiff_points(k, a, b) -> np.ndarray:
     return (k <= STIFF_K_MAX) & (work >= STIFF_WORK_MIN)
 
 
-def pilot_step_for(rtol: float, error_constant):
+def pilot_step_for(rtol: float, error_constant, factor: float = PILOT_FACTOR, cap: float = H_PILOT):
     """Fine step h0 of the pilot pair (2 h0, h0) of the lanes' step ladder (sweep/ladder.py): PILOT_FACTOR times
     the step whose checked estimate (SHARP_GAIN x the error) meets TARGET x rtol at the error constant
     ``error_constant`` (the largest measured), so that the point's own next rung is 2..8x finer."""
     sharp = (ladder.TARGET * rtol / (ladder.SHARP_GAIN * np.asarray(error_constant))) ** 0.25
-    return np.minimum(H_PILOT, PILOT_FACTOR * sharp)
+    return np.minimum(cap, factor * sharp)
 
 
 def rk4_step_for(rtol: float, stable_sliding, time_resolved: bool = False):
@@ -250,8 +259,9 @@ def make_plan(scene: Scene) -> Plan:
     elif scene.step is not None:
         step, source = np.full(k.size, scene.step), "override"
     elif lanes:
-        constant = np.full(k.size, C_STIFF) if tab.implicit else np.where(stable, C_STABLE, C_UNSTABLE)
-        step, source = pilot_step_for(scene.rtol, constant), "rule"
+        step = (pilot_step_for(scene.rtol, C_STIFF, STIFF_PILOT_FACTOR, STIFF_H_PILOT) * np.ones(k.size) if tab.implicit
+                else pilot_step_for(scene.rtol, np.where(stable, C_STABLE, C_UNSTABLE)))
+        source = "rule"
     else:
         step, source = rk4_step_for(scene.rtol, stable, scene.time_resolved), "rule"
     point_methods, point_method = (method,), np.zeros(k.size, np.int8)
@@ -260,7 +270,7 @@ def make_plan(scene: Scene) -> Plan:
         if stiff.any():
             point_methods, point_method = ("rk4", "ros4"), stiff.astype(np.int8)
             if scene.step is None:
-                step = np.where(stiff, pilot_step_for(scene.rtol, C_STIFF), step)
+                step = np.where(stiff, pilot_step_for(scene.rtol, C_STIFF, STIFF_PILOT_FACTOR, STIFF_H_PILOT), step)
     return Plan(
         model="quasistatic",
         method=method,
