@@ -77,8 +77,8 @@ STIFF_PILOT_FACTOR = 6.0
 needs (measured on the costly corner of benchmarks/work_precision.py: 2.5 -> 6 takes 25-30 % off its ladder at
 rtol 1e-7..1e-10, next rung 1.5x -> 2.5x below the pilot)."""
 STIFF_H_PILOT = 0.6
-"""H_PILOT of the ros4 lanes: coarser pilot pairs are not yet asymptotic there (on the corner at rtol 1e-4, h0 = 0.97
-takes 396 steps in all against 168 from h0 = 0.6)."""
+"""Cap of the ros4 lanes' STIFF_PILOT_FACTOR rule (:func:`stiff_pilot_step_for`): coarser pilot pairs are not yet
+asymptotic there (on the corner at rtol 1e-4, h0 = 0.97 takes 396 steps in all against 168 from h0 = 0.6)."""
 ROUNDOFF = {np.dtype(np.float64): 2.0 * np.finfo(np.float64).eps, np.dtype(np.float32): 2.0 * np.finfo(np.float32).eps}
 """Rounding error per step, relative (added to the estimate as steps * ROUNDOFF * |xi_inf|)."""
 
@@ -92,9 +92,11 @@ def _step_rule(method: str, lanes: bool) -> str:
         return (f"{method}: adaptive steps in sigma, PI controller on the embedded order-{tab.order_hat} estimate, "
                 f"local tolerance {CTRL_TOL_FACTOR[method]:g} rtol; " + common)
     if lanes:
-        cap, factor = (STIFF_H_PILOT, STIFF_PILOT_FACTOR) if tab.implicit else (H_PILOT, PILOT_FACTOR)
-        step = (f"step ladder per point (sweep/ladder.py): pilot pair 2 h0, h0, h0 = min({cap:g}, "
-                f"{factor:g} ({ladder.TARGET:g} rtol/({ladder.SHARP_GAIN:g} C))**0.25), then rungs "
+        rule = f"({ladder.TARGET:g} rtol/({ladder.SHARP_GAIN:g} C))**0.25"
+        h0 = f"min({H_PILOT:g}, {PILOT_FACTOR:g} {rule})"
+        if tab.implicit:
+            h0 = f"max({h0}, min({STIFF_H_PILOT:g}, {STIFF_PILOT_FACTOR:g} {rule}))"
+        step = (f"step ladder per point (sweep/ladder.py): pilot pair 2 h0, h0, h0 = {h0}, then rungs "
                 f"{ladder.MIN_RATIO:g}..{ladder.MAX_RATIO:g}x finer aimed at {ladder.TARGET:g} x tolerance from the "
                 f"point's measured error, at most {ladder.MAX_RUNS} runs")
     else:
@@ -126,6 +128,14 @@ def pilot_step_for(rtol: float, error_constant, factor: float = PILOT_FACTOR, ca
     ``error_constant`` (the largest measured), so that the point's own next rung is 2..8x finer."""
     sharp = (ladder.TARGET * rtol / (ladder.SHARP_GAIN * np.asarray(error_constant))) ** 0.25
     return np.minimum(cap, factor * sharp)
+
+
+def stiff_pilot_step_for(rtol: float) -> float:
+    """Pilot step h0 of the ros4 lanes: the general rule at the bound C_STIFF, or, where that is finer than
+    STIFF_H_PILOT, the rule with STIFF_PILOT_FACTOR capped at STIFF_H_PILOT (the coarser of the two). At loose rtol
+    the general rule's coarse pilot meets the tolerance at once (rtol 1e-3: 96 steps in all on the costly corner,
+    against 164 from h0 = 0.6)."""
+    return float(max(pilot_step_for(rtol, C_STIFF), pilot_step_for(rtol, C_STIFF, STIFF_PILOT_FACTOR, STIFF_H_PILOT)))
 
 
 def rk4_step_for(rtol: float, stable_sliding, time_resolved: bool = False):
@@ -259,7 +269,7 @@ def make_plan(scene: Scene) -> Plan:
     elif scene.step is not None:
         step, source = np.full(k.size, scene.step), "override"
     elif lanes:
-        step = (pilot_step_for(scene.rtol, C_STIFF, STIFF_PILOT_FACTOR, STIFF_H_PILOT) * np.ones(k.size) if tab.implicit
+        step = (stiff_pilot_step_for(scene.rtol) * np.ones(k.size) if tab.implicit
                 else pilot_step_for(scene.rtol, np.where(stable, C_STABLE, C_UNSTABLE)))
         source = "rule"
     else:
@@ -270,7 +280,7 @@ def make_plan(scene: Scene) -> Plan:
         if stiff.any():
             point_methods, point_method = ("rk4", "ros4"), stiff.astype(np.int8)
             if scene.step is None:
-                step = np.where(stiff, pilot_step_for(scene.rtol, C_STIFF, STIFF_PILOT_FACTOR, STIFF_H_PILOT), step)
+                step = np.where(stiff, stiff_pilot_step_for(scene.rtol), step)
     return Plan(
         model="quasistatic",
         method=method,
