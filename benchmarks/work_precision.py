@@ -168,11 +168,18 @@ def rtol_for_step(h: float, lo: float, hi: float) -> float:
 def time_engine(scene, plan, target_s, repeats, n_min=64, n_max=400_000):
     """Best-of-``repeats`` seconds per trajectory (CPU, wall) of the problem repeated N times through
     sweep.engine.execute (the kernel path run_sweep takes, without building the Dataset); N is chosen so that
-    one call lasts about ``target_s``. Returns (CPU s per trajectory, wall s per trajectory, N, batch xi_inf)."""
-    idx = np.zeros(n_min, np.int64)
-    execute(scene, plan, idx, progress=False)  # compile / load from numba's cache
-    per, _, _ = timed(lambda: execute(scene, plan, idx, progress=False), 3)
-    n = int(min(n_max, max(n_min, target_s / max(per / n_min, 1e-9))))
+    one call lasts about ``target_s``, from probes at growing N (a call has a fixed cost of ~0.4 ms, so a probe
+    at 64 points overstates the cost per point several times at loose rtol and would leave batches of a few
+    hundred points, timed mostly on that fixed cost). Returns (CPU s per trajectory, wall s per trajectory, N,
+    batch xi_inf)."""
+    n = n_min
+    execute(scene, plan, np.zeros(n, np.int64), progress=False)  # compile / load from numba's cache
+    for _ in range(3):
+        per, _, _ = timed(lambda n=n: execute(scene, plan, np.zeros(n, np.int64), progress=False), 3)
+        n_next = int(min(n_max, max(n_min, target_s / max(per / n, 1e-9))))
+        if n_next <= n:
+            break
+        n = n_next
     idx = np.zeros(n, np.int64)
     cpu, wall, res = timed(lambda: execute(scene, plan, idx, progress=False), repeats)
     return cpu / n, wall / n, n, res.xi_inf
@@ -526,8 +533,8 @@ def main(argv=None):
         return
     warnings.simplefilter("ignore", RuntimeWarning)
     t_start = time.perf_counter()
-    repeats = 3 if args.quick else 11  # short calls, many of them: the best one escapes other processes' load
-    target_s = 0.005
+    repeats = 3 if args.quick else 7  # short calls, several of them: the best one escapes other processes' load
+    target_s = 0.02  # batches of thousands of points at loose rtol, as in a sweep (run_sweep's chunks are 4096)
     passes = 1 if args.quick else 2
     threads2 = not args.no_threads2 and numba.config.NUMBA_NUM_THREADS >= 2
 
