@@ -1,0 +1,245 @@
+"""Driven scene, quasi-static model (PHYSICS.md 3b): stability of steady sliding and stick-slip, per point.
+
+The drive keeps moving at V. In reduced time tau, with the spring stretch z = tau - xi and u = ln psi,
+
+    A ln(xi' psi) = chi z - dmu(psi)   =>   w = ln xi' = (chi z - mu1 u - m2 u^2)/A - u,
+    z' = 1 - e^w,    u' = e^-u - e^w,
+
+an autonomous system in (z, u) whose fixed point z = u = 0 is steady sliding. The log-velocity w is a function of
+the state, so the slip velocity is never a state variable: stick phases (w << 0) and slip phases (w >> 0, where
+xi' rises by orders of magnitude) are the same smooth equations, and the adaptive Dormand-Prince 5(4) stepper
+(PI controller) takes steps of ~A/(chi e^w) in a slip and long steps in a stick. A slip velocity beyond
+RUNAWAY_XI_DOT ends the point as ``runaway`` (the quasi-static model breaks down: m2 = 0 below the Hopf line
+overflows in finite time), before any exponent can overflow.
+
+The run starts from steady sliding with the spring stretched by ``perturbation`` (z(0) = perturbation, u(0) = 0).
+Each cycle of the oscillation is cut at its maximum of z (z' = 1 - e^w turns negative, located by Newton on exact
+partial steps, so the peak is as accurate as the stepper) and its minimum; with a_k = half the peak-to-peak
+stretch of cycle k and T_k the time between its maxima, the observables are
+
+    growth_rate = ln(a_k/a_(k-1)) / T_k    (reduced, per unit tau; Re sigma of the linear theory while small),
+    period      = T_k                      (tau units; 2 pi / Im sigma, -> 2 pi / omega_c at the line),
+    amplitude   = a_k once the cycles are stationary (0 for steady sliding).
+
+How a regime is decided (never guessed; ``undecided`` when the budget ends first):
+
+* ``runaway``: the slip velocity passed RUNAWAY_XI_DOT.
+* ``steady``: the state (max |z|, |u|) fell below DECAYED x perturbation, or the growth rate is negative and has
+  converged (three successive cycles agree to GROWTH_RTOL): a linear decay is then established and the
+  perturbation dies. Without two full cycles (strong damping, or an overdamped return without any) the growth
+  rate is the decay rate of the state from 0.1 to DECAYED x perturbation.
+* ``stick_slip`` / ``neutral``: the cycles are stationary, |a_k/a_(k-1) - 1| <= STATIONARY_TOL over three cycles.
+  A long transient is not mistaken for an attractor: a transient with |growth_rate| T above STATIONARY_TOL is not
+  stationary, and one below it (a drift of < 1e-7 per cycle) is called neutral only where the amplitude is still
+  that of the first cycle (within NEUTRAL_SPREAD); stationary cycles whose amplitude has left the first one are a
+  limit cycle reached from the perturbation (stick_slip). Quasi-static m2 = 0 at the line is the neutral case.
+"""
+
+from __future__ import annotations
+
+import math
+from enum import IntEnum
+
+import numpy as np
+from numba import njit
+
+from ..solvers import DP5
+from .stop import EXP_MAX, FAST
+
+__all__ = ["Regime", "simulate_driven", "RUNAWAY_XI_DOT"]
+
+
+class Regime(IntEnum):
+    """Outcome of a driven point (append-only, like :class:`sweep.status.Status`)."""
+
+    STEADY = 0
+    STICK_SLIP = 1
+    NEUTRAL = 2
+    RUNAWAY = 3
+    UNDECIDED = 4
+
+
+RUNAWAY_XI_DOT = 1e8
+"""Slip velocity xi' = V_slip/V beyond which the quasi-static model is declared broken down (regime runaway)."""
+W_RUNAWAY = math.log(RUNAWAY_XI_DOT)
+DECAYED = 1e-3
+"""Amplitude, relative to the perturbation, below which a decaying oscillation is steady sliding."""
+GROWTH_RTOL = 1e-3
+"""Agreement of three successive per-cycle growth rates for the linear decay to count as established."""
+STATIONARY_TOL = 1e-7
+"""Largest |a_k/a_(k-1) - 1| of a stationary cycle (three in a row)."""
+NEUTRAL_SPREAD = 1e-2
+"""Stationary cycles within this relative distance of the first cycle's amplitude are neutral, not a limit cycle."""
+MIN_CYCLES = 3
+HISTORY = 4  # cycles kept for the decisions
+
+_C, _A, _B, _E = (np.ascontiguousarray(x) for x in DP5.arrays())
+_STAGES = _B.size
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def _rates(z, u, k, a, b):
+    """(z', u', w) of the quasi-static driven equations; k = chi/A, a = mu1/A, b = m2/A."""
+    w = k * z - u * (a + b * u) - u
+    e = math.exp(min(w, EXP_MAX))
+    return 1.0 - e, math.exp(min(-u, EXP_MAX)) - e, w
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def _step(z, u, h, k, a, b, kz, ku):
+    """One Dormand-Prince step of size h from (z, u); stage derivatives in kz, ku (kz[0], ku[0] given).
+    Returns (z1, u1, error in z, error in u, largest w met)."""
+    w_max = -math.inf
+    for i in range(1, _STAGES):
+        zi, ui = z, u
+        for j in range(i):
+            zi += h * _A[i, j] * kz[j]
+            ui += h * _A[i, j] * ku[j]
+        kz[i], ku[i], w = _rates(zi, ui, k, a, b)
+        w_max = max(w_max, w)
+    z1, u1, ez, eu = z, u, 0.0, 0.0
+    for i in range(_STAGES):
+        z1 += h * _B[i] * kz[i]
+        u1 += h * _B[i] * ku[i]
+        ez += h * _E[i] * kz[i]
+        eu += h * _E[i] * ku[i]
+    return z1, u1, ez, eu, w_max
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def _extremum(z0, u0, h, dz0, dz1, k, a, b, kz, ku):
+    """Time offset theta*h and value of the extremum of z inside a step of size h from (z0, u0) where z' changes
+    sign (dz0 at the start, dz1 at the end): the root of the cubic Hermite derivative as a first guess, then
+    Newton on exact partial steps of size theta*h (z'' = -e^w w')."""
+    # the Hermite derivative is quadratic in theta; with only the end slopes known, interpolate z' linearly
+    theta = dz0 / (dz0 - dz1)
+    zt = z0
+    for _ in range(4):
+        kz[0], ku[0], _w = _rates(z0, u0, k, a, b)
+        zt, ut, _ez, _eu, _wm = _step(z0, u0, theta * h, k, a, b, kz, ku)
+        dz, du, w = _rates(zt, ut, k, a, b)
+        dw = k * dz - (a + 2.0 * b * ut) * du - du
+        ddz = -math.exp(min(w, EXP_MAX)) * dw
+        if ddz == 0.0:
+            break
+        delta = -dz / (ddz * h)
+        theta = min(max(theta + delta, 0.0), 1.0)
+        if abs(delta) < 1e-12:
+            break
+    kz[0], ku[0], _w = _rates(z0, u0, k, a, b)
+    zt, ut, _ez, _eu, _wm = _step(z0, u0, theta * h, k, a, b, kz, ku)
+    return theta * h, zt
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def simulate_point(k, a, b, perturbation, rtol, max_cycles, max_steps):
+    """One driven point (reduced k = chi/A, a = mu1/A, b = m2/A). Returns (regime, growth_rate, period,
+    amplitude, cycles, steps, peak log-velocity w); NaN where an observable does not apply (e.g. no full cycle)."""
+    kz = np.empty(_STAGES)
+    ku = np.empty(_STAGES)
+    z, u, tau = perturbation, 0.0, 0.0
+    size = perturbation  # largest |z| met: the error scale of both states (they oscillate about 0)
+    h = 0.01 / (1.0 + k)
+    amp = np.full(HISTORY, np.nan)
+    per = np.full(HISTORY, np.nan)
+    grow = np.full(HISTORY, np.nan)
+    z_min, t_max_prev = math.inf, math.nan
+    norm_tenth, t_tenth = math.nan, math.nan
+    amp_first = math.nan
+    cycles, steps = 0, 0
+    w_peak = -math.inf
+    err_prev = 1e-4
+    dz, du, _w = _rates(z, u, k, a, b)
+    while steps < max_steps:
+        kz[0], ku[0] = dz, du
+        z1, u1, ez, eu, _w_max = _step(z, u, h, k, a, b, kz, ku)
+        steps += 1
+        scale = rtol * max(size, abs(z1), abs(u1))
+        err = max(abs(ez), abs(eu)) / scale
+        if not err <= 1.0:  # rejected (NaN included: a stage beyond the exponent clamp)
+            h *= max(0.2, 0.9 * err ** -0.2) if math.isfinite(err) else 0.25
+            if h < 1e-15 * (1.0 + tau):
+                return Regime.UNDECIDED, grow[-1], per[-1], math.nan, cycles, steps, w_peak
+            continue
+        dz1, du1, w1 = _rates(z1, u1, k, a, b)
+        w_peak = max(w_peak, w1)
+        if w1 > W_RUNAWAY:  # an accepted state: the slip velocity itself is past the threshold
+            return Regime.RUNAWAY, grow[-1], per[-1], math.nan, cycles, steps, w_peak
+        norm = max(abs(z1), abs(u1))
+        if norm < DECAYED * perturbation:  # decayed (also without cycles: an overdamped return)
+            if not math.isfinite(grow[-1]):  # fewer than two cycles: the decay of the state since it was 0.1x
+                grow[-1] = math.log(norm / norm_tenth) / (tau + h - t_tenth)
+            return Regime.STEADY, grow[-1], per[-1], 0.0, cycles, steps, w_peak
+        if norm < 0.1 * perturbation and not math.isfinite(t_tenth):
+            norm_tenth, t_tenth = norm, tau + h
+        if dz > 0.0 and dz1 <= 0.0:  # a maximum of z: a cycle ends
+            dt, z_top = _extremum(z, u, h, dz, dz1, k, a, b, kz, ku)
+            t_peak = tau + dt
+            if z_min < math.inf and math.isfinite(t_max_prev):
+                cycles += 1
+                for i in range(HISTORY - 1):
+                    amp[i], per[i], grow[i] = amp[i + 1], per[i + 1], grow[i + 1]
+                amp[-1], per[-1] = 0.5 * (z_top - z_min), t_peak - t_max_prev
+                grow[-1] = math.log(amp[-1] / amp[-2]) / per[-1] if amp[-2] > 0.0 else math.nan
+                if cycles == 1:
+                    amp_first = amp[-1]
+                regime = _decide(amp, grow, perturbation, amp_first, cycles)
+                if regime != Regime.UNDECIDED:
+                    amplitude = 0.0 if regime == Regime.STEADY else amp[-1]
+                    return regime, grow[-1], per[-1], amplitude, cycles, steps, w_peak
+                if cycles >= max_cycles:
+                    break
+            t_max_prev = t_peak
+        elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
+            _dt, z_min = _extremum(z, u, h, dz, dz1, k, a, b, kz, ku)
+        z, u, tau = z1, u1, tau + h
+        dz, du = dz1, du1
+        size = max(size, abs(z))
+        # PI step-size control (Gustafsson), exponents 0.7/5 and 0.4/5
+        err = max(err, 1e-10)
+        h *= min(5.0, max(0.2, 0.9 * err ** -0.14 * err_prev ** 0.08))
+        err_prev = err
+    return Regime.UNDECIDED, grow[-1], per[-1], math.nan, cycles, steps, w_peak
+
+
+@njit(cache=True)
+def _decide(amp, grow, perturbation, amp_first, cycles):
+    """The regime after a cycle (module docstring), or UNDECIDED to go on."""
+    a_k = amp[-1]
+    if a_k < DECAYED * perturbation:
+        return Regime.STEADY
+    if cycles < MIN_CYCLES + 1:
+        return Regime.UNDECIDED
+    g0, g1, g2 = grow[-3], grow[-2], grow[-1]
+    if g2 < 0.0 and abs(g1 - g2) <= GROWTH_RTOL * abs(g2) and abs(g0 - g1) <= GROWTH_RTOL * abs(g1):
+        # an established linear decay, unless the cycles are (nearly) stationary: then the stationary test decides
+        if abs(amp[-1] / amp[-2] - 1.0) > STATIONARY_TOL:
+            return Regime.STEADY
+    stationary = True
+    for i in range(HISTORY - 3, HISTORY):
+        if not abs(amp[i] / amp[i - 1] - 1.0) <= STATIONARY_TOL:
+            stationary = False
+    if stationary:
+        if abs(a_k / amp_first - 1.0) <= NEUTRAL_SPREAD:
+            return Regime.NEUTRAL
+        return Regime.STICK_SLIP
+    return Regime.UNDECIDED
+
+
+def simulate_driven(chi: float, mu1: float, m2: float, A: float, perturbation: float = 1e-3, rtol: float = 1e-9,
+                    max_cycles: int = 2000, max_steps: int = 5_000_000) -> dict[str, float | str | int]:
+    """Simulate one driven point of the quasi-static model (reduced parameters chi, mu1(V), m2, A [1]).
+
+    Returns a dict with ``regime`` (name), ``growth_rate`` [1/tau], ``period`` [tau], ``amplitude`` [1, half the
+    peak-to-peak spring stretch tau - xi], ``cycles``, ``steps`` and ``peak_log_velocity`` (largest ln xi').
+    ``perturbation`` is the initial stretch z(0) [1]; ``rtol`` the stepper's local tolerance (absolute floor
+    rtol x perturbation)."""
+    for name, value in (("A", A), ("perturbation", perturbation), ("rtol", rtol)):
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f"{name} must be finite and > 0, got {value!r}")
+    if not (math.isfinite(chi) and chi > 0.0):
+        raise ValueError(f"chi must be finite and > 0, got {chi!r}")
+    regime, g, T, amp, cycles, steps, w = simulate_point(chi / A, mu1 / A, m2 / A, perturbation, rtol,
+                                                           max_cycles, max_steps)
+    return {"regime": Regime(regime).name.lower(), "growth_rate": g, "period": T, "amplitude": amp,
+            "cycles": int(cycles), "steps": int(steps), "peak_log_velocity": w}

@@ -1,0 +1,79 @@
+"""Driven scene, quasi-static model (sweep/models/driven.py) against the linear theory and the known behaviour of
+PHYSICS.md 3b: growth rate and period of small oscillations vs the roots of A s^2 + (chi - mu1) s + chi, the
+square-root law of the supercritical (m2 > 0) Hopf bifurcation, neutral orbits and runaway for m2 = 0."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sweep import physics
+from sweep.models.driven import simulate_driven
+
+A, MU1 = 0.007, 0.0125  # sample2 at V0 (mu1 = m1): chi_c = mu1, omega_c = sqrt(mu1/A) = 1.336
+M2 = 0.0033
+
+
+def linear(chi, mu1=MU1):
+    root = physics.characteristic_roots(chi, mu1, A)[0]
+    return root.real, 2.0 * math.pi / abs(root.imag)
+
+
+@pytest.mark.parametrize("chi_over_chi_c, m2", [(1.05, 0.0), (1.2, M2), (0.97, M2), (0.9, 0.0)])
+def test_small_oscillations_follow_the_linear_theory(chi_over_chi_c, m2):
+    """A perturbation of 1e-5: growth rate (either sign) and period of the first cycles = the leading root."""
+    chi = chi_over_chi_c * MU1
+    out = simulate_driven(chi, MU1, m2, A, perturbation=1e-5, rtol=1e-10, max_cycles=4)
+    sigma, period = linear(chi)
+    assert out["period"] == pytest.approx(period, rel=1e-4)
+    assert out["growth_rate"] == pytest.approx(sigma, rel=1e-3, abs=1e-6)
+
+
+def test_period_just_above_the_line_is_two_pi_over_omega_c():
+    out = simulate_driven(1.005 * MU1, MU1, M2, A, perturbation=1e-4, rtol=1e-10)
+    assert out["regime"] == "steady"
+    assert out["period"] == pytest.approx(2.0 * math.pi / physics.omega_c(MU1, A), rel=1e-2)
+
+
+def test_far_above_the_line_is_steady_with_zero_amplitude():
+    out = simulate_driven(3.0 * MU1, MU1, M2, A, perturbation=1e-3)
+    assert out["regime"] == "steady" and out["amplitude"] == 0.0 and out["growth_rate"] < 0.0
+
+
+def test_supercritical_amplitude_grows_like_the_square_root_of_the_distance_to_the_line():
+    """m2 > 0, quasi-static: stick-slip below the line with a stationary amplitude ~ sqrt(chi_c - chi); the slow
+    approach near the line (thousands of cycles at 0.1 %) is followed to the end, not cut short."""
+    amplitudes = []
+    for eps in (0.001, 0.004, 0.016):
+        out = simulate_driven((1.0 - eps) * MU1, MU1, M2, A, perturbation=1e-4, rtol=1e-10, max_cycles=10_000)
+        assert out["regime"] == "stick_slip", out
+        amplitudes.append(out["amplitude"])
+    assert np.diff(np.log(amplitudes)) == pytest.approx([math.log(2.0)] * 2, rel=0.05)
+
+
+def test_a_slow_transient_is_undecided_not_guessed():
+    """0.1 % below the line the oscillation is still growing (3.7e-5 per unit tau) when 2000 cycles are up."""
+    out = simulate_driven(0.999 * MU1, MU1, M2, A, perturbation=1e-4, rtol=1e-10, max_cycles=2000)
+    assert out["regime"] == "undecided" and np.isnan(out["amplitude"]) and out["growth_rate"] > 0.0
+
+
+def test_m2_zero_is_neutral_at_the_line_and_runs_away_below():
+    amplitudes = []
+    for size in (0.02, 0.6):  # orbits of any amplitude persist (PHYSICS.md 3b)
+        out = simulate_driven(MU1, MU1, 0.0, A, perturbation=size, rtol=1e-11)
+        assert out["regime"] == "neutral", (size, out)
+        assert abs(out["growth_rate"]) < 1e-8
+        amplitudes.append(out["amplitude"])
+    assert amplitudes[1] > 10.0 * amplitudes[0]
+    out = simulate_driven(0.995 * MU1, MU1, 0.0, A, perturbation=1e-2)
+    assert out["regime"] == "runaway" and np.isnan(out["amplitude"])
+    assert out["peak_log_velocity"] > math.log(1e8)
+
+
+def test_bad_input_names_the_parameter():
+    with pytest.raises(ValueError, match="perturbation"):
+        simulate_driven(0.02, MU1, M2, A, perturbation=0.0)
+    with pytest.raises(ValueError, match="chi"):
+        simulate_driven(-1.0, MU1, M2, A)
