@@ -7,6 +7,7 @@ from collections.abc import Sequence
 import xarray as xr
 
 from .dataset import build_dataset
+from .driven_sweep import run_driven
 from .engine import execute
 from .params import FrictionParams
 from .plan import make_plan
@@ -21,6 +22,8 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "") -> 
     ``progress``: None shows a bar on an interactive terminal for sweeps longer than ~2 s; True/False force it.
     ``history`` is recorded in the file's history attribute (the CLI passes its command line).
     """
+    if scene.protocol == "driven":
+        return run_driven(scene, progress=progress, history=history or "sweep.run_sweep")
     plan = make_plan(scene)
     raw = execute(scene, plan, progress=progress)
     return build_dataset(scene, plan, raw, history=history or "sweep.run_sweep")

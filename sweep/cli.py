@@ -19,6 +19,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from .scene import default_scene, load_scene
 
     scene = load_scene(args.config) if args.config else default_scene()
+    if scene.protocol == "driven":
+        return _run_driven(scene, args)
     from .plan import make_plan
 
     plan = make_plan(scene)
@@ -55,6 +57,32 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_driven(scene, args: argparse.Namespace) -> int:
+    """``sweep run`` of a driven scene: one simulation per point (no plan, no pilot estimate)."""
+    from .api import run_sweep
+    from .driven_sweep import describe
+    from .io import save
+    from .plot import plot_regimes
+
+    if args.dry_run:
+        for key, text in describe(scene).items():
+            print(f"{key:>28}: {text}")
+        print(f"{'grid':>28}: {scene.shape[0]} K/M x {scene.shape[1]} V, observables {', '.join(scene.observables)}")
+        return 0
+    t0 = time.perf_counter()
+    ds = run_sweep(scene, progress=None if not args.quiet else False,
+                   history="sweep " + " ".join(shlex.quote(a) for a in sys.argv[1:]))
+    out = save(ds, args.output)
+    elapsed = time.perf_counter() - t0
+    print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, including compilation on a first run)")
+    print(_status_summary(ds))
+    names = ds["regime"].attrs["flag_meanings"].split()
+    codes, counts = np.unique(ds["regime"].values, return_counts=True)
+    print("regime: " + ", ".join(f"{names[c]} {n}" for c, n in zip(codes, counts)))
+    print(f"wrote {plot_regimes(ds, args.png or out.with_suffix('.png'))}")
+    return 0
+
+
 def _status_summary(ds) -> str:
     meanings = ds["status"].attrs["flag_meanings"].split()
     codes, counts = np.unique(ds["status"].values, return_counts=True)
@@ -63,10 +91,10 @@ def _status_summary(ds) -> str:
 
 def _cmd_plot(args: argparse.Namespace) -> int:
     from .io import open_dataset
-    from .plot import plot_landscape
+    from .plot import plot_file
 
     ds = open_dataset(args.file)
-    png = plot_landscape(ds, args.output or Path(args.file).with_suffix(".png"), variable=args.variable)
+    png = plot_file(ds, args.output or Path(args.file).with_suffix(".png"), variable=args.variable)
     print(f"wrote {png}")
     return 0
 
@@ -105,7 +133,8 @@ def build_parser() -> argparse.ArgumentParser:
     plot = sub.add_parser("plot", help="draw the landscape map of a sweep file")
     plot.add_argument("file")
     plot.add_argument("-o", "--output", type=Path, help="PNG path (default: the file with .png)")
-    plot.add_argument("--variable", default="xi_inf", help="variable to map (default xi_inf)")
+    plot.add_argument("--variable", default=None,
+                      help="variable to map (default: xi_inf for a stop sweep, the regime map for a driven one)")
     plot.set_defaults(func=_cmd_plot)
     info = sub.add_parser("info", help="summarise a sweep file")
     info.add_argument("file")

@@ -18,7 +18,7 @@ from .plan import Plan
 from .scene import Scene
 from .status import Status, flag_attrs
 
-__all__ = ["build_dataset", "REFERENCES"]
+__all__ = ["build_dataset", "build_driven_dataset", "REFERENCES"]
 
 REFERENCES = (
     "T. Baumberger and L. Gauthier, Creeplike relaxation at the interface between rough solids under shear, "
@@ -104,18 +104,75 @@ def build_dataset(scene: Scene, plan: Plan, raw: RawResult, history: str = "") -
         var.attrs["ancillary_variables"] = f"{name}_error"
         data[f"{name}_error"] = _var(var.dims, err, var.attrs["units"],
                                      f"estimated absolute numerical error of {name} (Richardson pair + tail bound)")
-    attrs = {
+    attrs = _attrs(scene, "Relaxation landscape of the Baumberger-Gauthier spring-block model (stop scene)",
+                   "points on unstable steady sliding (stable = 0) are computed and flagged by stable, not by status",
+                   history, raw.seconds)
+    attrs["plan_hash"] = plan.hash()
+    attrs.update({f"plan_{k}": v for k, v in plan.describe().items()})
+    return xr.Dataset(data, coords=_coords(scene), attrs=attrs)
+
+
+def _attrs(scene: Scene, title: str, comment: str, history: str, seconds: float) -> dict[str, object]:
+    """Global attributes shared by every protocol's Dataset."""
+    return {
         "Conventions": "CF-1.11",
-        "title": "Relaxation landscape of the Baumberger-Gauthier spring-block model (stop scene)",
+        "title": title,
         "institution": "sweep users",
         "source": versions(),
         "history": f"{_dt.datetime.now(_dt.UTC).isoformat(timespec='seconds')}: {history or 'sweep'}",
         "references": REFERENCES,
-        "comment": (f"status codes: {', '.join(f'{s.value}={s.name.lower()}' for s in Status)}; points on "
-                    "unstable steady sliding (stable = 0) are computed and flagged by stable, not by status"),
+        "comment": f"status codes: {', '.join(f'{s.value}={s.name.lower()}' for s in Status)}; {comment}",
         "scene": scene.to_toml(),
-        "plan_hash": plan.hash(),
-        "elapsed_seconds": float(raw.seconds),
+        "elapsed_seconds": float(seconds),
     }
-    attrs.update({f"plan_{k}": v for k, v in plan.describe().items()})
-    return xr.Dataset(data, coords=_coords(scene), attrs=attrs)
+
+
+def build_driven_dataset(scene: Scene, out: dict[str, np.ndarray], seconds: float, description: dict[str, str],
+                         history: str = "") -> xr.Dataset:
+    """Assemble the Dataset of a driven sweep from flat outputs of :func:`sweep.models.driven.simulate_batch`
+    (keys regime, status, growth_rate, period, amplitude, cycles, steps, peak_w)."""
+    from .models.driven import RUNAWAY_XI_DOT, Regime
+
+    shape = scene.shape
+    p = scene.params
+    grid = lambda a: a.reshape(shape)  # noqa: E731
+    chi = physics.reduced_stiffness(scene.K_over_M, p.D0, p.g)[:, None] * np.ones(shape)
+    mu1 = physics.mu1(scene.V, p.m1, p.m2, p.V0)[None, :] * np.ones(shape)
+    root = physics.characteristic_roots(chi, mu1, p.A)[..., 0]
+    with np.errstate(divide="ignore"):
+        period_linear = np.where(root.imag != 0.0, 2.0 * np.pi / np.abs(root.imag), np.nan)
+    regime_attrs = {"flag_values": np.array([r.value for r in Regime], np.int8),
+                    "flag_meanings": " ".join(r.name.lower() for r in Regime)}
+    data = {
+        "regime": _var(DIMS, grid(out["regime"]), "1", "regime reached from the perturbed steady sliding",
+                       **regime_attrs),
+        "status": _var(DIMS, grid(out["status"]), "1", "numerical status of the point", **flag_attrs()),
+        "stable": _var(DIMS, physics.stable_sliding(chi, mu1, p.A).astype(np.int8), "1",
+                       "steady sliding at V is linearly stable (quasi-static model)",
+                       flag_values=np.array([0, 1], np.int8), flag_meanings="unstable stable"),
+        "growth_rate_linear": _var(DIMS, root.real, "1",
+                                   "reduced growth rate of small oscillations, linear theory Re sigma (per unit tau)"),
+        "period_linear": _var(DIMS, period_linear, "1",
+                              "reduced period of small oscillations, linear theory 2 pi/Im sigma (tau units)"),
+        "steps": _var(DIMS, grid(out["steps"]), "1", "accepted and rejected steps of the point"),
+        "cycles": _var(DIMS, grid(out["cycles"]), "1", "oscillation cycles simulated"),
+        "peak_slip_velocity": _var(DIMS, np.exp(grid(out["peak_w"])) * scene.V[None, :], "m s-1",
+                                   "largest slip velocity met"),
+    }
+    if "growth_rate" in scene.observables:
+        data["growth_rate"] = _var(DIMS, grid(out["growth_rate"]), "1",
+                                   "reduced growth rate measured from the simulated envelope (per unit tau)")
+    if "period" in scene.observables:
+        data["period"] = _var(DIMS, grid(out["period"]), "1", "measured oscillation period (tau units)")
+    if "amplitude" in scene.observables:
+        data["amplitude"] = _var(DIMS, grid(out["amplitude"]), "1",
+                                 "half the peak-to-peak spring stretch tau - xi on the attractor (0: steady sliding)")
+    coords = _coords(scene)
+    coords["V"].attrs["long_name"] = "driving velocity"
+    coords["Omega_c"] = _var("V", physics.Omega_c(scene.V, physics.mu1(scene.V, p.m1, p.m2, p.V0), p.A, p.D0),
+                             "s-1", "critical pulsation on the Hopf line (V/D0) sqrt(mu1/A) (NaN: no line)")
+    attrs = _attrs(scene, "Stability of steady sliding and stick-slip of the Baumberger-Gauthier spring-block model "
+                   "(driven scene)", "regime runaway is status quasistatic_breakdown", history, seconds)
+    attrs["runaway_slip_velocity_over_V"] = RUNAWAY_XI_DOT
+    attrs.update({f"plan_{k}": v for k, v in description.items()})
+    return xr.Dataset(data, coords=coords, attrs=attrs)

@@ -14,7 +14,51 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 
-__all__ = ["plot_landscape"]
+__all__ = ["plot_file", "plot_landscape", "plot_regimes"]
+
+
+def plot_file(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = None) -> Path:
+    """The picture that fits the file: the regime map of a driven sweep, else the stop landscape."""
+    if "regime" in ds and variable is None:
+        return plot_regimes(ds, path)
+    return plot_landscape(ds, path, variable=variable or "xi_inf")
+
+
+def plot_regimes(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Regime map of a driven sweep over (K/M, V) (categorical colours, one per regime) with the quasi-static Hopf
+    line; a single K/M or V gives the regime along the other axis."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    names = ds["regime"].attrs["flag_meanings"].split()
+    colours = ["#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8c8c8c"][: len(names)]
+    fig, ax = plt.subplots(figsize=(7.5, 5.5), dpi=110)
+    km, v_um = ds["K_over_M"].values, ds["V"].values * 1e6
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    cmap = ListedColormap(colours)
+    norm = BoundaryNorm(np.arange(len(names) + 1) - 0.5, len(names))
+    if min(ds.sizes["K_over_M"], ds.sizes["V"]) > 1:
+        mesh = ax.pcolormesh(km, v_um, ds["regime"].values.T, shading="nearest", cmap=cmap, norm=norm)
+        bar = fig.colorbar(mesh, ax=ax, ticks=np.arange(len(names)))
+        bar.ax.set_yticklabels(names)
+        kc = ds["chi_c"].values * float(ds["K_over_M"][0] / ds["chi"][0])
+        ax.plot(kc, v_um, "k--", lw=1.6, label="Hopf line (linear, quasi-static)")
+        ax.set(xscale="log", yscale="log", xlim=(km.min(), km.max()), ylim=(v_um.min(), v_um.max()),
+               xlabel="K/M [s$^{-2}$]", ylabel="V [µm/s]")
+        ax.legend(loc="lower right", fontsize=8)
+    else:
+        along = "V" if ds.sizes["K_over_M"] == 1 else "K_over_M"
+        line = ds.squeeze()
+        x = line[along].values * (1e6 if along == "V" else 1.0)
+        ax.scatter(x, line["regime"].values, c=[colours[r] for r in line["regime"].values])
+        ax.set(xscale="log", yticks=np.arange(len(names)), yticklabels=names,
+               xlabel="V [µm/s]" if along == "V" else "K/M [s$^{-2}$]")
+    ax.set_title(_caption(ds).replace("stop scene", "driven scene") + "\nregime reached from perturbed steady sliding",
+                 fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
 
 
 def plot_landscape(ds: xr.Dataset, path: str | os.PathLike, variable: str = "xi_inf") -> Path:

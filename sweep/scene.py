@@ -20,10 +20,17 @@ from .params import FrictionParams, require_finite, require_positive
 from .presets import presets
 from .solvers import METHODS
 
-__all__ = ["Scene", "OBSERVABLES", "PROTOCOLS", "DEFAULT_ATOL", "default_scene", "load_scene"]
+__all__ = ["Scene", "OBSERVABLES", "DRIVEN_OBSERVABLES", "PROTOCOLS", "DEFAULT_ATOL", "default_scene",
+           "load_scene"]
 
-PROTOCOLS = ("stop",)
+PROTOCOLS = ("stop", "driven")
 OBSERVABLES = ("xi_inf", "trajectory", "slip_at", "t50", "t90")
+"""Observables of the stop protocol."""
+DRIVEN_OBSERVABLES = ("regime", "growth_rate", "period", "amplitude")
+"""Observables of the driven protocol (regime, with status, is always stored)."""
+DRIVEN_METHODS = ("auto", "dp5")
+PERTURBATION_RANGE = (1e-8, 1.0)
+"""Allowed initial spring stretch of the driven scene (reduced, z = tau - xi)."""
 DEFAULT_ATOL = {"xi_inf": 1e-12, "trajectory": 1e-12, "slip_at": 1e-12, "t50": 0.0, "t90": 0.0}
 """Absolute floors per observable, in the observable's reduced unit (xi for slips, tau for times)."""
 RTOL_RANGE = (1e-10, 1e-2)
@@ -59,8 +66,10 @@ class Scene:
 
     Parameters
     ----------
-    protocol : "stop"
-        The paper's experiment: steady sliding at V, drive frozen at t = 0 (PHYSICS.md 3a).
+    protocol : "stop" | "driven"
+        "stop": the paper's experiment, steady sliding at V, drive frozen at t = 0 (PHYSICS.md 3a). "driven": the
+        drive keeps moving at V; steady sliding perturbed by ``perturbation`` is followed until its regime is
+        decided (PHYSICS.md 3b; quasi-static model, sweep/models/driven.py).
     params : FrictionParams
         Friction law; see :data:`sweep.presets`.
     K_over_M : array [s-2]
@@ -71,10 +80,11 @@ class Scene:
         Relative accuracy of every observable w.r.t. the exact solution of the model, 1e-10 <= rtol <= 1e-2.
     atol : mapping, optional
         Absolute floors per observable (reduced units), overriding :data:`DEFAULT_ATOL`.
-    observables : tuple of str
-        Subset of ``OBSERVABLES``. xi_inf (with slip_inf, stress_relaxation, stable, status) is always
-        computed; "trajectory" adds xi(tau), psi(tau); "slip_at" the slip at ``t_obs``; "t50"/"t90" the times
-        to 50 %/90 % of the relaxed slip.
+    observables : tuple of str, optional
+        stop: subset of ``OBSERVABLES`` (default ("xi_inf",)); driven: subset of ``DRIVEN_OBSERVABLES`` (default
+        all). Stop: xi_inf (with slip_inf, stress_relaxation, stable, status) is always computed; "trajectory"
+        adds xi(tau), psi(tau); "slip_at" the slip at ``t_obs``; "t50"/"t90" the times to 50 %/90 % of the
+        relaxed slip. Driven: regime (with status) is always stored.
     trajectory_tau : (min, max, num)
         Log-spaced reduced times of the trajectory samples, 0 < min < max <= 1e250, num >= 2.
     t_obs : sequence of float [s]
@@ -93,6 +103,10 @@ class Scene:
         only for rtol >= 1e-5, a fixed-step method and observables = ("xi_inf",).
     max_steps : int
         Step budget per point; a point that needs more gets status max_steps.
+    perturbation : float
+        driven only: initial spring stretch z(0) = tau - xi away from steady sliding (reduced, 1e-8..1).
+    max_cycles : int
+        driven only: oscillation cycles per point before it is left ``undecided`` (>= 4).
     """
 
     protocol: str
@@ -101,13 +115,15 @@ class Scene:
     V: np.ndarray
     rtol: float = 1e-6
     atol: Mapping[str, float] = field(default_factory=dict)
-    observables: tuple[str, ...] = ("xi_inf",)
+    observables: tuple[str, ...] | None = None
     trajectory_tau: tuple[float, float, int] = (1e-3, 1e6, 61)
     t_obs: tuple[float, ...] = ()
     method: str = "auto"
     step: float | None = None
     precision: str = "float64"
     max_steps: int = 1_000_000
+    perturbation: float = 1e-3
+    max_cycles: int = 2000
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen dataclass)
@@ -121,11 +137,16 @@ class Scene:
         if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
             raise InputError(f"rtol must be in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}], got {rtol!r}")
         set_("rtol", rtol)
-        obs = (self.observables,) if isinstance(self.observables, str) else tuple(self.observables)
-        unknown = [o for o in obs if o not in OBSERVABLES]
+        allowed, always = (DRIVEN_OBSERVABLES, "regime") if self.protocol == "driven" else (OBSERVABLES, "xi_inf")
+        if self.observables is None:
+            obs = allowed if self.protocol == "driven" else (always,)
+        else:
+            obs = (self.observables,) if isinstance(self.observables, str) else tuple(self.observables)
+        unknown = [o for o in obs if o not in allowed]
         if unknown:
-            raise InputError(f"unknown observable(s) {unknown} in observables; allowed: {list(OBSERVABLES)}")
-        set_("observables", tuple(o for o in OBSERVABLES if o in obs or o == "xi_inf"))
+            raise InputError(f"unknown observable(s) {unknown} in observables of protocol {self.protocol!r}; "
+                             f"allowed: {list(allowed)}")
+        set_("observables", tuple(o for o in allowed if o in obs or o == always))
         atol = dict(self.atol)
         for name, value in atol.items():
             if name not in OBSERVABLES:
@@ -139,6 +160,7 @@ class Scene:
             raise InputError("observable 'slip_at' needs t_obs: the times after the stop [s], e.g. [0.1, 1, 10]")
         set_("t_obs", tuple(t_obs.tolist()))
         self._check_method()
+        self._check_driven()
         if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, (int, np.integer)) or self.max_steps < 1:
             raise InputError(f"max_steps must be an integer >= 1, got {self.max_steps!r}")
 
@@ -169,6 +191,25 @@ class Scene:
                 raise InputError(f"precision 'float32' runs fixed-step methods only (rk4), got method "
                                  f"{self.method!r}")
 
+    def _check_driven(self) -> None:
+        pert = require_positive("perturbation", self.perturbation)
+        if not PERTURBATION_RANGE[0] <= pert <= PERTURBATION_RANGE[1]:
+            raise InputError(f"perturbation must be in [{PERTURBATION_RANGE[0]:g}, {PERTURBATION_RANGE[1]:g}] "
+                             f"(reduced spring stretch), got {pert!r}")
+        object.__setattr__(self, "perturbation", pert)
+        if isinstance(self.max_cycles, bool) or not isinstance(self.max_cycles, (int, np.integer)) \
+                or self.max_cycles < 4:
+            raise InputError(f"max_cycles must be an integer >= 4, got {self.max_cycles!r}")
+        if self.protocol != "driven":
+            return
+        if self.method not in DRIVEN_METHODS:
+            raise InputError(f"protocol 'driven' runs the adaptive dp5 stepper: method must be one of "
+                             f"{list(DRIVEN_METHODS)}, got {self.method!r}")
+        for name, value, default in (("step", self.step, None), ("precision", self.precision, "float64"),
+                                     ("t_obs", self.t_obs, ())):
+            if value != default:
+                raise InputError(f"{name} is not used by protocol 'driven' (leave it at {default!r}), got {value!r}")
+
     def _check_trajectory_tau(self) -> None:
         try:
             lo, hi, num = self.trajectory_tau
@@ -188,7 +229,7 @@ class Scene:
     @property
     def time_resolved(self) -> bool:
         """True when values inside the transient are asked for (not only its limit xi_inf)."""
-        return any(o != "xi_inf" for o in self.observables)
+        return self.protocol == "stop" and any(o != "xi_inf" for o in self.observables)
 
     @property
     def n_points(self) -> int:
@@ -214,6 +255,9 @@ class Scene:
             lines.append(f"step = {self.step!r}")
         lines.append(f'precision = "{self.precision}"')
         lines.append(f"max_steps = {int(self.max_steps)}")
+        if self.protocol == "driven":
+            lines.append(f"perturbation = {self.perturbation!r}")
+            lines.append(f"max_cycles = {int(self.max_cycles)}")
         lines.append("[atol]")
         lines += [f"{k} = {v!r}" for k, v in sorted(self.atol.items())]
         lines.append("[params]")
@@ -284,7 +328,7 @@ def scene_from_mapping(cfg: Mapping[str, Any]) -> Scene:
         t = kwargs["trajectory_tau"]
         kwargs["trajectory_tau"] = (t.get("min"), t.get("max"), t.get("num"))
     return Scene(params=params, K_over_M=_axis_from_toml("K_over_M", cfg["K_over_M"]),
-                 V=_axis_from_toml("V", cfg["V"]), **{"protocol": "stop", **kwargs})
+                 V=_axis_from_toml("V", cfg["V"]), **{"protocol": "stop", **kwargs})  # protocol may be in kwargs
 
 
 def load_scene(source: str | Path) -> Scene:

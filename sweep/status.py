@@ -30,6 +30,9 @@ class Status(IntEnum):
     ERROR_ABOVE_TOL = 5
     """Computed, but the error estimate of at least one observable (``<name>_error``) exceeds rtol |value| +
     atol: the value is kept for inspection and must not be trusted to rtol."""
+    QUASISTATIC_BREAKDOWN = 6
+    """Driven scene: the slip velocity passed the threshold in the file's attrs (regime runaway): the quasi-static
+    model no longer describes the point (inertia is needed)."""
 
 
 def flag_attrs() -> dict[str, object]:

@@ -31,8 +31,9 @@ How a regime is decided (never guessed; ``undecided`` when the budget ends first
 * ``stick_slip`` / ``neutral``: the cycles are stationary, |a_k/a_(k-1) - 1| <= STATIONARY_TOL over three cycles.
   A long transient is not mistaken for an attractor: a transient with |growth_rate| T above STATIONARY_TOL is not
   stationary, and one below it (a drift of < 1e-7 per cycle) is called neutral only where the amplitude is still
-  that of the first cycle (within NEUTRAL_SPREAD); stationary cycles whose amplitude has left the first one are a
-  limit cycle reached from the perturbation (stick_slip). Quasi-static m2 = 0 at the line is the neutral case.
+  that of the first cycle (within NEUTRAL_SPREAD) and the first cycle is no larger than NEUTRAL_START x the
+  linear oscillation through the initial state; other stationary cycles are a limit cycle reached from the
+  perturbation (stick_slip). Quasi-static m2 = 0 at the line is the neutral case.
 """
 
 from __future__ import annotations
@@ -41,12 +42,16 @@ import math
 from enum import IntEnum
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ..solvers import DP5
+from ..status import Status
 from .stop import EXP_MAX, FAST
 
-__all__ = ["Regime", "simulate_driven", "RUNAWAY_XI_DOT"]
+__all__ = ["Regime", "simulate_driven", "simulate_batch", "RUNAWAY_XI_DOT"]
+
+OK, MAX_STEPS, STEP_UNDERFLOW = int(Status.OK), int(Status.MAX_STEPS), int(Status.STEP_UNDERFLOW)
+BREAKDOWN = int(Status.QUASISTATIC_BREAKDOWN)
 
 
 class Regime(IntEnum):
@@ -70,6 +75,10 @@ STATIONARY_TOL = 1e-7
 """Largest |a_k/a_(k-1) - 1| of a stationary cycle (three in a row)."""
 NEUTRAL_SPREAD = 1e-2
 """Stationary cycles within this relative distance of the first cycle's amplitude are neutral, not a limit cycle."""
+NEUTRAL_START = 2.0
+"""...and only where the first cycle is no larger than NEUTRAL_START x the amplitude of the linear oscillation
+through the initial state: an orbit that grew within its first cycle (far below the line) reached a limit cycle,
+however flat its later cycles are."""
 MIN_CYCLES = 3
 HISTORY = 4  # cycles kept for the decisions
 
@@ -131,10 +140,23 @@ def _extremum(z0, u0, h, dz0, dz1, k, a, b, kz, ku):
     return theta * h, zt
 
 
+@njit(cache=True)
+def _linear_amplitude(k, a, perturbation):
+    """Amplitude of the small oscillation through the initial state (z, u) = (perturbation, 0), where
+    z' = -k perturbation, in the linear theory: z = R e^(sigma_r tau) cos(omega tau + phi) with sigma = sigma_r
+    +- i omega the roots of s^2 + (k - a) s + k = 0 (PHYSICS.md 3b, reduced by A); NaN without oscillation."""
+    disc = k - 0.25 * (k - a) ** 2
+    if disc <= 0.0:
+        return math.nan
+    omega, sigma_r = math.sqrt(disc), 0.5 * (a - k)
+    return perturbation * math.sqrt(1.0 + ((k + sigma_r) / omega) ** 2)
+
+
 @njit(cache=True, fastmath=FAST, error_model="numpy")
 def simulate_point(k, a, b, perturbation, rtol, max_cycles, max_steps):
-    """One driven point (reduced k = chi/A, a = mu1/A, b = m2/A). Returns (regime, growth_rate, period,
-    amplitude, cycles, steps, peak log-velocity w); NaN where an observable does not apply (e.g. no full cycle)."""
+    """One driven point (reduced k = chi/A, a = mu1/A, b = m2/A). Returns (regime, status, growth_rate, period,
+    amplitude, cycles, steps, peak log-velocity w); NaN where an observable does not apply (e.g. no full cycle).
+    status: ok, max_steps or step_underflow (regime undecided), quasistatic_breakdown (regime runaway)."""
     kz = np.empty(_STAGES)
     ku = np.empty(_STAGES)
     z, u, tau = perturbation, 0.0, 0.0
@@ -146,6 +168,7 @@ def simulate_point(k, a, b, perturbation, rtol, max_cycles, max_steps):
     z_min, t_max_prev = math.inf, math.nan
     norm_tenth, t_tenth = math.nan, math.nan
     amp_first = math.nan
+    a_start = _linear_amplitude(k, a, perturbation)
     cycles, steps = 0, 0
     w_peak = -math.inf
     err_prev = 1e-4
@@ -159,17 +182,17 @@ def simulate_point(k, a, b, perturbation, rtol, max_cycles, max_steps):
         if not err <= 1.0:  # rejected (NaN included: a stage beyond the exponent clamp)
             h *= max(0.2, 0.9 * err ** -0.2) if math.isfinite(err) else 0.25
             if h < 1e-15 * (1.0 + tau):
-                return Regime.UNDECIDED, grow[-1], per[-1], math.nan, cycles, steps, w_peak
+                return Regime.UNDECIDED, STEP_UNDERFLOW, grow[-1], per[-1], math.nan, cycles, steps, w_peak
             continue
         dz1, du1, w1 = _rates(z1, u1, k, a, b)
         w_peak = max(w_peak, w1)
         if w1 > W_RUNAWAY:  # an accepted state: the slip velocity itself is past the threshold
-            return Regime.RUNAWAY, grow[-1], per[-1], math.nan, cycles, steps, w_peak
+            return Regime.RUNAWAY, BREAKDOWN, grow[-1], per[-1], math.nan, cycles, steps, w_peak
         norm = max(abs(z1), abs(u1))
         if norm < DECAYED * perturbation:  # decayed (also without cycles: an overdamped return)
             if not math.isfinite(grow[-1]):  # fewer than two cycles: the decay of the state since it was 0.1x
                 grow[-1] = math.log(norm / norm_tenth) / (tau + h - t_tenth)
-            return Regime.STEADY, grow[-1], per[-1], 0.0, cycles, steps, w_peak
+            return Regime.STEADY, OK, grow[-1], per[-1], 0.0, cycles, steps, w_peak
         if norm < 0.1 * perturbation and not math.isfinite(t_tenth):
             norm_tenth, t_tenth = norm, tau + h
         if dz > 0.0 and dz1 <= 0.0:  # a maximum of z: a cycle ends
@@ -183,12 +206,12 @@ def simulate_point(k, a, b, perturbation, rtol, max_cycles, max_steps):
                 grow[-1] = math.log(amp[-1] / amp[-2]) / per[-1] if amp[-2] > 0.0 else math.nan
                 if cycles == 1:
                     amp_first = amp[-1]
-                regime = _decide(amp, grow, perturbation, amp_first, cycles)
+                regime = _decide(amp, grow, perturbation, amp_first, a_start, cycles)
                 if regime != Regime.UNDECIDED:
                     amplitude = 0.0 if regime == Regime.STEADY else amp[-1]
-                    return regime, grow[-1], per[-1], amplitude, cycles, steps, w_peak
+                    return regime, OK, grow[-1], per[-1], amplitude, cycles, steps, w_peak
                 if cycles >= max_cycles:
-                    break
+                    return Regime.UNDECIDED, OK, grow[-1], per[-1], math.nan, cycles, steps, w_peak
             t_max_prev = t_peak
         elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
             _dt, z_min = _extremum(z, u, h, dz, dz1, k, a, b, kz, ku)
@@ -199,11 +222,21 @@ def simulate_point(k, a, b, perturbation, rtol, max_cycles, max_steps):
         err = max(err, 1e-10)
         h *= min(5.0, max(0.2, 0.9 * err ** -0.14 * err_prev ** 0.08))
         err_prev = err
-    return Regime.UNDECIDED, grow[-1], per[-1], math.nan, cycles, steps, w_peak
+    return Regime.UNDECIDED, MAX_STEPS, grow[-1], per[-1], math.nan, cycles, steps, w_peak
+
+
+@njit(parallel=True, cache=True)
+def simulate_batch(k, a, b, perturbation, rtol, max_cycles, max_steps, regime, status, growth_rate, period,
+                   amplitude, cycles, steps, peak_w):
+    """Every point of flat arrays k, a, b (one thread per point at a time; a point's arithmetic does not depend
+    on the others)."""
+    for i in prange(k.size):
+        (regime[i], status[i], growth_rate[i], period[i], amplitude[i], cycles[i], steps[i],
+         peak_w[i]) = simulate_point(k[i], a[i], b[i], perturbation, rtol, max_cycles, max_steps)
 
 
 @njit(cache=True)
-def _decide(amp, grow, perturbation, amp_first, cycles):
+def _decide(amp, grow, perturbation, amp_first, a_start, cycles):
     """The regime after a cycle (module docstring), or UNDECIDED to go on."""
     a_k = amp[-1]
     if a_k < DECAYED * perturbation:
@@ -220,7 +253,7 @@ def _decide(amp, grow, perturbation, amp_first, cycles):
         if not abs(amp[i] / amp[i - 1] - 1.0) <= STATIONARY_TOL:
             stationary = False
     if stationary:
-        if abs(a_k / amp_first - 1.0) <= NEUTRAL_SPREAD:
+        if abs(a_k / amp_first - 1.0) <= NEUTRAL_SPREAD and amp_first <= NEUTRAL_START * a_start:
             return Regime.NEUTRAL
         return Regime.STICK_SLIP
     return Regime.UNDECIDED
@@ -239,7 +272,8 @@ def simulate_driven(chi: float, mu1: float, m2: float, A: float, perturbation: f
             raise ValueError(f"{name} must be finite and > 0, got {value!r}")
     if not (math.isfinite(chi) and chi > 0.0):
         raise ValueError(f"chi must be finite and > 0, got {chi!r}")
-    regime, g, T, amp, cycles, steps, w = simulate_point(chi / A, mu1 / A, m2 / A, perturbation, rtol,
-                                                           max_cycles, max_steps)
-    return {"regime": Regime(regime).name.lower(), "growth_rate": g, "period": T, "amplitude": amp,
+    regime, status, g, T, amp, cycles, steps, w = simulate_point(chi / A, mu1 / A, m2 / A, perturbation, rtol,
+                                                                   max_cycles, max_steps)
+    return {"regime": Regime(regime).name.lower(), "status": Status(status).name.lower(), "growth_rate": g,
+            "period": T, "amplitude": amp,
             "cycles": int(cycles), "steps": int(steps), "peak_log_velocity": w}

@@ -1,0 +1,79 @@
+"""The driven protocol through the public API: Scene validation, the Dataset, agreement with the linear theory
+over a grid, the netCDF file and the CLI."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import sweep
+from sweep import physics
+from sweep.cli import main
+from sweep.errors import InputError
+from sweep.models.driven import Regime
+
+PARAMS = sweep.presets["sample2"]
+KM = np.logspace(4, 6, 8)
+V = np.array([1e-7, 1e-6, 3e-6])
+
+
+def driven(**kw) -> sweep.Scene:
+    return sweep.Scene(protocol="driven", params=PARAMS, K_over_M=kw.pop("K_over_M", KM), V=kw.pop("V", V), **kw)
+
+
+@pytest.mark.parametrize("kw, name", [
+    (dict(method="rk4"), "method"),
+    (dict(perturbation=0.0), "perturbation"),
+    (dict(perturbation=2.0), "perturbation"),
+    (dict(max_cycles=2), "max_cycles"),
+    (dict(observables=("xi_inf",)), "observables"),
+    (dict(step=0.1), "step"),
+    (dict(precision="float32"), "precision"),
+])
+def test_bad_driven_scene_names_the_parameter(kw, name):
+    with pytest.raises(InputError, match=name):
+        driven(**kw)
+
+
+def test_driven_grid_follows_the_linear_theory():
+    """Where the linear growth rate is clearly negative the regime is steady and the measured rate (from at
+    least two cycles) equals it; where clearly positive the point is not steady; every status is a known one."""
+    ds = sweep.run_sweep(driven(), progress=False)
+    regime, lin, grow = ds["regime"].values, ds["growth_rate_linear"].values, ds["growth_rate"].values
+    clearly_stable, clearly_unstable = lin < -1e-3, lin > 1e-3
+    assert clearly_stable.sum() >= 5 and clearly_unstable.sum() >= 3
+    assert np.all(regime[clearly_stable] == Regime.STEADY)
+    assert np.all(regime[clearly_unstable] != Regime.STEADY)
+    measured = clearly_stable & (ds["cycles"].values >= 2)
+    assert measured.sum() >= 3
+    np.testing.assert_allclose(grow[measured], lin[measured], rtol=2e-3)
+    assert np.all(np.isin(ds["status"].values, [sweep.Status.OK, sweep.Status.QUASISTATIC_BREAKDOWN]))
+    assert np.all((regime == Regime.RUNAWAY) == (ds["status"].values == sweep.Status.QUASISTATIC_BREAKDOWN))
+    assert np.all(ds["amplitude"].values[regime == Regime.STEADY] == 0.0)
+    assert not np.any(np.isnan(ds["amplitude"].values[regime == Regime.STICK_SLIP]))
+    omega = ds["Omega_c"].values
+    mu1 = physics.mu1(V, PARAMS.m1, PARAMS.m2, PARAMS.V0)
+    np.testing.assert_allclose(omega, V / PARAMS.D0 * np.sqrt(mu1 / PARAMS.A))
+
+
+def test_only_the_observables_asked_for_are_stored(tmp_path):
+    ds = sweep.run_sweep(driven(observables=("period",), K_over_M=KM[-2:], V=V[:1]), progress=False)
+    assert "period" in ds and "regime" in ds and "growth_rate" not in ds and "amplitude" not in ds
+    path = tmp_path / "d.nc"
+    ds.to_netcdf(path)
+    back = xr.open_dataset(path)
+    assert back["regime"].attrs["flag_meanings"].split()[0] == "steady"
+    np.testing.assert_array_equal(back["regime"].values, ds["regime"].values)
+
+
+def test_cli_runs_a_driven_scene(tmp_path, capsys):
+    cfg = tmp_path / "driven.toml"
+    cfg.write_text('protocol = "driven"\npreset = "sample2"\n[K_over_M]\nstart = 1e4\nstop = 1e6\nnum = 4\n'
+                   '[V]\nvalues = [1e-6, 1e-5]\n')
+    out = tmp_path / "d.nc"
+    assert main(["run", str(cfg), "-o", str(out), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "regime:" in text and out.exists() and out.with_suffix(".png").stat().st_size > 10_000
+    assert main(["plot", str(out), "-o", str(tmp_path / "p.png")]) == 0
+    assert (tmp_path / "p.png").stat().st_size > 10_000
