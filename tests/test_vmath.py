@@ -9,20 +9,20 @@ from numba import njit
 from sweep.solvers.vmath import exp_f32, exp_f64
 
 
-@njit
-def _map64(x):
-    out = np.empty_like(x)
-    for i in range(x.size):
-        out[i] = exp_f64(x[i])
-    return out
+def _mapper(exp):
+    """A compiled loop applying ``exp`` elementwise (as the lane kernels call it)."""
+
+    @njit
+    def apply(x):
+        out = np.empty_like(x)
+        for i in range(x.size):
+            out[i] = exp(x[i])
+        return out
+
+    return apply
 
 
-@njit
-def _map32(x):
-    out = np.empty_like(x)
-    for i in range(x.size):
-        out[i] = exp_f32(x[i])
-    return out
+_map64, _map32 = _mapper(exp_f64), _mapper(exp_f32)
 
 
 def _arguments(lo, hi):
