@@ -2,6 +2,7 @@
 
 from .api import run_sweep, solve_point
 from .errors import InputError
+from .hopf import locate_hopf
 from .io import open_dataset as open
 from .io import save
 from .params import FrictionParams
@@ -10,6 +11,6 @@ from .presets import presets, provenance
 from .scene import Scene, default_scene, load_scene
 from .status import Status
 
-__all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "default_scene", "load_scene", "make_plan",
-           "open", "presets", "provenance", "run_sweep", "save", "solve_point"]
+__all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "default_scene", "load_scene", "locate_hopf",
+           "make_plan", "open", "presets", "provenance", "run_sweep", "save", "solve_point"]
 __version__ = "0.1.0"

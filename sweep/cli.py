@@ -1,4 +1,4 @@
-"""Command line: ``sweep run | plot | info``."""
+"""Command line: ``sweep run | plot | hopf | info``."""
 
 from __future__ import annotations
 
@@ -120,6 +120,25 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_hopf(args: argparse.Namespace) -> int:
+    """``sweep hopf CONFIG.toml -o hopf.nc``: the Hopf line over the file's V axis, netCDF + PNG."""
+    from .hopf import locate_hopf
+    from .io import save
+    from .plot import plot_hopf
+    from .scene import hopf_config
+
+    params, v, kwargs = hopf_config(args.config)
+    t0 = time.perf_counter()
+    ds = locate_hopf(params, v, **kwargs)
+    ds.attrs["history"] = "sweep " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    out = save(ds, args.output)
+    names = ds["bifurcation"].attrs["flag_meanings"].split()
+    kinds = ", ".join(f"{names[c]} {n}" for c, n in zip(*np.unique(ds["bifurcation"].values, return_counts=True)))
+    print(f"wrote {out} ({v.size} velocities in {time.perf_counter() - t0:.2f} s; bifurcation: {kinds})")
+    print(f"wrote {plot_hopf(ds, args.png or out.with_suffix('.png'))}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="sweep", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -136,6 +155,11 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--variable", default=None,
                       help="variable to map (default: xi_inf for a stop sweep, the regime map for a driven one)")
     plot.set_defaults(func=_cmd_plot)
+    hopf = sub.add_parser("hopf", help="locate the Hopf line over the V axis of a scene file (netCDF + PNG)")
+    hopf.add_argument("config", help="TOML with preset and/or [params], a [V] axis table, optional rtol, model")
+    hopf.add_argument("-o", "--output", type=Path, default=Path("sweep-out") / "hopf.nc", help="netCDF output")
+    hopf.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
+    hopf.set_defaults(func=_cmd_hopf)
     info = sub.add_parser("info", help="summarise a sweep file")
     info.add_argument("file")
     info.set_defaults(func=_cmd_info)

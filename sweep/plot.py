@@ -14,7 +14,31 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 
-__all__ = ["plot_file", "plot_landscape", "plot_regimes"]
+__all__ = ["plot_file", "plot_hopf", "plot_landscape", "plot_regimes"]
+
+
+def plot_hopf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """The Hopf line K/M_c(V) located by simulation (markers coloured by bifurcation type) over the linear one."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(7.0, 5.0), dpi=110)
+    v_um = ds["V"].values * 1e6
+    ax.plot(ds["K_over_M_c_linear"].values, v_um, "k-", lw=1.2, label="linear theory (eq. 3)")
+    names = ds["bifurcation"].attrs["flag_meanings"].split()
+    for code, name in enumerate(names):
+        sel = ds["bifurcation"].values == code
+        if sel.any() and name != "none":
+            ax.plot(ds["K_over_M_c"].values[sel], v_um[sel], "o", ms=4, label=f"simulation: {name}")
+    none = ~np.isfinite(ds["K_over_M_c_linear"].values)
+    if none.any():
+        ax.axhspan(v_um[none].min(), v_um[none].max(), color="0.9", label="no Hopf line (mu1(V) <= 0)")
+    ax.set(xscale="log", yscale="log", xlabel="K/M [s$^{-2}$]", ylabel="V [µm/s]",
+           title=f"Hopf line, {ds.attrs.get('model', '')} model; stick-slip at smaller K/M")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
 
 
 def plot_file(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = None) -> Path:

@@ -311,18 +311,7 @@ def scene_from_mapping(cfg: Mapping[str, Any]) -> Scene:
     for required in ("K_over_M", "V"):
         if required not in cfg:
             raise InputError(f"scene is missing the [{required}] axis table")
-    if "preset" in cfg:
-        if cfg["preset"] not in presets:
-            raise InputError(f"preset must be one of {sorted(presets)}, got {cfg['preset']!r}")
-        base = presets[cfg["preset"]]
-        params = base.replace(**cfg.get("params", {}))
-    elif "params" in cfg:
-        try:
-            params = FrictionParams(**cfg["params"])
-        except TypeError as exc:
-            raise InputError(f"[params]: {exc} (fields: A, m1, m2, D0, V0, m0, g)") from None
-    else:
-        raise InputError("scene needs preset = \"sample1\"|\"sample2\" and/or a [params] table")
+    params = _params_from(cfg)
     kwargs = {k: v for k, v in cfg.items() if k not in ("preset", "params", "K_over_M", "V")}
     if "trajectory_tau" in kwargs and isinstance(kwargs["trajectory_tau"], Mapping):
         t = kwargs["trajectory_tau"]
@@ -331,8 +320,21 @@ def scene_from_mapping(cfg: Mapping[str, Any]) -> Scene:
                  V=_axis_from_toml("V", cfg["V"]), **{"protocol": "stop", **kwargs})  # protocol may be in kwargs
 
 
-def load_scene(source: str | Path) -> Scene:
-    """Read a Scene from a TOML file path (or a TOML string if it contains a newline)."""
+def _params_from(cfg: Mapping[str, Any]) -> FrictionParams:
+    """FrictionParams from ``preset`` and/or a ``[params]`` table of a parsed TOML mapping."""
+    if "preset" in cfg:
+        if cfg["preset"] not in presets:
+            raise InputError(f"preset must be one of {sorted(presets)}, got {cfg['preset']!r}")
+        return presets[cfg["preset"]].replace(**cfg.get("params", {}))
+    if "params" in cfg:
+        try:
+            return FrictionParams(**cfg["params"])
+        except TypeError as exc:
+            raise InputError(f"[params]: {exc} (fields: A, m1, m2, D0, V0, m0, g)") from None
+    raise InputError("scene needs preset = \"sample1\"|\"sample2\" and/or a [params] table")
+
+
+def _read_toml(source: str | Path) -> dict[str, Any]:
     text = str(source)
     if "\n" not in text:
         path = Path(text)
@@ -340,10 +342,24 @@ def load_scene(source: str | Path) -> Scene:
             raise InputError(f"scene file {text!r} does not exist")
         text = path.read_text()
     try:
-        cfg = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"malformed TOML in scene: {exc}") from None
-    return scene_from_mapping(cfg)
+
+
+def hopf_config(source: str | Path) -> tuple[FrictionParams, np.ndarray, dict[str, Any]]:
+    """(params, V axis, keyword arguments of sweep.locate_hopf) from a TOML file with preset and/or [params], a
+    [V] axis table and optionally rtol and model (other scene keys, e.g. [K_over_M], are ignored)."""
+    cfg = _read_toml(source)
+    if "V" not in cfg:
+        raise InputError("hopf needs the [V] axis table of velocities [m s-1]")
+    kwargs = {k: cfg[k] for k in ("rtol", "model") if k in cfg}
+    return _params_from(cfg), _axis_from_toml("V", cfg["V"]), kwargs
+
+
+def load_scene(source: str | Path) -> Scene:
+    """Read a Scene from a TOML file path (or a TOML string if it contains a newline)."""
+    return scene_from_mapping(_read_toml(source))
 
 
 def default_scene() -> Scene:

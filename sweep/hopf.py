@@ -1,0 +1,165 @@
+"""The Hopf line located by simulation (PHYSICS.md 3b): where the measured growth rate of small oscillations of the
+driven scene changes sign, and the type of the bifurcation decided from simulations around it.
+
+For each V: the line is bracketed around the linear prediction chi_c = mu1(V) (quasi-static), the sign of the
+growth rate measured from the simulated envelope (sweep/models/driven.py, a perturbation of SIGN_PERTURBATION,
+SIGN_CYCLES cycles) is checked at both ends, and the bracket is bisected until its relative width is below ``rtol``
+(default 0.1 %); K_over_M_c is its midpoint. The linear value is stored beside it. Where mu1(V) <= 0 there is no
+line (steady sliding is stable at every stiffness): NaN and bifurcation "none".
+
+The bifurcation type is decided from simulations, never assumed:
+
+* supercritical: just below the line a small perturbation grows into a stationary limit cycle (regime stick_slip)
+  at two distances d and 4d (d = TYPE_DISTANCE), with amplitudes in the ratio of the square root law (2, within
+  SQRT_LAW_SPREAD);
+* degenerate: no limit cycle on either side: just below the line a small start runs away, just above it a large
+  start decays (quasi-static m2 = 0, whose orbits at the line are neutral; the located line is a bracket, so the
+  neutral orbits themselves are tested at the exact line in tests/test_driven.py);
+* subcritical: just above the line a large start (LARGE_PERTURBATION) keeps a stick-slip attractor while a small
+  one decays (hysteresis);
+* undetermined: none of these (e.g. a slow transient left undecided); the type is not guessed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import xarray as xr
+
+from . import physics
+from .dataset import REFERENCES, versions
+from .errors import InputError
+from .models.driven import Regime, simulate_point
+from .params import FrictionParams
+
+__all__ = ["locate_hopf"]
+
+SIGN_PERTURBATION = 1e-5
+SIGN_CYCLES = 4
+STEPPER_RTOL = 1e-10
+BRACKET = 0.1
+"""Initial bracket chi_c_linear x (1 -+ BRACKET), widened (doubled) until the measured signs differ."""
+TYPE_DISTANCE = 0.004
+SQRT_LAW_SPREAD = 0.15
+LARGE_PERTURBATION = 0.5
+TYPE_CYCLES = 10_000
+MAX_STEPS = 20_000_000
+BIFURCATIONS = ("none", "supercritical", "subcritical", "degenerate", "undetermined")
+
+
+def _growth(k: float, a: float, b: float) -> float:
+    """Measured growth rate of a small perturbation at reduced stiffness k = chi/A (a = mu1/A, b = m2/A)."""
+    out = simulate_point(k, a, b, SIGN_PERTURBATION, STEPPER_RTOL, SIGN_CYCLES, MAX_STEPS)
+    return out[2]
+
+
+def _run(k: float, a: float, b: float, perturbation: float):
+    """(regime, amplitude) of a point run to a decision."""
+    out = simulate_point(k, a, b, perturbation, STEPPER_RTOL, TYPE_CYCLES, MAX_STEPS)
+    return int(out[0]), out[4]
+
+
+def _locate(a: float, b: float, rtol: float) -> tuple[float, int]:
+    """Reduced critical stiffness k_c = chi_c/A where the measured growth rate changes sign; (value, evaluations)."""
+    lo, hi = a * (1.0 - BRACKET), a * (1.0 + BRACKET)
+    evaluations = 2
+    g_lo, g_hi = _growth(lo, a, b), _growth(hi, a, b)
+    while not (g_lo > 0.0 > g_hi) and evaluations < 40:
+        lo, hi = lo * (1.0 - BRACKET), hi * (1.0 + BRACKET)
+        g_lo, g_hi = _growth(lo, a, b), _growth(hi, a, b)
+        evaluations += 2
+    if not (g_lo > 0.0 > g_hi):
+        return math.nan, evaluations
+    while (hi - lo) > rtol * 0.5 * (hi + lo):
+        mid = 0.5 * (lo + hi)
+        g = _growth(mid, a, b)
+        evaluations += 1
+        if g > 0.0:
+            lo = mid
+        elif g < 0.0:
+            hi = mid
+        else:
+            return mid, evaluations
+    return 0.5 * (lo + hi), evaluations
+
+
+def _bifurcation(k_c: float, a: float, b: float) -> tuple[str, float]:
+    """Type of the bifurcation at k_c (module docstring) and the limit-cycle amplitude at distance TYPE_DISTANCE
+    below the line (NaN if there is none)."""
+    below = [_run(k_c * (1.0 - f * TYPE_DISTANCE), a, b, 1e-4) for f in (1.0, 4.0)]
+    if all(r == Regime.STICK_SLIP for r, _ in below):
+        ratio = below[1][1] / below[0][1]
+        if abs(ratio / 2.0 - 1.0) <= SQRT_LAW_SPREAD:
+            return "supercritical", below[0][1]
+    above_large = _run(k_c * (1.0 + TYPE_DISTANCE), a, b, LARGE_PERTURBATION)
+    if below[0][0] == Regime.RUNAWAY and above_large[0] == Regime.STEADY:
+        return "degenerate", math.nan
+    above_small = _run(k_c * (1.0 + TYPE_DISTANCE), a, b, 1e-4)
+    if above_large[0] == Regime.STICK_SLIP and above_small[0] == Regime.STEADY:
+        return "subcritical", math.nan
+    return "undetermined", math.nan
+
+
+def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "quasistatic", rtol: float = 1e-3,
+                bifurcation: bool = True) -> xr.Dataset:
+    """The Hopf line over the velocities ``V`` [m s-1] (Dataset over V).
+
+    Variables: ``K_over_M_c`` [s-2] located by simulation (bisection on the sign of the measured growth rate to a
+    relative width ``rtol``), ``K_over_M_c_linear`` [s-2] (eq. 3), ``chi_c`` [1], ``Omega_c`` [s-1] (eq. 4),
+    ``bifurcation`` (flag: none / supercritical / subcritical / degenerate / undetermined; decided from
+    simulations, module docstring) and ``limit_cycle_amplitude`` [1] just below a supercritical line. NaN and
+    "none" where mu1(V) <= 0: steady sliding is then stable at every stiffness. ``model``: "quasistatic" (the
+    inertial model is not implemented yet: any other value is an error).
+    """
+    if model != "quasistatic":
+        raise InputError(f"model must be 'quasistatic' (the inertial model is not implemented yet), got {model!r}")
+    if not isinstance(params, FrictionParams):
+        raise InputError(f"params must be a sweep.FrictionParams, got {type(params).__name__}")
+    v = np.asarray(V, dtype=float).reshape(-1)
+    if v.size == 0 or not np.all(np.isfinite(v)) or np.any(v <= 0):
+        raise InputError(f"V must be a non-empty sequence of finite velocities > 0 [m s-1], got {V!r}")
+    if not (math.isfinite(rtol) and 1e-8 <= rtol <= 0.1):
+        raise InputError(f"rtol must be in [1e-8, 0.1] (relative width of the located bracket), got {rtol!r}")
+    p = params
+    mu1 = np.asarray(physics.mu1(v, p.m1, p.m2, p.V0), dtype=float)
+    chi_c, kinds, amps, evals = (np.full(v.size, np.nan), np.zeros(v.size, np.int8), np.full(v.size, np.nan),
+                                 np.zeros(v.size, np.int64))
+    for i, m in enumerate(mu1):
+        if m <= 0.0:
+            continue
+        k_c, evals[i] = _locate(m / p.A, p.m2 / p.A, rtol)
+        chi_c[i] = k_c * p.A
+        if bifurcation and math.isfinite(k_c):
+            kind, amps[i] = _bifurcation(k_c, m / p.A, p.m2 / p.A)
+            kinds[i] = BIFURCATIONS.index(kind)
+        elif math.isfinite(k_c):
+            kinds[i] = BIFURCATIONS.index("undetermined")
+    to_km = p.g / p.D0
+    var = lambda data, units, name, **attrs: xr.Variable("V", data, {"units": units, "long_name": name, **attrs})  # noqa: E731
+    ds = xr.Dataset(
+        {
+            "K_over_M_c": var(chi_c * to_km, "s-2", "K/M on the Hopf line, located by simulation"),
+            "K_over_M_c_linear": var(np.asarray(physics.hopf_K_over_M(v, p.A, p.m1, p.m2, p.D0, p.V0, p.g)), "s-2",
+                                     "K/M on the Hopf line, linear theory (eq. 3)"),
+            "chi_c": var(chi_c, "1", "reduced critical stiffness located by simulation"),
+            "Omega_c": var(np.asarray(physics.Omega_c(v, mu1, p.A, p.D0)), "s-1",
+                           "critical pulsation (V/D0) sqrt(mu1/A) (eq. 4)"),
+            "bifurcation": var(kinds, "1", "type of the Hopf bifurcation, decided from simulations",
+                               flag_values=np.arange(len(BIFURCATIONS), dtype=np.int8),
+                               flag_meanings=" ".join(BIFURCATIONS)),
+            "limit_cycle_amplitude": var(amps, "1", f"stick-slip amplitude (tau - xi) at {TYPE_DISTANCE:g} below "
+                                         "a supercritical line"),
+            "simulations": var(evals, "1", "driven simulations spent on locating the line"),
+            "mu1": var(mu1, "1", "velocity-weakening slope mu1(V)"),
+        },
+        coords={"V": var(v, "m s-1", "driving velocity")},
+        attrs={"Conventions": "CF-1.11", "title": "Hopf line of the Baumberger-Gauthier spring-block model",
+               "source": versions(), "references": REFERENCES, "model": model, "rtol": rtol,
+               "method": (f"bisection on the sign of the growth rate measured over {SIGN_CYCLES} cycles of a "
+                          f"{SIGN_PERTURBATION:g} perturbation (dp5, local rtol {STEPPER_RTOL:g}); type from runs "
+                          f"at {TYPE_DISTANCE:g} and {4 * TYPE_DISTANCE:g} below and above the line"),
+               "params": str(p.as_dict())},
+    )
+    return ds

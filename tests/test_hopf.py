@@ -1,0 +1,61 @@
+"""sweep.locate_hopf (quasi-static): the line located by simulation against the analytic one (PHYSICS.md 3b, eq. 3),
+the bifurcation type against the known behaviour (m2 > 0 supercritical, m2 = 0 degenerate), no line where
+mu1(V) <= 0, and the CLI."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import sweep
+from sweep.cli import main
+from sweep.errors import InputError
+from sweep.io import open_dataset
+
+SAMPLE2 = sweep.presets["sample2"]
+V = np.array([1e-7, 1e-6, 3e-6, 5e-6])  # mu1 > 0 below 6.6 um/s for sample2
+
+
+@pytest.mark.parametrize("params, kind", [(SAMPLE2, "supercritical"), (SAMPLE2.replace(m2=0.0), "degenerate"),
+                                          (sweep.presets["sample1"], "supercritical")])
+def test_line_by_simulation_matches_the_analytic_line(params, kind):
+    ds = sweep.locate_hopf(params, V)
+    np.testing.assert_allclose(ds["K_over_M_c"], ds["K_over_M_c_linear"], rtol=5e-3)
+    # the default bracket width 1e-3: the located midpoint is within half of it
+    np.testing.assert_allclose(ds["K_over_M_c"], ds["K_over_M_c_linear"], rtol=6e-4)
+    names = ds["bifurcation"].attrs["flag_meanings"].split()
+    assert [names[c] for c in ds["bifurcation"].values] == [kind] * V.size
+    assert np.all(ds["simulations"].values > 2)
+    if kind == "supercritical":
+        assert np.all(ds["limit_cycle_amplitude"].values > 0)
+
+
+def test_no_line_where_mu1_is_not_positive():
+    ds = sweep.locate_hopf(SAMPLE2, [1e-5, 1e-4])  # mu1 < 0 above 6.6 um/s
+    assert np.all(np.isnan(ds["K_over_M_c"])) and np.all(np.isnan(ds["K_over_M_c_linear"]))
+    assert np.all(ds["bifurcation"].values == 0) and np.all(ds["simulations"].values == 0)
+
+
+def test_tighter_tolerance_locates_closer():
+    loose = sweep.locate_hopf(SAMPLE2, [1e-6], rtol=1e-2, bifurcation=False)
+    tight = sweep.locate_hopf(SAMPLE2, [1e-6], rtol=1e-5, bifurcation=False)
+    exact = float(tight["K_over_M_c_linear"][0])
+    assert abs(float(tight["K_over_M_c"][0]) / exact - 1) < 1e-5
+    assert float(tight["simulations"][0]) > float(loose["simulations"][0])
+
+
+@pytest.mark.parametrize("kw, name", [(dict(model="inertial"), "model"), (dict(rtol=0.5), "rtol"),
+                                      (dict(V=[-1e-6]), "V")])
+def test_bad_input_names_the_parameter(kw, name):
+    with pytest.raises(InputError, match=name):
+        sweep.locate_hopf(SAMPLE2, **{"V": [1e-6], **kw})
+
+
+def test_cli_hopf_writes_file_and_picture(tmp_path, capsys):
+    cfg = tmp_path / "h.toml"
+    cfg.write_text('preset = "sample2"\n[V]\nstart = 1e-7\nstop = 1e-5\nnum = 5\n')
+    out = tmp_path / "hopf.nc"
+    assert main(["hopf", str(cfg), "-o", str(out)]) == 0
+    assert "supercritical" in capsys.readouterr().out
+    ds = open_dataset(out)
+    assert ds.sizes["V"] == 5 and out.with_suffix(".png").stat().st_size > 10_000
