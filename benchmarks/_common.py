@@ -88,6 +88,14 @@ def sweep_digest() -> str:
     return h.hexdigest()[:16]
 
 
+def machine_info() -> dict:
+    """CPU, CPUs, numba threading, platform, versions, git commit and whether sweep/ was dirty."""
+    return {"cpu": cpu_model(), "logical_cpus": os.cpu_count(), "usable_cpus": usable_cpus(),
+            "numba_threading_layer": threading_layer(), "NUMBA_NUM_THREADS": numba.config.NUMBA_NUM_THREADS,
+            "platform": platform.platform(),
+            "versions": {**versions(), "git_commit": git_commit(), "sweep_tree_dirty": sweep_tree_dirty()}}
+
+
 def loadavg() -> list[float] | None:
     try:
         return [float(x) for x in Path("/proc/loadavg").read_text().split()[:3]]

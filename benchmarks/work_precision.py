@@ -36,8 +36,6 @@ import argparse
 import datetime as _dt
 import json
 import math
-import os
-import platform
 import sys
 import time
 import warnings
@@ -55,16 +53,11 @@ sys.path.insert(0, str(HERE))
 import reference as refmod  # noqa: E402  (tests/reference.py: scipy only, independent of sweep)
 from _common import (  # noqa: E402  (benchmarks/_common.py)
     check_tail_ok,
-    cpu_model,
-    git_commit,
     loadavg,
+    machine_info,
     scipy_point,
     sweep_digest,
-    sweep_tree_dirty,
-    threading_layer,
     timed,
-    usable_cpus,
-    versions,
 )
 from cases import STOP_CASES, case_params  # noqa: E402
 
@@ -449,13 +442,6 @@ def summary(engine, scipy_cfgs):
 
 
 # -------------------------------------------------------------------------------------------- output
-
-def machine_info():
-    return {"cpu": cpu_model(), "logical_cpus": os.cpu_count(), "usable_cpus": usable_cpus(),
-            "numba_threading_layer": threading_layer(), "NUMBA_NUM_THREADS": numba.config.NUMBA_NUM_THREADS,
-            "platform": platform.platform(),
-            "versions": {**versions(), "git_commit": git_commit(), "sweep_tree_dirty": sweep_tree_dirty()}}
-
 
 FAMILY_STYLE = {
     "engine rk4 fixed h": ("C0", "o", "-"), "engine rk4 plan rule": ("C0", "s", ":"),

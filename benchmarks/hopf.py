@@ -1,0 +1,118 @@
+"""Cost of the Hopf line and of the driven scene (quasi-static model), with the map of both lines.
+
+* locating the line over 50 velocities (sample2, V 0.1..6 um/s where mu1 > 0, and 10..100 um/s where it is not):
+  sweep.locate_hopf by simulation (with and without the bifurcation type) vs the analytic line (eq. 3), side by
+  side, and the largest relative distance between the two lines;
+* throughput of the driven scene: run_sweep on a 40 x 20 (K/M, V) grid of sample2, points per second, per
+  regime (mean steps and cycles), 1 thread and 2 threads;
+* the regime map with the analytic and the simulated Hopf lines (PNG).
+
+Writes benchmarks/results/hopf.json and hopf.png. Run: python benchmarks/hopf.py (~1 min on 2 cores).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import loadavg, machine_info, sweep_digest  # noqa: E402
+
+import sweep  # noqa: E402
+from sweep import physics  # noqa: E402
+from sweep.models.driven import Regime  # noqa: E402
+
+OUT = Path(__file__).resolve().parent / "results"
+PARAMS = sweep.presets["sample2"]
+V_LINE = np.concatenate([np.logspace(-7, np.log10(6e-6), 45), np.logspace(-5, -4, 5)])
+GRID = dict(K_over_M=np.logspace(3, 6, 40), V=np.logspace(-7, -5, 20))
+
+
+def best_of(fn, repeats=3):
+    times, out = [], None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return min(times), out
+
+
+def main() -> None:
+    t_start = time.perf_counter()
+    digest0, load0 = sweep_digest(), loadavg()
+    sweep.locate_hopf(PARAMS, V_LINE[:2])  # compile / load the kernels
+    numba.set_num_threads(1)
+    t_typed, line = best_of(lambda: sweep.locate_hopf(PARAMS, V_LINE), 1)
+    t_sim, line_only = best_of(lambda: sweep.locate_hopf(PARAMS, V_LINE, bifurcation=False))
+    t_lin, lin = best_of(lambda: physics.hopf_K_over_M(V_LINE, PARAMS.A, PARAMS.m1, PARAMS.m2, PARAMS.D0,
+                                                       PARAMS.V0, PARAMS.g), 20)
+    has_line = np.isfinite(lin)
+    rel = np.abs(line["K_over_M_c"].values[has_line] / lin[has_line] - 1)
+    names = line["bifurcation"].attrs["flag_meanings"].split()
+    kinds = {names[c]: int(n) for c, n in zip(*np.unique(line["bifurcation"].values, return_counts=True))}
+
+    scene = sweep.Scene(protocol="driven", params=PARAMS, **GRID)
+    sweep.run_sweep(scene, progress=False)
+    driven = {}
+    for threads in (1, 2):
+        numba.set_num_threads(threads)
+        t, ds = best_of(lambda: sweep.run_sweep(scene, progress=False))
+        driven[f"threads_{threads}"] = {"seconds": t, "points_per_s": scene.n_points / t}
+    regimes = {}
+    for r in Regime:
+        sel = ds["regime"].values == r
+        if sel.any():
+            regimes[r.name.lower()] = {"points": int(sel.sum()), "mean_steps": float(ds["steps"].values[sel].mean()),
+                                       "mean_cycles": float(ds["cycles"].values[sel].mean())}
+    agree = (ds["regime"].values == Regime.STEADY) == (ds["stable"].values == 1)
+    result = {
+        "benchmark": "hopf", "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "machine": machine_info(),
+        "sweep_source_digest_start_end": [digest0, sweep_digest()], "loadavg_start_end": [load0, loadavg()],
+        "line": {"velocities": int(V_LINE.size), "with_line": int(has_line.sum()),
+                 "seconds_simulation_with_type_1thread": t_typed, "seconds_simulation_1thread": t_sim,
+                 "seconds_analytic": t_lin, "simulation_over_analytic": t_sim / t_lin,
+                 "simulations_per_velocity_mean": float(line_only["simulations"].values[has_line].mean()),
+                 "max_rel_distance_to_linear": float(rel.max()), "bifurcation_counts": kinds},
+        "driven_grid": {"shape": list(scene.shape), **driven, "regimes": regimes,
+                        "steady_iff_linearly_stable_fraction": float(agree.mean())},
+        "benchmark_wall_s": time.perf_counter() - t_start,
+    }
+    OUT.mkdir(exist_ok=True)
+    (OUT / "hopf.json").write_text(json.dumps(result, indent=1))
+    plot(ds, line, OUT / "hopf.png")
+    print(json.dumps(result, indent=1))
+
+
+def plot(ds, line, path):
+    """The driven regime map with the analytic and the simulated Hopf lines."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.5, 5.5), dpi=110)
+    names = ds["regime"].attrs["flag_meanings"].split()
+    km, v_um = ds["K_over_M"].values, ds["V"].values * 1e6
+    mesh = ax.pcolormesh(km, v_um, ds["regime"].values.T, shading="nearest", cmap="tab10", vmin=-0.5, vmax=9.5)
+    for code, name in enumerate(names):
+        if (ds["regime"].values == code).any():
+            ax.plot([], [], "s", color=mesh.cmap(mesh.norm(code)), label=name)
+    lv = line["V"].values * 1e6
+    ax.plot(line["K_over_M_c_linear"].values, lv, "k-", lw=1.5, label="Hopf line, linear (eq. 3)")
+    ax.plot(line["K_over_M_c"].values, lv, "w.", ms=5, label="Hopf line, located by simulation")
+    ax.set(xscale="log", yscale="log", xlim=(km.min(), km.max()), ylim=(v_um.min(), v_um.max()),
+           xlabel="K/M [s$^{-2}$]", ylabel="V [µm/s]",
+           title="driven scene, sample2, quasi-static: regime from a perturbation of 1e-3")
+    ax.legend(fontsize=8, loc="lower left")
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    main()
