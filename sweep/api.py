@@ -9,6 +9,7 @@ import xarray as xr
 from .dataset import build_dataset
 from .driven_sweep import run_driven
 from .engine import execute
+from .hopf import with_simulated_line
 from .params import FrictionParams
 from .plan import make_plan
 from .scene import Scene
@@ -23,10 +24,12 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "") -> 
     ``history`` is recorded in the file's history attribute (the CLI passes its command line).
     """
     if scene.protocol == "driven":
-        return run_driven(scene, progress=progress, history=history or "sweep.run_sweep")
-    plan = make_plan(scene)
-    raw = execute(scene, plan, progress=progress)
-    return build_dataset(scene, plan, raw, history=history or "sweep.run_sweep")
+        ds = run_driven(scene, progress=progress, history=history or "sweep.run_sweep")
+    else:
+        plan = make_plan(scene)
+        raw = execute(scene, plan, progress=progress)
+        ds = build_dataset(scene, plan, raw, history=history or "sweep.run_sweep")
+    return with_simulated_line(ds, scene.params)
 
 
 def solve_point(params: FrictionParams, K_over_M: float, V: float, rtol: float = 1e-6,

@@ -67,6 +67,7 @@ def plot_regimes(ds: xr.Dataset, path: str | os.PathLike) -> Path:
         bar.ax.set_yticklabels(names)
         kc = ds["chi_c"].values * float(ds["K_over_M"][0] / ds["chi"][0])
         ax.plot(kc, v_um, "k--", lw=1.6, label="Hopf line (linear, quasi-static)")
+        _simulated_line(ax, ds, v_um, "k")
         ax.set(xscale="log", yscale="log", xlim=(km.min(), km.max()), ylim=(v_um.min(), v_um.max()),
                xlabel="K/M [s$^{-2}$]", ylabel="V [µm/s]")
         ax.legend(loc="lower right", fontsize=8)
@@ -125,12 +126,20 @@ def _draw_map(fig, ax, ds: xr.Dataset, variable: str) -> None:
     kc = ds["chi_c"].values * float(ds["K_over_M"][0] / ds["chi"][0])  # chi -> K/M is the factor g/D0
     ax.plot(kc, v_um, "w-", lw=2.2)
     ax.plot(kc, v_um, "r--", lw=1.6, label="Hopf line (linear, quasi-static)")
+    _simulated_line(ax, ds, v_um, "r")
     failed = ds["status"].values.T != 0
     if failed.any():
         kk, vv = np.meshgrid(km, v_um)
         ax.plot(kk[failed], vv[failed], "x", color="0.5", ms=3, label="status != ok")
     ax.set(xscale="log", yscale="log", xlim=(km.min(), km.max()), ylim=(v_um.min(), v_um.max()),
            xlabel="K/M [s$^{-2}$]", ylabel="V [µm/s]")
+
+
+def _simulated_line(ax, ds: xr.Dataset, v_um: np.ndarray, colour: str) -> None:
+    """The Hopf line located by simulation (sweep.hopf.with_simulated_line), where the file has it."""
+    if "K_over_M_c_simulated" in ds.coords:
+        ax.plot(ds["K_over_M_c_simulated"].values, v_um, "o", ms=3, mfc="none", mec=colour,
+                label="Hopf line (located by simulation)")
 
 
 def _draw_curve(ax, ds: xr.Dataset, variable: str) -> None:

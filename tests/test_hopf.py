@@ -59,3 +59,12 @@ def test_cli_hopf_writes_file_and_picture(tmp_path, capsys):
     assert "supercritical" in capsys.readouterr().out
     ds = open_dataset(out)
     assert ds.sizes["V"] == 5 and out.with_suffix(".png").stat().st_size > 10_000
+
+
+def test_sweep_files_carry_the_simulated_line_next_to_the_analytic_one():
+    scene = sweep.Scene(protocol="stop", params=SAMPLE2, K_over_M=[1e4, 1e5], V=[1e-6, 3e-6, 1e-5])
+    ds = sweep.run_sweep(scene, progress=False)
+    analytic = ds["chi_c"].values * ds["K_over_M"].values[0] / ds["chi"].values[0]
+    simulated = ds["K_over_M_c_simulated"].values
+    np.testing.assert_allclose(simulated[:2], analytic[:2], rtol=6e-4)
+    assert np.isnan(simulated[2]) and np.isnan(analytic[2])  # mu1 < 0 at 10 um/s: no line
