@@ -48,6 +48,7 @@ def run_driven(scene: Scene, progress: bool | None = None, history: str = "") ->
     k = np.repeat(chi / p.A, scene.V.size)
     a = np.tile(mu1 / p.A, scene.K_over_M.size)
     b = np.full(k.size, p.m2 / p.A)
+    g = np.zeros(k.size)  # quasi-static (the scene's choice of model is not implemented yet)
     n = k.size
     out = {"regime": np.zeros(n, np.int8), "status": np.zeros(n, np.int8), "growth_rate": np.full(n, np.nan),
            "period": np.full(n, np.nan), "amplitude": np.full(n, np.nan), "cycles": np.zeros(n, np.int64),
@@ -56,7 +57,7 @@ def run_driven(scene: Scene, progress: bool | None = None, history: str = "") ->
     with Progress(n, enabled=progress) as bar:
         for start in range(0, n, CHUNK):
             sl = slice(start, min(n, start + CHUNK))
-            simulate_batch(k[sl], a[sl], b[sl], scene.perturbation, stepper_rtol(scene.rtol), scene.max_cycles,
+            simulate_batch(k[sl], a[sl], b[sl], g[sl], scene.perturbation, stepper_rtol(scene.rtol), scene.max_cycles,
                            scene.max_steps, *(v[sl] for v in out.values()))
             bar.update(sl.stop - sl.start)
     return build_driven_dataset(scene, out, time.perf_counter() - t0, describe(scene), history=history)

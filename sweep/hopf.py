@@ -1,7 +1,8 @@
 """The Hopf line located by simulation (PHYSICS.md 3b): where the measured growth rate of small oscillations of the
 driven scene changes sign, and the type of the bifurcation decided from simulations around it.
 
-For each V: the line is bracketed around the linear prediction chi_c = mu1(V) (quasi-static), the sign of the
+For each V: the line is bracketed around the linear prediction chi_c = mu1(V) (1 + gamma/A) (gamma = 0 for the
+quasi-static model), the sign of the
 growth rate measured from the simulated envelope (sweep/models/driven.py, a perturbation of SIGN_PERTURBATION,
 SIGN_CYCLES cycles) is checked at both ends, and the bracket is bisected until its relative width is below ``rtol``
 (default 0.1 %); K_over_M_c is its midpoint. The linear value is stored beside it. Where mu1(V) <= 0 there is no
@@ -49,54 +50,56 @@ MAX_STEPS = 20_000_000
 BIFURCATIONS = ("none", "supercritical", "subcritical", "degenerate", "undetermined")
 
 
-def _growth(k: float, a: float, b: float) -> float:
-    """Measured growth rate of a small perturbation at reduced stiffness k = chi/A (a = mu1/A, b = m2/A)."""
-    out = simulate_point(k, a, b, SIGN_PERTURBATION, STEPPER_RTOL, SIGN_CYCLES, MAX_STEPS)
+def _growth(k: float, a: float, b: float, g: float) -> float:
+    """Measured growth rate of a small perturbation at reduced stiffness k = chi/A (a = mu1/A, b = m2/A,
+    g = gamma/A)."""
+    out = simulate_point(k, a, b, g, SIGN_PERTURBATION, STEPPER_RTOL, SIGN_CYCLES, MAX_STEPS)
     return out[2]
 
 
-def _run(k: float, a: float, b: float, perturbation: float):
+def _run(k: float, a: float, b: float, g: float, perturbation: float):
     """(regime, amplitude) of a point run to a decision."""
-    out = simulate_point(k, a, b, perturbation, STEPPER_RTOL, TYPE_CYCLES, MAX_STEPS)
+    out = simulate_point(k, a, b, g, perturbation, STEPPER_RTOL, TYPE_CYCLES, MAX_STEPS)
     return int(out[0]), out[4]
 
 
-def _locate(a: float, b: float, rtol: float) -> tuple[float, int]:
-    """Reduced critical stiffness k_c = chi_c/A where the measured growth rate changes sign; (value, evaluations)."""
-    lo, hi = a * (1.0 - BRACKET), a * (1.0 + BRACKET)
+def _locate(a: float, b: float, g: float, rtol: float) -> tuple[float, int]:
+    """Reduced critical stiffness k_c = chi_c/A where the measured growth rate changes sign, bracketed around
+    the linear value a (1 + g); (value, evaluations)."""
+    lo, hi = a * (1.0 + g) * (1.0 - BRACKET), a * (1.0 + g) * (1.0 + BRACKET)
     evaluations = 2
-    g_lo, g_hi = _growth(lo, a, b), _growth(hi, a, b)
+    g_lo, g_hi = _growth(lo, a, b, g), _growth(hi, a, b, g)
     while not (g_lo > 0.0 > g_hi) and evaluations < 40:
         lo, hi = lo * (1.0 - BRACKET), hi * (1.0 + BRACKET)
-        g_lo, g_hi = _growth(lo, a, b), _growth(hi, a, b)
+        g_lo, g_hi = _growth(lo, a, b, g), _growth(hi, a, b, g)
         evaluations += 2
     if not (g_lo > 0.0 > g_hi):
         return math.nan, evaluations
     while (hi - lo) > rtol * 0.5 * (hi + lo):
         mid = 0.5 * (lo + hi)
-        g = _growth(mid, a, b)
+        rate = _growth(mid, a, b, g)
         evaluations += 1
-        if g > 0.0:
+        if rate > 0.0:
             lo = mid
-        elif g < 0.0:
+        elif rate < 0.0:
             hi = mid
         else:
             return mid, evaluations
     return 0.5 * (lo + hi), evaluations
 
 
-def _bifurcation(k_c: float, a: float, b: float) -> tuple[str, float]:
+def _bifurcation(k_c: float, a: float, b: float, g: float) -> tuple[str, float]:
     """Type of the bifurcation at k_c (module docstring) and the limit-cycle amplitude at distance TYPE_DISTANCE
     below the line (NaN if there is none)."""
-    below = [_run(k_c * (1.0 - f * TYPE_DISTANCE), a, b, 1e-4) for f in (1.0, 4.0)]
+    below = [_run(k_c * (1.0 - f * TYPE_DISTANCE), a, b, g, 1e-4) for f in (1.0, 4.0)]
     if all(r == Regime.STICK_SLIP for r, _ in below):
         ratio = below[1][1] / below[0][1]
         if abs(ratio / 2.0 - 1.0) <= SQRT_LAW_SPREAD:
             return "supercritical", below[0][1]
-    above_large = _run(k_c * (1.0 + TYPE_DISTANCE), a, b, LARGE_PERTURBATION)
+    above_large = _run(k_c * (1.0 + TYPE_DISTANCE), a, b, g, LARGE_PERTURBATION)
     if below[0][0] == Regime.RUNAWAY and above_large[0] == Regime.STEADY:
         return "degenerate", math.nan
-    above_small = _run(k_c * (1.0 + TYPE_DISTANCE), a, b, 1e-4)
+    above_small = _run(k_c * (1.0 + TYPE_DISTANCE), a, b, g, 1e-4)
     if above_large[0] == Regime.STICK_SLIP and above_small[0] == Regime.STEADY:
         return "subcritical", math.nan
     return "undetermined", math.nan
@@ -110,11 +113,11 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "quasis
     relative width ``rtol``), ``K_over_M_c_linear`` [s-2] (eq. 3), ``chi_c`` [1], ``Omega_c`` [s-1] (eq. 4),
     ``bifurcation`` (flag: none / supercritical / subcritical / degenerate / undetermined; decided from
     simulations, module docstring) and ``limit_cycle_amplitude`` [1] just below a supercritical line. NaN and
-    "none" where mu1(V) <= 0: steady sliding is then stable at every stiffness. ``model``: "quasistatic" (the
-    inertial model is not implemented yet: any other value is an error).
+    "none" where mu1(V) <= 0: steady sliding is then stable at every stiffness. ``model``: "quasistatic" or
+    "inertial" (the full Newton equation with gamma = V^2/(g D0); linear line chi_c = mu1 (1 + gamma/A)).
     """
-    if model != "quasistatic":
-        raise InputError(f"model must be 'quasistatic' (the inertial model is not implemented yet), got {model!r}")
+    if model not in ("quasistatic", "inertial"):
+        raise InputError(f"model must be 'quasistatic' or 'inertial', got {model!r}")
     if not isinstance(params, FrictionParams):
         raise InputError(f"params must be a sweep.FrictionParams, got {type(params).__name__}")
     v = np.asarray(V, dtype=float).reshape(-1)
@@ -124,15 +127,16 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "quasis
         raise InputError(f"rtol must be in [1e-8, 0.1] (relative width of the located bracket), got {rtol!r}")
     p = params
     mu1 = np.asarray(physics.mu1(v, p.m1, p.m2, p.V0), dtype=float)
+    gamma = np.asarray(physics.inertia_number(v, p.D0, p.g), dtype=float) * (model == "inertial")
     chi_c, kinds, amps, evals = (np.full(v.size, np.nan), np.zeros(v.size, np.int8), np.full(v.size, np.nan),
                                  np.zeros(v.size, np.int64))
     for i, m in enumerate(mu1):
         if m <= 0.0:
             continue
-        k_c, evals[i] = _locate(m / p.A, p.m2 / p.A, rtol)
+        k_c, evals[i] = _locate(m / p.A, p.m2 / p.A, gamma[i] / p.A, rtol)
         chi_c[i] = k_c * p.A
         if bifurcation and math.isfinite(k_c):
-            kind, amps[i] = _bifurcation(k_c, m / p.A, p.m2 / p.A)
+            kind, amps[i] = _bifurcation(k_c, m / p.A, p.m2 / p.A, gamma[i] / p.A)
             kinds[i] = BIFURCATIONS.index(kind)
         elif math.isfinite(k_c):
             kinds[i] = BIFURCATIONS.index("undetermined")
@@ -141,8 +145,10 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "quasis
     ds = xr.Dataset(
         {
             "K_over_M_c": var(chi_c * to_km, "s-2", "K/M on the Hopf line, located by simulation"),
-            "K_over_M_c_linear": var(np.asarray(physics.hopf_K_over_M(v, p.A, p.m1, p.m2, p.D0, p.V0, p.g)), "s-2",
+            "K_over_M_c_linear": var(np.asarray(physics.hopf_K_over_M(v, p.A, p.m1, p.m2, p.D0, p.V0, p.g,
+                                                                      inertial=model == "inertial")), "s-2",
                                      "K/M on the Hopf line, linear theory (eq. 3)"),
+            "gamma": var(np.asarray(physics.inertia_number(v, p.D0, p.g)), "1", "inertia number V^2/(g D0)"),
             "chi_c": var(chi_c, "1", "reduced critical stiffness located by simulation"),
             "Omega_c": var(np.asarray(physics.Omega_c(v, mu1, p.A, p.D0)), "s-1",
                            "critical pulsation (V/D0) sqrt(mu1/A) (eq. 4)"),

@@ -77,3 +77,16 @@ def test_bad_input_names_the_parameter():
         simulate_driven(0.02, MU1, M2, A, perturbation=0.0)
     with pytest.raises(ValueError, match="chi"):
         simulate_driven(-1.0, MU1, M2, A)
+
+
+@pytest.mark.parametrize("gamma_over_A, chi_over_chi_c", [(0.01, 1.02), (1.0, 1.05), (10.0, 0.98)])
+def test_inertial_oscillations_follow_the_cubic(gamma_over_A, chi_over_chi_c):
+    """With inertia the small oscillations follow the complex pair of gamma s^3 + (gamma + A) s^2 + (chi - mu1) s
+    + chi = 0 (the third, real root decays within the first cycles)."""
+    gamma = gamma_over_A * A
+    chi = chi_over_chi_c * physics.chi_c_inertial(MU1, A, gamma)
+    out = simulate_driven(chi, MU1, 0.0, A, perturbation=1e-5, rtol=1e-10, max_cycles=6, gamma=gamma)
+    roots = physics.characteristic_roots(chi, MU1, A, gamma)
+    pair = roots[np.argmax(np.abs(roots.imag))]
+    assert out["period"] == pytest.approx(2.0 * math.pi / abs(pair.imag), rel=1e-4)
+    assert out["growth_rate"] == pytest.approx(pair.real, rel=2e-3, abs=1e-6)

@@ -44,7 +44,7 @@ def test_tighter_tolerance_locates_closer():
     assert float(tight["simulations"][0]) > float(loose["simulations"][0])
 
 
-@pytest.mark.parametrize("kw, name", [(dict(model="inertial"), "model"), (dict(rtol=0.5), "rtol"),
+@pytest.mark.parametrize("kw, name", [(dict(model="newtonian"), "model"), (dict(rtol=0.5), "rtol"),
                                       (dict(V=[-1e-6]), "V")])
 def test_bad_input_names_the_parameter(kw, name):
     with pytest.raises(InputError, match=name):
@@ -68,3 +68,17 @@ def test_sweep_files_carry_the_simulated_line_next_to_the_analytic_one():
     simulated = ds["K_over_M_c_simulated"].values
     np.testing.assert_allclose(simulated[:2], analytic[:2], rtol=6e-4)
     assert np.isnan(simulated[2]) and np.isnan(analytic[2])  # mu1 < 0 at 10 um/s: no line
+
+
+def test_inertial_line_by_simulation_matches_the_analytic_line_for_gamma_over_A_1e3_to_10():
+    """chi_c = mu1 (1 + gamma/A) (PHYSICS.md 3b) from the full Newton equation, gamma/A = 1e-3 .. 10 (m2 = 0, so
+    mu1 = m1 at every V and only gamma changes)."""
+    params = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0, D0=0.7e-6)
+    ratios = np.array([1e-3, 1e-2, 0.1, 1.0, 10.0])
+    v = np.sqrt(ratios * params.g * params.D0 * params.A)
+    ds = sweep.locate_hopf(params, v, model="inertial", bifurcation=False)
+    np.testing.assert_allclose(ds["gamma"].values / params.A, ratios, rtol=1e-12)
+    np.testing.assert_allclose(ds["K_over_M_c_linear"], params.g / params.D0 * params.m1 * (1 + ratios), rtol=1e-12)
+    np.testing.assert_allclose(ds["K_over_M_c"], ds["K_over_M_c_linear"], rtol=6e-4)
+    quasi = sweep.locate_hopf(params, v[-1:], bifurcation=False)  # the quasi-static line is 11x lower there
+    assert float(ds["K_over_M_c"][-1]) / float(quasi["K_over_M_c"][0]) == pytest.approx(11.0, rel=1e-3)

@@ -87,64 +87,75 @@ _STAGES = _B.size
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def _rates(z, u, k, a, b):
-    """(z', u', w) of the quasi-static driven equations; k = chi/A, a = mu1/A, b = m2/A."""
-    w = k * z - u * (a + b * u) - u
-    e = math.exp(min(w, EXP_MAX))
-    return 1.0 - e, math.exp(min(-u, EXP_MAX)) - e, w
+def _rates(z, u, w, k, a, b, g):
+    """(z', u', w', ln xi') of the driven equations; k = chi/A, a = mu1/A, b = m2/A, g = gamma/A. Quasi-static
+    (g = 0): ln xi' is the balance k z - a u - b u^2 - u itself and the state w is unused (w' = 0). Inertial:
+    w = ln xi' is a state, (gamma/A) xi'' = k z - a u - b u^2 - A ln(xi' psi)/A gives w' = (balance - w) e^-w / g
+    (PHYSICS.md 3b with the spring chi (tau - xi))."""
+    balance = k * z - u * (a + b * u) - u
+    if g == 0.0:
+        lw, dw = balance, 0.0
+    else:
+        lw, dw = w, (balance - w) * math.exp(min(-w, EXP_MAX)) / g
+    e = math.exp(min(lw, EXP_MAX))
+    return 1.0 - e, math.exp(min(-u, EXP_MAX)) - e, dw, lw
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def _step(z, u, h, k, a, b, kz, ku):
-    """One Dormand-Prince step of size h from (z, u); stage derivatives in kz, ku (kz[0], ku[0] given).
-    Returns (z1, u1, error in z, error in u, largest w met)."""
+def _step(z, u, w, h, k, a, b, g, kz, ku, kw):
+    """One Dormand-Prince step of size h from (z, u, w); stage derivatives in kz, ku, kw (stage 0 given).
+    Returns (z1, u1, w1, errors in z, u, w, largest ln xi' met)."""
     w_max = -math.inf
     for i in range(1, _STAGES):
-        zi, ui = z, u
+        zi, ui, wi = z, u, w
         for j in range(i):
             zi += h * _A[i, j] * kz[j]
             ui += h * _A[i, j] * ku[j]
-        kz[i], ku[i], w = _rates(zi, ui, k, a, b)
-        w_max = max(w_max, w)
-    z1, u1, ez, eu = z, u, 0.0, 0.0
+            wi += h * _A[i, j] * kw[j]
+        kz[i], ku[i], kw[i], lw = _rates(zi, ui, wi, k, a, b, g)
+        w_max = max(w_max, lw)
+    z1, u1, w1, ez, eu, ew = z, u, w, 0.0, 0.0, 0.0
     for i in range(_STAGES):
         z1 += h * _B[i] * kz[i]
         u1 += h * _B[i] * ku[i]
+        w1 += h * _B[i] * kw[i]
         ez += h * _E[i] * kz[i]
         eu += h * _E[i] * ku[i]
-    return z1, u1, ez, eu, w_max
+        ew += h * _E[i] * kw[i]
+    return z1, u1, w1, ez, eu, ew, w_max
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def _extremum(z0, u0, h, dz0, dz1, k, a, b, kz, ku):
-    """Time offset theta*h and value of the extremum of z inside a step of size h from (z0, u0) where z' changes
-    sign (dz0 at the start, dz1 at the end): the root of the cubic Hermite derivative as a first guess, then
-    Newton on exact partial steps of size theta*h (z'' = -e^w w')."""
-    # the Hermite derivative is quadratic in theta; with only the end slopes known, interpolate z' linearly
+def _extremum(z0, u0, w0, h, dz0, dz1, k, a, b, g, kz, ku, kw):
+    """Time offset theta*h and value of the extremum of z inside a step of size h from (z0, u0, w0) where z'
+    changes sign (dz0 at the start, dz1 at the end): linear interpolation of z' as a first guess, then Newton on
+    exact partial steps of size theta*h (z'' = -xi' (ln xi')')."""
     theta = dz0 / (dz0 - dz1)
-    zt = z0
     for _ in range(4):
-        kz[0], ku[0], _w = _rates(z0, u0, k, a, b)
-        zt, ut, _ez, _eu, _wm = _step(z0, u0, theta * h, k, a, b, kz, ku)
-        dz, du, w = _rates(zt, ut, k, a, b)
-        dw = k * dz - (a + 2.0 * b * ut) * du - du
-        ddz = -math.exp(min(w, EXP_MAX)) * dw
+        kz[0], ku[0], kw[0], _lw = _rates(z0, u0, w0, k, a, b, g)
+        zt, ut, wt, _ez, _eu, _ew, _wm = _step(z0, u0, w0, theta * h, k, a, b, g, kz, ku, kw)
+        dz, du, dw, lw = _rates(zt, ut, wt, k, a, b, g)
+        dlw = k * dz - (a + 2.0 * b * ut) * du - du if g == 0.0 else dw
+        ddz = -math.exp(min(lw, EXP_MAX)) * dlw
         if ddz == 0.0:
             break
         delta = -dz / (ddz * h)
         theta = min(max(theta + delta, 0.0), 1.0)
         if abs(delta) < 1e-12:
             break
-    kz[0], ku[0], _w = _rates(z0, u0, k, a, b)
-    zt, ut, _ez, _eu, _wm = _step(z0, u0, theta * h, k, a, b, kz, ku)
+    kz[0], ku[0], kw[0], _lw = _rates(z0, u0, w0, k, a, b, g)
+    zt, _ut, _wt, _ez, _eu, _ew, _wm = _step(z0, u0, w0, theta * h, k, a, b, g, kz, ku, kw)
     return theta * h, zt
 
 
 @njit(cache=True)
-def _linear_amplitude(k, a, perturbation):
+def _linear_amplitude(k, a, g, perturbation):
     """Amplitude of the small oscillation through the initial state (z, u) = (perturbation, 0), where
     z' = -k perturbation, in the linear theory: z = R e^(sigma_r tau) cos(omega tau + phi) with sigma = sigma_r
-    +- i omega the roots of s^2 + (k - a) s + k = 0 (PHYSICS.md 3b, reduced by A); NaN without oscillation."""
+    +- i omega the roots of s^2 + (k - a) s + k = 0 (PHYSICS.md 3b, reduced by A); NaN without oscillation.
+    With inertia (g > 0) the start has xi' = 1, z' = 0: it is an extremum, R ~ perturbation."""
+    if g > 0.0:
+        return perturbation
     disc = k - 0.25 * (k - a) ** 2
     if disc <= 0.0:
         return math.nan
@@ -153,42 +164,44 @@ def _linear_amplitude(k, a, perturbation):
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def simulate_point(k, a, b, perturbation, rtol, max_cycles, max_steps):
-    """One driven point (reduced k = chi/A, a = mu1/A, b = m2/A). Returns (regime, status, growth_rate, period,
+def simulate_point(k, a, b, g, perturbation, rtol, max_cycles, max_steps):
+    """One driven point (reduced k = chi/A, a = mu1/A, b = m2/A; g = gamma/A, 0 for the quasi-static model;
+    state z = tau - xi, u = ln psi and, with inertia, w = ln xi'). Returns (regime, status, growth_rate, period,
     amplitude, cycles, steps, peak log-velocity w); NaN where an observable does not apply (e.g. no full cycle).
     status: ok, max_steps or step_underflow (regime undecided), quasistatic_breakdown (regime runaway)."""
     kz = np.empty(_STAGES)
     ku = np.empty(_STAGES)
-    z, u, tau = perturbation, 0.0, 0.0
+    kw = np.empty(_STAGES)
+    z, u, w, tau = perturbation, 0.0, 0.0, 0.0
     size = perturbation  # largest |z| met: the error scale of both states (they oscillate about 0)
-    h = 0.01 / (1.0 + k)
+    h = 0.01 / (1.0 + k) if g == 0.0 else min(0.01 / (1.0 + k), 0.1 * g)
     amp = np.full(HISTORY, np.nan)
     per = np.full(HISTORY, np.nan)
     grow = np.full(HISTORY, np.nan)
     z_min, t_max_prev = math.inf, math.nan
     norm_tenth, t_tenth = math.nan, math.nan
     amp_first = math.nan
-    a_start = _linear_amplitude(k, a, perturbation)
+    a_start = _linear_amplitude(k, a, g, perturbation)
     cycles, steps = 0, 0
     w_peak = -math.inf
     err_prev = 1e-4
-    dz, du, _w = _rates(z, u, k, a, b)
+    dz, du, dw, _lw = _rates(z, u, w, k, a, b, g)
     while steps < max_steps:
-        kz[0], ku[0] = dz, du
-        z1, u1, ez, eu, _w_max = _step(z, u, h, k, a, b, kz, ku)
+        kz[0], ku[0], kw[0] = dz, du, dw
+        z1, u1, w1, ez, eu, ew, _w_max = _step(z, u, w, h, k, a, b, g, kz, ku, kw)
         steps += 1
-        scale = rtol * max(size, abs(z1), abs(u1))
-        err = max(abs(ez), abs(eu)) / scale
+        scale = rtol * max(size, abs(z1), abs(u1), abs(w1))
+        err = max(abs(ez), abs(eu), abs(ew)) / scale
         if not err <= 1.0:  # rejected (NaN included: a stage beyond the exponent clamp)
             h *= max(0.2, 0.9 * err ** -0.2) if math.isfinite(err) else 0.25
             if h < 1e-15 * (1.0 + tau):
                 return Regime.UNDECIDED, STEP_UNDERFLOW, grow[-1], per[-1], math.nan, cycles, steps, w_peak
             continue
-        dz1, du1, w1 = _rates(z1, u1, k, a, b)
-        w_peak = max(w_peak, w1)
-        if w1 > W_RUNAWAY:  # an accepted state: the slip velocity itself is past the threshold
+        dz1, du1, dw1, lw1 = _rates(z1, u1, w1, k, a, b, g)
+        w_peak = max(w_peak, lw1)
+        if lw1 > W_RUNAWAY:  # an accepted state: the slip velocity itself is past the threshold
             return Regime.RUNAWAY, BREAKDOWN, grow[-1], per[-1], math.nan, cycles, steps, w_peak
-        norm = max(abs(z1), abs(u1))
+        norm = max(abs(z1), abs(u1), abs(w1))
         if norm < DECAYED * perturbation:  # decayed (also without cycles: an overdamped return)
             if not math.isfinite(grow[-1]):  # fewer than two cycles: the decay of the state since it was 0.1x
                 grow[-1] = math.log(norm / norm_tenth) / (tau + h - t_tenth)
@@ -196,7 +209,7 @@ def simulate_point(k, a, b, perturbation, rtol, max_cycles, max_steps):
         if norm < 0.1 * perturbation and not math.isfinite(t_tenth):
             norm_tenth, t_tenth = norm, tau + h
         if dz > 0.0 and dz1 <= 0.0:  # a maximum of z: a cycle ends
-            dt, z_top = _extremum(z, u, h, dz, dz1, k, a, b, kz, ku)
+            dt, z_top = _extremum(z, u, w, h, dz, dz1, k, a, b, g, kz, ku, kw)
             t_peak = tau + dt
             if z_min < math.inf and math.isfinite(t_max_prev):
                 cycles += 1
@@ -214,9 +227,9 @@ def simulate_point(k, a, b, perturbation, rtol, max_cycles, max_steps):
                     return Regime.UNDECIDED, OK, grow[-1], per[-1], math.nan, cycles, steps, w_peak
             t_max_prev = t_peak
         elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
-            _dt, z_min = _extremum(z, u, h, dz, dz1, k, a, b, kz, ku)
-        z, u, tau = z1, u1, tau + h
-        dz, du = dz1, du1
+            _dt, z_min = _extremum(z, u, w, h, dz, dz1, k, a, b, g, kz, ku, kw)
+        z, u, w, tau = z1, u1, w1, tau + h
+        dz, du, dw = dz1, du1, dw1
         size = max(size, abs(z))
         # PI step-size control (Gustafsson), exponents 0.7/5 and 0.4/5
         err = max(err, 1e-10)
@@ -226,13 +239,13 @@ def simulate_point(k, a, b, perturbation, rtol, max_cycles, max_steps):
 
 
 @njit(parallel=True, cache=True)
-def simulate_batch(k, a, b, perturbation, rtol, max_cycles, max_steps, regime, status, growth_rate, period,
+def simulate_batch(k, a, b, g, perturbation, rtol, max_cycles, max_steps, regime, status, growth_rate, period,
                    amplitude, cycles, steps, peak_w):
     """Every point of flat arrays k, a, b (one thread per point at a time; a point's arithmetic does not depend
     on the others)."""
     for i in prange(k.size):
         (regime[i], status[i], growth_rate[i], period[i], amplitude[i], cycles[i], steps[i],
-         peak_w[i]) = simulate_point(k[i], a[i], b[i], perturbation, rtol, max_cycles, max_steps)
+         peak_w[i]) = simulate_point(k[i], a[i], b[i], g[i], perturbation, rtol, max_cycles, max_steps)
 
 
 @njit(cache=True)
@@ -260,8 +273,10 @@ def _decide(amp, grow, perturbation, amp_first, a_start, cycles):
 
 
 def simulate_driven(chi: float, mu1: float, m2: float, A: float, perturbation: float = 1e-3, rtol: float = 1e-9,
-                    max_cycles: int = 2000, max_steps: int = 5_000_000) -> dict[str, float | str | int]:
-    """Simulate one driven point of the quasi-static model (reduced parameters chi, mu1(V), m2, A [1]).
+                    max_cycles: int = 2000, max_steps: int = 5_000_000,
+                    gamma: float = 0.0) -> dict[str, float | str | int]:
+    """Simulate one driven point (reduced parameters chi, mu1(V), m2, A [1]); ``gamma`` = V^2/(g D0) [1] > 0 adds
+    inertia (the full Newton equation), 0 is the quasi-static model.
 
     Returns a dict with ``regime`` (name), ``growth_rate`` [1/tau], ``period`` [tau], ``amplitude`` [1, half the
     peak-to-peak spring stretch tau - xi], ``cycles``, ``steps`` and ``peak_log_velocity`` (largest ln xi').
@@ -272,8 +287,10 @@ def simulate_driven(chi: float, mu1: float, m2: float, A: float, perturbation: f
             raise ValueError(f"{name} must be finite and > 0, got {value!r}")
     if not (math.isfinite(chi) and chi > 0.0):
         raise ValueError(f"chi must be finite and > 0, got {chi!r}")
-    regime, status, g, T, amp, cycles, steps, w = simulate_point(chi / A, mu1 / A, m2 / A, perturbation, rtol,
-                                                                   max_cycles, max_steps)
+    if not (math.isfinite(gamma) and gamma >= 0.0):
+        raise ValueError(f"gamma must be finite and >= 0, got {gamma!r}")
+    regime, status, g, T, amp, cycles, steps, w = simulate_point(chi / A, mu1 / A, m2 / A, gamma / A, perturbation,
+                                                                   rtol, max_cycles, max_steps)
     return {"regime": Regime(regime).name.lower(), "status": Status(status).name.lower(), "growth_rate": g,
             "period": T, "amplitude": amp,
             "cycles": int(cycles), "steps": int(steps), "peak_log_velocity": w}
