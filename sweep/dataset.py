@@ -70,6 +70,7 @@ def build_dataset(scene: Scene, plan: Plan, raw: RawResult, history: str = "") -
     xi_inf = grid(raw.xi_inf)
     chi = plan.chi.reshape(shape)
     stable = physics.stable_sliding(chi, plan.mu1.reshape(shape), p.A).astype(np.int8)
+    xi_in = np.asarray(physics.xi_inertial(physics.inertia_number(scene.V, p.D0, p.g)[None, :], chi))
     data = {
         "xi_inf": _var(DIMS, xi_inf, "1", "relaxed slip after the stop in units of D0, Dx_inf/D0"),
         "slip_inf": _var(DIMS, p.D0 * xi_inf, "m", "relaxed slip after the stop Dx_inf"),
@@ -78,6 +79,11 @@ def build_dataset(scene: Scene, plan: Plan, raw: RawResult, history: str = "") -
                        flag_values=np.array([0, 1], np.int8), flag_meanings="unstable stable"),
         "status": _var(DIMS, grid(raw.status), "1", "numerical status of the point", **flag_attrs()),
         "steps": _var(DIMS, grid(raw.steps), "1", "steps taken by the point (fine run of the first pass)"),
+        "xi_inertial": _var(DIMS, xi_in, "1", "slip of a pure inertial stop (constant friction) in units of D0, "
+                            "sqrt(gamma/chi) (eqs. 14-15)"),
+        "creep_over_inertia": _var(DIMS, xi_inf / xi_in, "1",
+                                   "relaxed creep slip over the pure inertial slip, xi_inf/xi_inertial (>> 1: creep "
+                                   "dominates, D0/V >> sqrt(M/K); ~1 or below: inertia matters)"),
     }
     errors = {"xi_inf": grid(raw.xi_inf_err), "slip_inf": p.D0 * grid(raw.xi_inf_err),
               "stress_relaxation": chi * grid(raw.xi_inf_err)}

@@ -82,3 +82,14 @@ def test_inertial_line_by_simulation_matches_the_analytic_line_for_gamma_over_A_
     np.testing.assert_allclose(ds["K_over_M_c"], ds["K_over_M_c_linear"], rtol=6e-4)
     quasi = sweep.locate_hopf(params, v[-1:], bifurcation=False)  # the quasi-static line is 11x lower there
     assert float(ds["K_over_M_c"][-1]) / float(quasi["K_over_M_c"][0]) == pytest.approx(11.0, rel=1e-3)
+
+
+def test_stop_files_carry_the_pure_inertia_bound_and_the_creep_criterion():
+    """eq. 15: xi_in = sqrt(gamma/chi), i.e. Dx_in = V sqrt(M/K); creep_over_inertia = xi_inf/xi_in."""
+    km, v = np.array([1e3, 1e6]), np.array([1e-7, 1e-4])
+    ds = sweep.run_sweep(sweep.Scene(protocol="stop", params=SAMPLE2, K_over_M=km, V=v), progress=False)
+    dx_in = v[None, :] * np.sqrt(1.0 / km[:, None])  # V sqrt(M/K) [m]
+    np.testing.assert_allclose(ds["xi_inertial"].values * SAMPLE2.D0, dx_in, rtol=1e-12)
+    np.testing.assert_allclose(ds["creep_over_inertia"], ds["xi_inf"] / ds["xi_inertial"], rtol=1e-12)
+    ratio = ds["creep_over_inertia"].values
+    assert ratio[0, 0] > 100 and ratio[1, 1] < ratio[0, 0]  # slow drive on a soft spring: creep dominates
