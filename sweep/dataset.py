@@ -144,7 +144,9 @@ def build_driven_dataset(scene: Scene, out: dict[str, np.ndarray], seconds: floa
     grid = lambda a: a.reshape(shape)  # noqa: E731
     chi = physics.reduced_stiffness(scene.K_over_M, p.D0, p.g)[:, None] * np.ones(shape)
     mu1 = physics.mu1(scene.V, p.m1, p.m2, p.V0)[None, :] * np.ones(shape)
-    root = physics.characteristic_roots(chi, mu1, p.A)[..., 0]
+    gamma_v = physics.inertia_number(scene.V, p.D0, p.g) * (scene.model == "inertial")
+    gamma = gamma_v[None, :] * np.ones(shape)
+    root = physics.characteristic_roots(chi, mu1, p.A, gamma)[..., 0]  # the leading root (sorted)
     with np.errstate(divide="ignore"):
         period_linear = np.where(root.imag != 0.0, 2.0 * np.pi / np.abs(root.imag), np.nan)
     regime_attrs = {"flag_values": np.array([r.value for r in Regime], np.int8),
@@ -153,8 +155,8 @@ def build_driven_dataset(scene: Scene, out: dict[str, np.ndarray], seconds: floa
         "regime": _var(DIMS, grid(out["regime"]), "1", "regime reached from the perturbed steady sliding",
                        **regime_attrs),
         "status": _var(DIMS, grid(out["status"]), "1", "numerical status of the point", **flag_attrs()),
-        "stable": _var(DIMS, physics.stable_sliding(chi, mu1, p.A).astype(np.int8), "1",
-                       "steady sliding at V is linearly stable (quasi-static model)",
+        "stable": _var(DIMS, physics.stable_sliding(chi, mu1, p.A, gamma).astype(np.int8), "1",
+                       f"steady sliding at V is linearly stable ({scene.model} model)",
                        flag_values=np.array([0, 1], np.int8), flag_meanings="unstable stable"),
         "growth_rate_linear": _var(DIMS, root.real, "1",
                                    "reduced growth rate of small oscillations, linear theory Re sigma (per unit tau)"),
@@ -175,6 +177,9 @@ def build_driven_dataset(scene: Scene, out: dict[str, np.ndarray], seconds: floa
                                  "half the peak-to-peak spring stretch tau - xi on the attractor (0: steady sliding)")
     coords = _coords(scene)
     coords["V"].attrs["long_name"] = "driving velocity"
+    coords["chi_c_quasistatic"] = coords["chi_c"]
+    coords["chi_c"] = _var("V", physics.chi_c_inertial(mu1[0], p.A, gamma_v), "1",
+                           f"reduced stiffness on the Hopf line of the {scene.model} model (NaN: no Hopf line)")
     coords["Omega_c"] = _var("V", physics.Omega_c(scene.V, physics.mu1(scene.V, p.m1, p.m2, p.V0), p.A, p.D0),
                              "s-1", "critical pulsation on the Hopf line (V/D0) sqrt(mu1/A) (NaN: no line)")
     attrs = _attrs(scene, "Stability of steady sliding and stick-slip of the Baumberger-Gauthier spring-block model "

@@ -28,7 +28,7 @@ def stepper_rtol(rtol: float) -> float:
 def describe(scene: Scene) -> dict[str, str]:
     """What the driven run chose, for the Dataset attrs."""
     return {
-        "model": "quasistatic",
+        "model": scene.model + (" (gamma = V^2/(g D0) per V)" if scene.model == "inertial" else ""),
         "method": f"dp5 (adaptive, PI control) in tau on (z = tau - xi, u = ln psi), local rtol "
                   f"{stepper_rtol(scene.rtol):g} x max(perturbation, |z|)",
         "regime_rule": (f"runaway: slip velocity > {RUNAWAY_XI_DOT:g} V; steady: state below {DECAYED:g} x "
@@ -48,7 +48,8 @@ def run_driven(scene: Scene, progress: bool | None = None, history: str = "") ->
     k = np.repeat(chi / p.A, scene.V.size)
     a = np.tile(mu1 / p.A, scene.K_over_M.size)
     b = np.full(k.size, p.m2 / p.A)
-    g = np.zeros(k.size)  # quasi-static (the scene's choice of model is not implemented yet)
+    gamma = physics.inertia_number(scene.V, p.D0, p.g) if scene.model == "inertial" else np.zeros(scene.V.size)
+    g = np.tile(gamma / p.A, scene.K_over_M.size)
     n = k.size
     out = {"regime": np.zeros(n, np.int8), "status": np.zeros(n, np.int8), "growth_rate": np.full(n, np.nan),
            "period": np.full(n, np.nan), "amplitude": np.full(n, np.nan), "cycles": np.zeros(n, np.int64),

@@ -29,6 +29,7 @@ OBSERVABLES = ("xi_inf", "trajectory", "slip_at", "t50", "t90")
 DRIVEN_OBSERVABLES = ("regime", "growth_rate", "period", "amplitude")
 """Observables of the driven protocol (regime, with status, is always stored)."""
 DRIVEN_METHODS = ("auto", "dp5")
+MODELS = ("quasistatic", "inertial")
 PERTURBATION_RANGE = (1e-8, 1.0)
 """Allowed initial spring stretch of the driven scene (reduced, z = tau - xi)."""
 DEFAULT_ATOL = {"xi_inf": 1e-12, "trajectory": 1e-12, "slip_at": 1e-12, "t50": 0.0, "t90": 0.0}
@@ -107,6 +108,10 @@ class Scene:
         driven only: initial spring stretch z(0) = tau - xi away from steady sliding (reduced, 1e-8..1).
     max_cycles : int
         driven only: oscillation cycles per point before it is left ``undecided`` (>= 4).
+    model : "quasistatic" | "inertial"
+        The paper's quasi-static model, or (driven only, so far) the full Newton equation with the inertia number
+        gamma = V^2/(g D0). The inertial stop scene and the per-point automatic choice (model="auto",
+        model_tol) are not implemented yet: asking for them is an error.
     """
 
     protocol: str
@@ -124,6 +129,7 @@ class Scene:
     max_steps: int = 1_000_000
     perturbation: float = 1e-3
     max_cycles: int = 2000
+    model: str = "quasistatic"
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen dataclass)
@@ -200,7 +206,13 @@ class Scene:
         if isinstance(self.max_cycles, bool) or not isinstance(self.max_cycles, (int, np.integer)) \
                 or self.max_cycles < 4:
             raise InputError(f"max_cycles must be an integer >= 4, got {self.max_cycles!r}")
+        if self.model not in MODELS:
+            raise InputError(f"model must be one of {list(MODELS)} (model='auto' is not implemented yet), "
+                             f"got {self.model!r}")
         if self.protocol != "driven":
+            if self.model != "quasistatic":
+                raise InputError(f"protocol 'stop' runs the quasi-static model only so far (the inertial stop "
+                                 f"scene is not implemented yet), got model={self.model!r}")
             return
         if self.method not in DRIVEN_METHODS:
             raise InputError(f"protocol 'driven' runs the adaptive dp5 stepper: method must be one of "
@@ -258,6 +270,7 @@ class Scene:
         if self.protocol == "driven":
             lines.append(f"perturbation = {self.perturbation!r}")
             lines.append(f"max_cycles = {int(self.max_cycles)}")
+            lines.append(f'model = "{self.model}"')
         lines.append("[atol]")
         lines += [f"{k} = {v!r}" for k, v in sorted(self.atol.items())]
         lines.append("[params]")

@@ -30,6 +30,7 @@ def driven(**kw) -> sweep.Scene:
     (dict(observables=("xi_inf",)), "observables"),
     (dict(step=0.1), "step"),
     (dict(precision="float32"), "precision"),
+    (dict(model="auto"), "model"),
 ])
 def test_bad_driven_scene_names_the_parameter(kw, name):
     with pytest.raises(InputError, match=name):
@@ -77,3 +78,26 @@ def test_cli_runs_a_driven_scene(tmp_path, capsys):
     assert "regime:" in text and out.exists() and out.with_suffix(".png").stat().st_size > 10_000
     assert main(["plot", str(out), "-o", str(tmp_path / "p.png")]) == 0
     assert (tmp_path / "p.png").stat().st_size > 10_000
+
+
+def test_stop_scene_refuses_the_inertial_model_it_does_not_have():
+    with pytest.raises(InputError, match="model"):
+        sweep.Scene(protocol="stop", params=PARAMS, K_over_M=KM, V=V, model="inertial")
+
+
+def test_inertial_driven_grid_follows_its_own_linear_theory():
+    """Fast drives (gamma/A 0.03 .. 3 at m2 = 0): the inertial model's line chi_c = mu1 (1 + gamma/A) moves to
+    stiffer springs; steady exactly where its linear theory is stable, not where the quasi-static one is."""
+    params = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0, D0=0.7e-6)
+    v = np.sqrt(np.array([0.03, 0.3, 3.0]) * params.g * params.D0 * params.A)
+    km = np.logspace(5, 6, 12)  # the quasi-static line is at 1.75e5 s^-2, the inertial one 1.03 .. 4x higher
+    ds = sweep.run_sweep(sweep.Scene(protocol="driven", params=params, K_over_M=km, V=v, model="inertial"),
+                         progress=False)
+    np.testing.assert_allclose(ds["chi_c"], ds["chi_c_quasistatic"] * (1 + ds["gamma"] / params.A))
+    lin = ds["growth_rate_linear"].values
+    clear = np.abs(lin) > 1e-3
+    assert clear.sum() > 20
+    np.testing.assert_array_equal(ds["regime"].values[clear] == Regime.STEADY, lin[clear] < 0)
+    quasi_unstable = ds["chi"].values[:, None] < ds["chi_c_quasistatic"].values[None, :]
+    assert np.any((ds["stable"].values == 0) & ~quasi_unstable)  # unstable only because of inertia
+    assert "inertial" in ds.attrs["plan_model"] and 'model = "inertial"' in ds.attrs["scene"]
