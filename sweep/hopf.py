@@ -16,8 +16,8 @@ The bifurcation type is decided from simulations, never assumed:
 * degenerate: no limit cycle on either side: just below the line a small start runs away, just above it a large
   start decays (quasi-static m2 = 0, whose orbits at the line are neutral; the located line is a bracket, so the
   neutral orbits themselves are tested at the exact line in tests/test_driven.py);
-* subcritical: just above the line a large start (LARGE_PERTURBATION) keeps a stick-slip attractor while a small
-  one decays (hysteresis);
+* subcritical: just above the line a large start (LARGE_PERTURBATION, or 1.2x the stick-slip cycle found just
+  below if larger) keeps a stick-slip attractor while a small one decays (hysteresis);
 * undetermined: none of these (e.g. a slow transient left undecided); the type is not guessed.
 """
 
@@ -96,7 +96,10 @@ def _bifurcation(k_c: float, a: float, b: float, g: float) -> tuple[str, float]:
         ratio = below[1][1] / below[0][1]
         if abs(ratio / 2.0 - 1.0) <= SQRT_LAW_SPREAD:
             return "supercritical", below[0][1]
-    above_large = _run(k_c * (1.0 + TYPE_DISTANCE), a, b, g, LARGE_PERTURBATION)
+    # a large start: at least the size of the stick-slip cycle found just below, which a subcritical (inverted)
+    # line keeps on its stable side too
+    large = max(LARGE_PERTURBATION, 1.2 * below[0][1]) if below[0][0] == Regime.STICK_SLIP else LARGE_PERTURBATION
+    above_large = _run(k_c * (1.0 + TYPE_DISTANCE), a, b, g, large)
     if below[0][0] == Regime.RUNAWAY and above_large[0] == Regime.STEADY:
         return "degenerate", math.nan
     above_small = _run(k_c * (1.0 + TYPE_DISTANCE), a, b, g, 1e-4)
