@@ -1,5 +1,6 @@
 """Cost of the Hopf line and of the driven scene (quasi-static model), with the map of both lines.
 
+* the inertial line (sample2 with m2 = 0, gamma/A = 1e-3 .. 10 over 10 velocities) against mu1 (1 + gamma/A);
 * locating the line over 50 velocities (sample2, V 0.1..6 um/s where mu1 > 0, and 10..100 um/s where it is not):
   sweep.locate_hopf by simulation (with and without the bifurcation type) vs the analytic line (eq. 3), side by
   side, and the largest relative distance between the two lines;
@@ -51,6 +52,10 @@ def main() -> None:
     t_sim, line_only = best_of(lambda: sweep.locate_hopf(PARAMS, V_LINE, bifurcation=False))
     t_lin, lin = best_of(lambda: physics.hopf_K_over_M(V_LINE, PARAMS.A, PARAMS.m1, PARAMS.m2, PARAMS.D0,
                                                        PARAMS.V0, PARAMS.g), 20)
+    inertial_params = PARAMS.replace(m2=0.0)  # mu1 = m1 at every V: the inertial line up to gamma/A = 10
+    v_fast = np.sqrt(np.logspace(-3, 1, 10) * PARAMS.g * PARAMS.D0 * PARAMS.A)
+    t_inertial, inertial = best_of(lambda: sweep.locate_hopf(inertial_params, v_fast, model="inertial",
+                                                             bifurcation=False), 1)
     has_line = np.isfinite(lin)
     rel = np.abs(line["K_over_M_c"].values[has_line] / lin[has_line] - 1)
     names = line["bifurcation"].attrs["flag_meanings"].split()
@@ -78,6 +83,10 @@ def main() -> None:
                  "seconds_analytic": t_lin, "simulation_over_analytic": t_sim / t_lin,
                  "simulations_per_velocity_mean": float(line_only["simulations"].values[has_line].mean()),
                  "max_rel_distance_to_linear": float(rel.max()), "bifurcation_counts": kinds},
+        "inertial_line": {"params": "sample2 with m2 = 0", "gamma_over_A": [1e-3, 10.0], "velocities": 10,
+                          "seconds_1thread": t_inertial,
+                          "max_rel_distance_to_linear": float(np.max(np.abs(
+                              inertial["K_over_M_c"].values / inertial["K_over_M_c_linear"].values - 1)))},
         "driven_grid": {"shape": list(scene.shape), **driven, "regimes": regimes,
                         "steady_iff_linearly_stable_fraction": float(agree.mean())},
         "benchmark_wall_s": time.perf_counter() - t_start,
