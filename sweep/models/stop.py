@@ -36,6 +36,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..jitcache import pin, pin_module
 from ..solvers.vmath import exp_f32, exp_f64
 from ..status import Status
 
@@ -53,9 +54,11 @@ TAIL_SAFETY = 1e-3
 RATE_FLOOR = 0.1
 """Floor of the late rate r(u) of the time map (bounds the step in s by h/RATE_FLOOR)."""
 SQRT_PI = math.sqrt(math.pi)
-FAST = {"nsz", "arcp", "contract", "afn"}
+FAST = {"nsz": True, "arcp": True, "contract": True, "afn": True}
 """fastmath flags of every kernel here (~9 % faster): FMA contraction and reciprocal division, but no "nnan" or
-"ninf" (the status codes rely on isfinite) and no "reassoc" (results stay reproducible on one instruction set)."""
+"ninf" (the status codes rely on isfinite) and no "reassoc" (results stay reproducible on one instruction set).
+A dict, not a set: numba pickles the options into the cache key of closures, and a set of strings pickles in a
+per-process order (string hashing is randomised), which made those kernels miss the disk cache."""
 
 
 @njit(cache=True, fastmath=FAST)
@@ -124,7 +127,7 @@ def make_rate(dtype):
         E = exp(expo)
         return w * E, w, E, expo
 
-    return rate
+    return pin(rate, f.__name__)
 
 
 rate_f64 = make_rate(np.float64)
@@ -179,3 +182,6 @@ def continuation_error(E_e: float, g_e: float, du: float) -> float:
     else:
         shape = math.exp(-du) * math.expm1(c * du) / c
     return E_e / (1.0 - E_e) * shape
+
+
+pin_module(__name__)

@@ -21,6 +21,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from ..jitcache import pin, pin_module
 from ..solvers import METHODS, RosenbrockTableau
 from .stop import EXP_MAX, FAST, MAX_STEPS, NONFINITE, OK, TAIL_SAFETY, make_rate, tail_error, tail_slip
 from .stop_stiff import make_stiff_rate
@@ -65,7 +66,7 @@ def _explicit_step(f, tableau):
             st[_X * W + l], st[_S * W + l], st[_STAGE * W + l], st[(_STAGE + 1) * W + l] = x1, s1, d5x, d5s
             st[_E * W + l], st[_EXPO * W + l] = E, max(max(max(o2, o3), max(o4, o5)), st[_EXPO * W + l])
 
-    return step_all
+    return pin(step_all, f.__name__, tableau.name)
 
 
 def _rosenbrock_step(f, tableau):
@@ -109,7 +110,7 @@ def _rosenbrock_step(f, tableau):
             st[_X * W + l], st[_S * W + l] = x1, s1
             st[_E * W + l], st[_EXPO * W + l] = E1, max(max(max(o2, o3), o4), st[_EXPO * W + l])
 
-    return step_all
+    return pin(step_all, f.__name__, tableau.name)
 
 
 def make_lane_kernels(dtype, tableau):
@@ -190,6 +191,8 @@ def make_lane_kernels(dtype, tableau):
             relax_runs(k, a, bb, s_c, run_point, run_h, np.arange(g, run_point.size, groups), max_steps,
                        rtol, atol, xi_inf, tail_err, status, steps)
 
+    for kernel in (load, take_next, relax_runs, relax_batch):
+        pin(kernel, f.__name__, tableau.name)
     return relax_runs, relax_batch
 
 
@@ -198,3 +201,6 @@ def lane_kernels(dtype: np.dtype, method: str):
     """(relax_runs, relax_batch) for a float type and a fixed-step method of :data:`sweep.solvers.METHODS`
     (built once per process; numba compiles on first call and caches on disk)."""
     return make_lane_kernels(np.dtype(dtype), METHODS[method])
+
+
+pin_module(__name__)

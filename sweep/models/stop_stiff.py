@@ -28,6 +28,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..jitcache import pin, pin_module
 from ..solvers.vmath import exp_f32, exp_f64
 from .stop import FAST
 
@@ -55,4 +56,7 @@ def make_stiff_rate(dtype):
         r = half * (g + math.sqrt(g * g + quarter * abs(b))) + floor
         return (s + s_c) / (one + r * (s + s_c))
 
-    return stiff_rate, step_factor
+    return pin(stiff_rate, f.__name__), pin(step_factor, f.__name__)
+
+
+pin_module(__name__)

@@ -24,6 +24,8 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
 
+from ..jitcache import pin_module
+
 __all__ = ["exp_f64", "exp_f32"]
 
 
@@ -76,7 +78,7 @@ _LO_32, _HI_32 = _F(-87.0), _F(88.0)
 _P32 = tuple(_F(1.0 / math.factorial(i)) for i in range(8))
 
 
-@njit(inline="always", fastmath={"nsz", "contract"}, error_model="numpy", cache=True)
+@njit(inline="always", fastmath={"nsz": True, "contract": True}, error_model="numpy", cache=True)
 def exp_f64(x: float) -> float:
     """exp(x) for float64, relative error <= 2.3e-16 for -708 <= x <= 708 (clamped outside)."""
     x = min(max(x, -708.0), 708.0)
@@ -92,7 +94,7 @@ def exp_f64(x: float) -> float:
     return p * _bits_as_float((_float_as_bits(t) - _ROUND_BITS + 1023) << 52)
 
 
-@njit(inline="always", fastmath={"nsz", "contract"}, error_model="numpy", cache=True)
+@njit(inline="always", fastmath={"nsz": True, "contract": True}, error_model="numpy", cache=True)
 def exp_f32(x):
     """exp(x) for float32, relative error <= 2 ulp for -87 <= x <= 88 (clamped outside)."""
     x = min(max(x, _LO_32), _HI_32)
@@ -105,3 +107,6 @@ def exp_f32(x):
     p = c[0] + r * (c[1] + r * q)
     # numba widens int32 arithmetic to int64: narrow back before reinterpreting the bits as float32
     return p * _bits_as_float(np.int32((_float_as_bits(t) - _ROUND_BITS_32 + _BIAS_32) << _SHIFT_32))
+
+
+pin_module(__name__)

@@ -1,0 +1,41 @@
+"""Stable identities for numba dispatchers, so that kernels built by factories load from numba's disk cache.
+
+numba keys a cached closure by a pickle of its closure cells; a cell holding another dispatcher pickles that
+dispatcher's instance UUID, a fresh random one in every process. Kernels built by factories (one per float type
+and tableau: models/stop_lanes.py, models/stop.py, models/stop_stiff.py) therefore missed the cache in every new
+process and recompiled (~8 s per process, and the cache index grew by one entry each time). :func:`pin` gives a
+dispatcher (or intrinsic) a UUID derived from its module, qualified name and variant instead, so the pickle, and
+the cache key, are the same in every process (the fastmath options are dicts, not sets, for the same reason:
+models/stop.py FAST).
+"""
+
+from __future__ import annotations
+
+import sys
+
+from numba.core.dispatcher import Dispatcher
+from numba.core.extending import _Intrinsic
+
+__all__ = ["pin", "pin_module"]
+
+
+def pin(dispatcher: Dispatcher | _Intrinsic, *variant: object) -> Dispatcher | _Intrinsic:
+    """Set a stable UUID "sweep:<module>.<qualname>[:variant...]" on a dispatcher or intrinsic (no-op if it has
+    one)."""
+    func = dispatcher.py_func if isinstance(dispatcher, Dispatcher) else dispatcher._defn
+    name = ":".join(["sweep", f"{func.__module__}.{func.__qualname__}", *map(str, variant)])
+    try:
+        dispatcher._set_uuid(name)
+    except AssertionError:  # already identified (e.g. pickled before): keep it
+        pass
+    return dispatcher
+
+
+def pin_module(name: str) -> None:
+    """:func:`pin` every dispatcher and intrinsic defined at the top level of the module ``name`` (call it at the
+    module's end as ``pin_module(__name__)``)."""
+    for value in vars(sys.modules[name]).values():
+        if isinstance(value, Dispatcher) and value.py_func.__module__ == name:
+            pin(value)
+        elif isinstance(value, _Intrinsic) and value._defn.__module__ == name:
+            pin(value)
