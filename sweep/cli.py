@@ -40,6 +40,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from .plot import plot_landscape
 
     compile_s = warm_up(scene, plan)
+    t_line = time.perf_counter()
+    from .hopf import locate_hopf
+
+    locate_hopf(scene.params, scene.V[:1], bifurcation=False)  # compile / load the kernel of the simulated line
+    compile_s += time.perf_counter() - t_line
     t0 = time.perf_counter()
     ds = run_sweep(scene, progress=None if not args.quiet else False,
                    history="sweep " + " ".join(shlex.quote(a) for a in sys.argv[1:]))
