@@ -1,4 +1,5 @@
-"""The driven protocol over a (K/M, V) grid: one quasi-static simulation per point (sweep/models/driven.py)."""
+"""The driven protocol over a (K/M, V) grid: one simulation per point (sweep/models/driven.py), quasi-static or
+with inertia (Scene.model)."""
 
 from __future__ import annotations
 
@@ -29,7 +30,8 @@ def describe(scene: Scene) -> dict[str, str]:
     """What the driven run chose, for the Dataset attrs."""
     return {
         "model": scene.model + (" (gamma = V^2/(g D0) per V)" if scene.model == "inertial" else ""),
-        "method": f"dp5 (adaptive, PI control) in tau on (z = tau - xi, u = ln psi), local rtol "
+        "method": f"dp5 (adaptive, PI control) in tau on (z = tau - xi, u = ln psi"
+                  f"{', w = ln xi' if scene.model == 'inertial' else ''}), local rtol "
                   f"{stepper_rtol(scene.rtol):g} x max(perturbation, |z|)",
         "regime_rule": (f"runaway: slip velocity > {RUNAWAY_XI_DOT:g} V; steady: state below {DECAYED:g} x "
                         f"perturbation or 3 per-cycle growth rates < 0 agreeing to {GROWTH_RTOL:g}; stationary: "

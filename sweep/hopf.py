@@ -2,11 +2,11 @@
 driven scene changes sign, and the type of the bifurcation decided from simulations around it.
 
 For each V: the line is bracketed around the linear prediction chi_c = mu1(V) (1 + gamma/A) (gamma = 0 for the
-quasi-static model), the sign of the
-growth rate measured from the simulated envelope (sweep/models/driven.py, a perturbation of SIGN_PERTURBATION,
-SIGN_CYCLES cycles) is checked at both ends, and the bracket is bisected until its relative width is below ``rtol``
-(default 0.1 %); K_over_M_c is its midpoint. The linear value is stored beside it. Where mu1(V) <= 0 there is no
-line (steady sliding is stable at every stiffness): NaN and bifurcation "none".
+quasi-static model), the sign of the growth rate measured from the simulated envelope (sweep/models/driven.py, a
+perturbation of SIGN_PERTURBATION, SIGN_CYCLES cycles) is checked at both ends, and the bracket is bisected until
+its relative width is below ``rtol`` (default 0.1 %); K_over_M_c is its midpoint. The linear value is stored
+beside it. Where mu1(V) <= 0 there is no line (steady sliding is stable at every stiffness): NaN and bifurcation
+"none".
 
 The bifurcation type is decided from simulations, never assumed:
 
