@@ -1,4 +1,4 @@
-"""Driven scene, quasi-static model (PHYSICS.md 3b): stability of steady sliding and stick-slip, per point.
+"""Driven scene (PHYSICS.md 3b): stability of steady sliding and stick-slip, per point, quasi-static or inertial.
 
 The drive keeps moving at V. In reduced time tau, with the spring stretch z = tau - xi and u = ln psi,
 
@@ -11,6 +11,11 @@ xi' rises by orders of magnitude) are the same smooth equations, and the adaptiv
 (PI controller) takes steps of ~A/(chi e^w) in a slip and long steps in a stick. A slip velocity beyond
 RUNAWAY_XI_DOT ends the point as ``runaway`` (the quasi-static model breaks down: m2 = 0 below the Hopf line
 overflows in finite time), before any exponent can overflow.
+
+With inertia (gamma = V^2/(g D0) > 0) the Newton equation gamma xi'' = chi z - dmu(psi) - A ln(xi' psi) makes
+w = ln xi' a third state, w' = ((chi z - dmu)/A - u - w) e^-w A/gamma, relaxing at the rate A/(gamma xi'): stiff
+for small gamma/A and in long stick phases, where this explicit stepper takes many steps (max_steps then leaves the
+point undecided); near steady sliding (xi' ~ 1) it is cheap, which is where the Hopf line is located.
 
 The run starts from steady sliding with the spring stretched by ``perturbation`` (z(0) = perturbation, u(0) = 0).
 Each cycle of the oscillation is cut at its maximum of z (z' = 1 - e^w turns negative, located by Newton on exact
@@ -82,7 +87,7 @@ however flat its later cycles are."""
 MIN_CYCLES = 3
 HISTORY = 4  # cycles kept for the decisions
 
-_C, _A, _B, _E = (np.ascontiguousarray(x) for x in DP5.arrays())
+_, _A, _B, _E = (np.ascontiguousarray(x) for x in DP5.arrays())
 _STAGES = _B.size
 
 
