@@ -6,7 +6,7 @@
   side, and the largest relative distance between the two lines;
 * throughput of the driven scene: run_sweep on a 40 x 20 (K/M, V) grid of sample2, points per second, per
   regime (mean steps and cycles), 1 thread and 2 threads;
-* the regime map with the analytic and the simulated Hopf lines (PNG).
+* the regime map with the analytic and the simulated Hopf lines (sweep.plot.plot_regimes, PNG).
 
 Writes benchmarks/results/hopf.json and hopf.png. Run: python benchmarks/hopf.py (~1 min on 2 cores).
 """
@@ -27,6 +27,7 @@ from _common import loadavg, machine_info, sweep_digest  # noqa: E402
 import sweep  # noqa: E402
 from sweep import physics  # noqa: E402
 from sweep.models.driven import Regime  # noqa: E402
+from sweep.plot import plot_regimes  # noqa: E402
 
 OUT = Path(__file__).resolve().parent / "results"
 PARAMS = sweep.presets["sample2"]
@@ -93,34 +94,8 @@ def main() -> None:
     }
     OUT.mkdir(exist_ok=True)
     (OUT / "hopf.json").write_text(json.dumps(result, indent=1))
-    plot(ds, line, OUT / "hopf.png")
+    plot_regimes(ds, OUT / "hopf.png")  # the run_sweep file carries the simulated line (K_over_M_c_simulated)
     print(json.dumps(result, indent=1))
-
-
-def plot(ds, line, path):
-    """The driven regime map with the analytic and the simulated Hopf lines."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7.5, 5.5), dpi=110)
-    names = ds["regime"].attrs["flag_meanings"].split()
-    km, v_um = ds["K_over_M"].values, ds["V"].values * 1e6
-    mesh = ax.pcolormesh(km, v_um, ds["regime"].values.T, shading="nearest", cmap="tab10", vmin=-0.5, vmax=9.5)
-    for code, name in enumerate(names):
-        if (ds["regime"].values == code).any():
-            ax.plot([], [], "s", color=mesh.cmap(mesh.norm(code)), label=name)
-    lv = line["V"].values * 1e6
-    ax.plot(line["K_over_M_c_linear"].values, lv, "k-", lw=1.5, label="Hopf line, linear (eq. 3)")
-    ax.plot(line["K_over_M_c"].values, lv, "w.", ms=5, label="Hopf line, located by simulation")
-    ax.set(xscale="log", yscale="log", xlim=(km.min(), km.max()), ylim=(v_um.min(), v_um.max()),
-           xlabel="K/M [s$^{-2}$]", ylabel="V [µm/s]",
-           title="driven scene, sample2, quasi-static: regime from a perturbation of 1e-3")
-    ax.legend(fontsize=8, loc="lower left")
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
 
 
 if __name__ == "__main__":

@@ -29,7 +29,7 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "") -> 
         plan = make_plan(scene)
         raw = execute(scene, plan, progress=progress)
         ds = build_dataset(scene, plan, raw, history=history or "sweep.run_sweep")
-    return with_simulated_line(ds, scene.params)
+    return with_simulated_line(ds, scene.params, scene.model)
 
 
 def solve_point(params: FrictionParams, K_over_M: float, V: float, rtol: float = 1e-6,

@@ -47,12 +47,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
     compile_s += time.perf_counter() - t_line
     t0 = time.perf_counter()
     ds = run_sweep(scene, progress=None if not args.quiet else False,
-                   history="sweep " + " ".join(shlex.quote(a) for a in sys.argv[1:]))
+                   history=_history())
     out = save(ds, args.output)
     elapsed = time.perf_counter() - t0
     print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, {scene.n_points / max(elapsed, 1e-9):,.0f} "
           f"points/s; kernel {'compiled' if compile_s > 2 else 'loaded'} in {compile_s:.1f} s beforehand)")
-    print(_status_summary(ds))
+    print(_flag_summary(ds, "status"))
     try:
         print(f"wrote {plot_landscape(ds, args.png or out.with_suffix('.png'))}")
     except Exception as exc:  # the results are safe on disk; a failed picture must not hide that
@@ -76,22 +76,27 @@ def _run_driven(scene, args: argparse.Namespace) -> int:
         return 0
     t0 = time.perf_counter()
     ds = run_sweep(scene, progress=None if not args.quiet else False,
-                   history="sweep " + " ".join(shlex.quote(a) for a in sys.argv[1:]))
+                   history=_history())
     out = save(ds, args.output)
     elapsed = time.perf_counter() - t0
     print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, including compilation on a first run)")
-    print(_status_summary(ds))
-    names = ds["regime"].attrs["flag_meanings"].split()
-    codes, counts = np.unique(ds["regime"].values, return_counts=True)
-    print("regime: " + ", ".join(f"{names[c]} {n}" for c, n in zip(codes, counts)))
+    print(_flag_summary(ds, "status"))
+    print(_flag_summary(ds, "regime"))
     print(f"wrote {plot_regimes(ds, args.png or out.with_suffix('.png'))}")
     return 0
 
 
-def _status_summary(ds) -> str:
-    meanings = ds["status"].attrs["flag_meanings"].split()
-    codes, counts = np.unique(ds["status"].values, return_counts=True)
-    return "status: " + ", ".join(f"{meanings[c]} {n}" for c, n in zip(codes, counts))
+def _history() -> str:
+    """The command line, for the file's history attribute."""
+    return "sweep " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+
+
+def _flag_summary(ds, name: str) -> str:
+    """"name: meaning count, ..." of a flag variable."""
+    meanings = ds[name].attrs["flag_meanings"].split()
+    codes, counts = np.unique(ds[name].values, return_counts=True)
+    return f"{name}: " + ", ".join(f"{meanings[c]} {n}" for c, n in zip(codes, counts))
+
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:
@@ -117,7 +122,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
         print(f"  {name}: {c.values.min():.4g} .. {c.values.max():.4g} [{c.units}]")
     for key in sorted(k for k in ds.attrs if k.startswith("plan_")):
         print(f"  {key}: {ds.attrs[key]}")
-    print("  " + _status_summary(ds))
+    print("  " + _flag_summary(ds, "status"))
     for name, var in ds.data_vars.items():
         vals = var.values[np.isfinite(var.values)] if var.dtype.kind == "f" else var.values
         rng = f"{vals.min():.4g} .. {vals.max():.4g}" if vals.size else "all NaN"
@@ -135,11 +140,9 @@ def _cmd_hopf(args: argparse.Namespace) -> int:
     params, v, kwargs = hopf_config(args.config)
     t0 = time.perf_counter()
     ds = locate_hopf(params, v, **kwargs)
-    ds.attrs["history"] = "sweep " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    ds.attrs["history"] = _history()
     out = save(ds, args.output)
-    names = ds["bifurcation"].attrs["flag_meanings"].split()
-    kinds = ", ".join(f"{names[c]} {n}" for c, n in zip(*np.unique(ds["bifurcation"].values, return_counts=True)))
-    print(f"wrote {out} ({v.size} velocities in {time.perf_counter() - t0:.2f} s; bifurcation: {kinds})")
+    print(f"wrote {out} ({v.size} velocities in {time.perf_counter() - t0:.2f} s; {_flag_summary(ds, 'bifurcation')})")
     print(f"wrote {plot_hopf(ds, args.png or out.with_suffix('.png'))}")
     return 0
 

@@ -180,7 +180,7 @@ def build_driven_dataset(scene: Scene, out: dict[str, np.ndarray], seconds: floa
     coords["chi_c_quasistatic"] = coords["chi_c"]
     coords["chi_c"] = _var("V", physics.chi_c_inertial(mu1[0], p.A, gamma_v), "1",
                            f"reduced stiffness on the Hopf line of the {scene.model} model (NaN: no Hopf line)")
-    coords["Omega_c"] = _var("V", physics.Omega_c(scene.V, physics.mu1(scene.V, p.m1, p.m2, p.V0), p.A, p.D0),
+    coords["Omega_c"] = _var("V", physics.Omega_c(scene.V, mu1[0], p.A, p.D0),
                              "s-1", "critical pulsation on the Hopf line (V/D0) sqrt(mu1/A) (NaN: no line)")
     attrs = _attrs(scene, "Stability of steady sliding and stick-slip of the Baumberger-Gauthier spring-block model "
                    "(driven scene)", "regime runaway is status quasistatic_breakdown", history, seconds)

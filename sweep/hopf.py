@@ -41,7 +41,7 @@ SIGN_PERTURBATION = 1e-5
 SIGN_CYCLES = 4
 STEPPER_RTOL = 1e-10
 BRACKET = 0.1
-"""Initial bracket chi_c_linear x (1 -+ BRACKET), widened (doubled) until the measured signs differ."""
+"""Initial bracket chi_c_linear x (1 -+ BRACKET), widened by the same factors until the measured signs differ."""
 TYPE_DISTANCE = 0.004
 SQRT_LAW_SPREAD = 0.15
 LARGE_PERTURBATION = 0.5
@@ -174,9 +174,10 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "quasis
     return ds
 
 
-def with_simulated_line(ds: xr.Dataset, params: FrictionParams) -> xr.Dataset:
-    """``ds`` (a sweep over V) with the coordinate ``K_over_M_c_simulated`` [s-2]: the Hopf line located by
-    simulation at each V (:func:`locate_hopf` without the type; ~2 ms per velocity), next to the analytic chi_c."""
-    line = locate_hopf(params, ds["V"].values, bifurcation=False)
+def with_simulated_line(ds: xr.Dataset, params: FrictionParams, model: str = "quasistatic") -> xr.Dataset:
+    """``ds`` (a sweep over V) with the coordinate ``K_over_M_c_simulated`` [s-2]: the Hopf line of ``model``
+    located by simulation at each V (:func:`locate_hopf` without the type; ~2 ms per velocity), next to the
+    analytic chi_c."""
+    line = locate_hopf(params, ds["V"].values, model=model, bifurcation=False)
     attrs = {**line["K_over_M_c"].attrs, "comment": line.attrs["method"]}
     return ds.assign_coords(K_over_M_c_simulated=("V", line["K_over_M_c"].values, attrs))
