@@ -188,15 +188,20 @@ def test_fsal_stage_is_the_derivative_at_the_step_end():
 
 # ---------------------------------------------------------------------------------------------- Rosenbrock
 
-def test_ros4_passes_its_order_conditions_and_is_stable_for_decaying_modes():
-    from sweep.solvers import ROS4
+@pytest.mark.parametrize("name, order, r_inf", [("ROS4", 4, 1.0 / 3.0), ("RODAS3", 3, 0.0)])
+def test_rosenbrock_methods_pass_their_order_conditions_and_are_stable_for_decaying_modes(name, order, r_inf):
+    import sweep.solvers
 
-    alpha, gam, b = ROS4.standard_form()
-    for name, value, want in rosenbrock_conditions(alpha, gam, b, ROS4.gamma):
-        assert value == pytest.approx(want, abs=1e-13), name
-    assert abs(ROS4.stability_at_infinity()) == pytest.approx(1.0 / 3.0, abs=1e-12)
+    tab = getattr(sweep.solvers, name)
+    alpha, gam, b = tab.standard_form()
+    n_conditions = {3: 4, 4: 8}[order]
+    for cond, value, want in rosenbrock_conditions(alpha, gam, b, tab.gamma)[:n_conditions]:
+        assert value == pytest.approx(want, abs=1e-13), cond
+    if order == 3:  # and not order 4: the fourth-order conditions fail
+        assert any(abs(v - w) > 1e-3 for _, v, w in rosenbrock_conditions(alpha, gam, b, tab.gamma)[4:])
+    assert abs(tab.stability_at_infinity()) == pytest.approx(r_inf, abs=1e-12)  # RODAS3: L-stable
     # A-stability on the imaginary axis and in the left half-plane: |R(z)| <= 1 (HW IV.7.14)
-    B = alpha + gam + ROS4.gamma * np.eye(4)
+    B = alpha + gam + tab.gamma * np.eye(4)
     z = np.concatenate([1j * np.geomspace(1e-3, 1e4, 200), -np.geomspace(1e-3, 1e4, 200),
                         np.geomspace(1e-3, 1e4, 200) * np.exp(1j * 0.75 * np.pi)])
     R = np.array([1.0 + zz * b @ np.linalg.solve(np.eye(4) - zz * B, np.ones(4)) for zz in z])

@@ -26,7 +26,7 @@ import numpy as np
 
 from .tableau import COEFFICIENT_TOL
 
-__all__ = ["ROS4", "RosenbrockTableau", "rosenbrock_conditions"]
+__all__ = ["RODAS3", "ROS4", "RosenbrockTableau", "rosenbrock_conditions"]
 
 
 def rosenbrock_conditions(alpha: np.ndarray, gam: np.ndarray, b: np.ndarray, gamma: float) -> list[tuple[str, float,
@@ -152,4 +152,23 @@ ROS4 = RosenbrockTableau(
     e=(17.0 / 54.0, 7.0 / 36.0, 0.0, 125.0 / 108.0),
     order=4,
     order_hat=3,
+)
+
+
+RODAS3 = RosenbrockTableau(
+    # Sandu, Verwer, Blom, Spee, Carmichael & Potra (1997), "Benchmarking stiff ODE solvers for atmospheric
+    # chemistry problems II: Rosenbrock solvers", Atmos. Environ. 31, 3459-3472: RODAS3, order 3 with an embedded
+    # order-2 solution, L-stable (R(inf) = 0) and stiffly accurate (the solution is the last stage's input plus
+    # its increment), so a stiff component is damped to its slow manifold in one step whatever h times its rate.
+    # Stage 2 reuses stage 1's f (a_2j = 0, alpha_2 = 0).
+    name="rodas3",
+    gamma=0.5,
+    a=_lower([[0.0], [2.0, 0.0], [2.0, 0.0, 1.0]], 4),
+    c=_lower([[4.0], [1.0, -1.0], [1.0, -1.0, -8.0 / 3.0]], 4),
+    alpha_x=(0.0, 0.0, 1.0, 1.0),
+    gamma_x=(0.5, 1.5, 0.0, 0.0),
+    m=(2.0, 0.0, 1.0, 1.0),
+    e=(0.0, 0.0, 0.0, 1.0),
+    order=3,
+    order_hat=2,
 )
