@@ -66,7 +66,8 @@ TAU_HORIZON_NO_LIMIT = 1e12
 TAIL_TARGET = 1e-17  # T(u_end) target, times min(1, A/chi)
 DOP853_MAX_NFEV = 120_000  # ~10^4 steps; beyond that the problem is stiff: switch to Radau
 
-__all__ = ["ReferenceSolution", "TwoPhaseSolution", "reference_stop", "has_finite_limit", "tail_integral"]
+__all__ = ["ReferenceSolution", "TwoPhaseSolution", "reference_stop", "reference_stop_from", "has_finite_limit",
+           "tail_integral"]
 
 
 def has_finite_limit(mu1: float, m2: float) -> bool:
@@ -109,16 +110,20 @@ class TwoPhaseSolution:
     """Dense output over S of the two phases (module docstring), as the state (xi, u = ln psi); ``ts`` are the
     step points of both phases (increasing)."""
 
-    def __init__(self, early: OdeSolution, late: OdeSolution | None):
+    def __init__(self, early: OdeSolution | None, late: OdeSolution | None):
+        """``early`` is None for a start already in the late phase (:func:`reference_stop_from`)."""
         self.early, self.late = early, late
         self.S_switch = late.t_min if late is not None else math.inf
-        self.ts = early.ts if late is None else np.concatenate((early.ts, late.ts[1:]))
+        if early is None:
+            self.ts = late.ts
+        else:
+            self.ts = early.ts if late is None else np.concatenate((early.ts, late.ts[1:]))
 
     def __call__(self, S) -> np.ndarray:
         S = np.asarray(S, dtype=float)
         flat = np.atleast_1d(S).ravel()
         y = np.empty((2, flat.size))
-        first = flat <= self.S_switch
+        first = flat <= self.S_switch if self.early is not None else np.zeros(flat.shape, dtype=bool)
         if np.any(first):
             y[:, first] = self.early(flat[first])
         if np.any(~first):
@@ -257,10 +262,14 @@ def _solve_phase(chi, A, mu1, m2, S0, S_end, y0, method, count, budget, late):
     return res
 
 
-def _solve(chi, A, mu1, m2, S_end, method, budget):
-    """Both phases up to S_end; returns (TwoPhaseSolution, (xi, u) at S_end, evaluations)."""
+def _solve(chi, A, mu1, m2, S_end, method, budget, S0=0.0, xi0=0.0, u0=0.0):
+    """Both phases from the state (xi0, u0) at S0 (default: the stop, (0, 0) at 0) up to S_end; returns
+    (TwoPhaseSolution, (xi, u) at S_end, evaluations)."""
     count = [0]
-    early = _solve_phase(chi, A, mu1, m2, 0.0, S_end, [0.0, 0.0], method, count, budget, late=False)
+    if S0 > 0.0 and u0 >= 0.5 * S0:  # the start is already in the late phase
+        late = _solve_phase(chi, A, mu1, m2, S0, S_end, [xi0, u0 - S0], method, count, budget, late=True)
+        return TwoPhaseSolution(None, late.sol), late.y[:, -1] + [0.0, S_end], count[0]
+    early = _solve_phase(chi, A, mu1, m2, S0, S_end, [xi0, u0], method, count, budget, late=False)
     if early.status != 1:  # u stayed below S/2 up to the horizon
         return TwoPhaseSolution(early.sol, None), early.y[:, -1], count[0]
     S_sw, (xi_sw, u_sw) = float(early.t_events[0][0]), early.y_events[0][0]
@@ -272,7 +281,22 @@ def _solve(chi, A, mu1, m2, S_end, method, budget):
 def reference_stop(chi: float, A: float, mu1: float, m2: float, method: str = "auto") -> ReferenceSolution:
     """Reference quasi-static stop transient (cached). ``method``: "auto" (DOP853 with a budget of
     DOP853_MAX_NFEV evaluations, then Radau), "DOP853" (no budget) or "Radau" (forced; for cross-checks)."""
-    chi, A, mu1, m2 = float(chi), float(A), float(mu1), float(m2)
+    return _reference(float(chi), float(A), float(mu1), float(m2), method, 0.0, 0.0, 0.0)
+
+
+@functools.cache
+def reference_stop_from(chi: float, A: float, mu1: float, m2: float, S0: float, xi0: float, u0: float,
+                        method: str = "auto") -> ReferenceSolution:
+    """As :func:`reference_stop`, but the quasi-static transient continues from the state xi = xi0, u = ln psi =
+    u0 at S = S0 = ln(1 + tau0) (cached; used by reference_inertial.py after its hand-over). ``sol``, ``xi`` and
+    ``psi`` are then defined for tau >= tau0 only; ``xi_inf`` is the limit of that continuation."""
+    S0, xi0, u0 = float(S0), float(xi0), float(u0)
+    if not (S0 >= 0.0 and math.isfinite(xi0) and math.isfinite(u0)):
+        raise ValueError("need S0 >= 0 and a finite state")
+    return _reference(float(chi), float(A), float(mu1), float(m2), method, S0, xi0, u0)
+
+
+def _reference(chi, A, mu1, m2, method, S0, xi0, u0) -> ReferenceSolution:
     if not (chi > 0.0 and A > 0.0):
         raise ValueError("chi and A must be > 0")
     t0 = time.perf_counter()
@@ -283,6 +307,8 @@ def reference_stop(chi: float, A: float, mu1: float, m2: float, method: str = "a
     else:
         u_need = None
         S_end = math.log1p(TAU_HORIZON_NO_LIMIT)
+    if S0 >= S_end:
+        raise ValueError(f"start S0 = {S0} lies beyond the horizon S_end = {S_end}")
 
     methods = ["DOP853", "Radau"] if method == "auto" else [method]
     for _ in range(8):  # extend the horizon if u lags S too much for the tail bound
@@ -290,7 +316,7 @@ def reference_stop(chi: float, A: float, mu1: float, m2: float, method: str = "a
         for m in methods:
             try:
                 res = _solve(chi, A, mu1, m2, S_end, m, DOP853_MAX_NFEV if m == "DOP853" and method == "auto"
-                             else math.inf)
+                             else math.inf, S0, xi0, u0)
                 used = m
                 break
             except _Budget:
