@@ -31,18 +31,24 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(plan.text())
         print(f"{'grid':>28}: {scene.shape[0]} K/M x {scene.shape[1]} V, rtol {scene.rtol:g}, "
               f"observables {', '.join(scene.observables)}")
+        print(f"{'model':>28}: {scene.model}" + (f" (model_tol {scene.model_tol:g}: per point, inertial where the "
+                                                  f"estimated error of the quasi-static model is larger; the "
+                                                  f"estimate and the inertial points are not in the time estimate)"
+                                                  if scene.model == "auto" else ""))
         print(f"{'estimated steps per point':>28}: {mean_steps:.0f} (mean of a pilot subsample)")
         print(f"{'estimated time':>28}: {seconds:.1f} s on this machine")
         return 0
     from .api import run_sweep
     from .engine import warm_up
     from .io import save
+    from .model_choice import warm_up_models
     from .plot import plot_landscape
 
     compile_s = warm_up(scene, plan)
     t_line = time.perf_counter()
     from .hopf import locate_hopf
 
+    warm_up_models()
     locate_hopf(scene.params, scene.V[:1], bifurcation=False)  # compile / load the kernel of the simulated line
     compile_s += time.perf_counter() - t_line
     t0 = time.perf_counter()
@@ -53,6 +59,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, {scene.n_points / max(elapsed, 1e-9):,.0f} "
           f"points/s; kernel {'compiled' if compile_s > 2 else 'loaded'} in {compile_s:.1f} s beforehand)")
     print(_flag_summary(ds, "status"))
+    print(_model_summary(ds))
     try:
         print(f"wrote {plot_landscape(ds, args.png or out.with_suffix('.png'))}")
     except Exception as exc:  # the results are safe on disk; a failed picture must not hide that
@@ -81,6 +88,7 @@ def _run_driven(scene, args: argparse.Namespace) -> int:
     elapsed = time.perf_counter() - t0
     print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, including compilation on a first run)")
     print(_flag_summary(ds, "status"))
+    print(_model_summary(ds))
     print(_flag_summary(ds, "regime"))
     print(f"wrote {plot_regimes(ds, args.png or out.with_suffix('.png'))}")
     return 0
@@ -97,6 +105,15 @@ def _flag_summary(ds, name: str) -> str:
     codes, counts = np.unique(ds[name].values, return_counts=True)
     return f"{name}: " + ", ".join(f"{meanings[c]} {n}" for c, n in zip(codes, counts))
 
+
+def _model_summary(ds) -> str:
+    """The model flag counts, and the largest estimated error of the quasi-static model where it was used."""
+    text = _flag_summary(ds, "model")
+    if "model_error" in ds:
+        used = ds["model_error"].where(ds["model"] == 0)
+        if bool(used.notnull().any()):
+            text += f" (largest estimated error of the quasi-static model where used: {float(used.max()):.2g})"
+    return text
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:
@@ -142,7 +159,8 @@ def _cmd_hopf(args: argparse.Namespace) -> int:
     ds = locate_hopf(params, v, **kwargs)
     ds.attrs["history"] = _history()
     out = save(ds, args.output)
-    print(f"wrote {out} ({v.size} velocities in {time.perf_counter() - t0:.2f} s; {_flag_summary(ds, 'bifurcation')})")
+    print(f"wrote {out} ({v.size} velocities in {time.perf_counter() - t0:.2f} s; {_flag_summary(ds, 'bifurcation')}; "
+          f"{_flag_summary(ds, 'model')})")
     print(f"wrote {plot_hopf(ds, args.png or out.with_suffix('.png'))}")
     return 0
 

@@ -14,6 +14,7 @@ import xarray as xr
 
 from . import physics
 from .engine import RawResult
+from .model_choice import ESTIMATE_RTOL, MODEL_FLAG, TIGHTER, ModelChoice, line_uses_inertia
 from .plan import Plan
 from .scene import Scene
 from .status import Status, flag_attrs
@@ -45,15 +46,21 @@ def _var(dims, data, units: str, long_name: str, **attrs) -> xr.Variable:
 def _coords(scene: Scene) -> dict[str, xr.Variable]:
     p = scene.params
     mu1 = physics.mu1(scene.V, p.m1, p.m2, p.V0)
+    gamma = physics.inertia_number(scene.V, p.D0, p.g)
+    line_inertial = line_uses_inertia(gamma / p.A, scene.model, scene.model_tol)
     coords = {
         "K_over_M": _var("K_over_M", scene.K_over_M, "s-2", "spring stiffness over slider mass K/M"),
         "V": _var("V", scene.V, "m s-1", "driving velocity before the stop"),
         "chi": _var("K_over_M", physics.reduced_stiffness(scene.K_over_M, p.D0, p.g), "1",
                     "reduced stiffness chi = K D0/(M g)"),
         "mu1": _var("V", mu1, "1", "velocity-weakening slope mu1(V) = m1 - 2 m2 ln(V/V0)"),
-        "chi_c": _var("V", physics.chi_c_quasistatic(mu1), "1",
-                      "reduced stiffness on the Hopf line of the quasi-static model (NaN: no Hopf line, mu1 <= 0)"),
-        "gamma": _var("V", physics.inertia_number(scene.V, p.D0, p.g), "1", "inertia number gamma = V^2/(g D0)"),
+        "chi_c": _var("V", physics.chi_c_inertial(mu1, p.A, gamma * line_inertial), "1",
+                      "reduced stiffness on the Hopf line of the model used at this V, mu1 (1 + gamma/A) with inertia "
+                      "(NaN: no Hopf line, mu1 <= 0)", comment=_line_model_comment(scene)),
+        "chi_c_quasistatic": _var("V", physics.chi_c_quasistatic(mu1), "1",
+                                  "reduced stiffness on the Hopf line of the quasi-static model mu1 (paper eq. 3; NaN: "
+                                  "no Hopf line)"),
+        "gamma": _var("V", gamma, "1", "inertia number gamma = V^2/(g D0)"),
     }
     if "trajectory" in scene.observables:
         coords["tau"] = _var("tau", scene.tau_samples, "1", "reduced time after the stop tau = V t/D0")
@@ -62,21 +69,43 @@ def _coords(scene: Scene) -> dict[str, xr.Variable]:
     return coords
 
 
-def build_dataset(scene: Scene, plan: Plan, raw: RawResult, history: str = "") -> xr.Dataset:
+def _line_model_comment(scene: Scene) -> str:
+    if scene.model == "auto":
+        return (f"inertial model where gamma/A > model_tol = {scene.model_tol:g} (inertia shifts the line by gamma/A "
+                f"relative), quasi-static elsewhere")
+    return f"{scene.model} model"
+
+
+def _model_variables(scene: Scene, choice: ModelChoice, grid) -> dict[str, xr.Variable]:
+    """The per-point model flag and, with model="auto", the quasi-static model's estimated error."""
+    out = {"model": _var(DIMS, grid(choice.inertial.astype(np.int8)), "1", "model used for the point", **MODEL_FLAG)}
+    if choice.model_error is not None:
+        out["model_error"] = _var(
+            DIMS, grid(choice.model_error), "1", "relative error of xi_inf with the quasi-static model",
+            comment=f"first-order inertial correction (estimated at rtol {ESTIMATE_RTOL:g}) where the quasi-static "
+                    f"model is used (model = 0: 1.5 x model_error <= model_tol = {scene.model_tol:g}); measured "
+                    f"between the two models where inertia was solved for; NaN where there is no finite xi_inf")
+    return out
+
+
+def build_dataset(scene: Scene, plan: Plan, raw: RawResult, choice: ModelChoice, history: str = "") -> xr.Dataset:
     """Assemble the Dataset of a stop sweep from the kernel's flat outputs."""
     shape = scene.shape
     p = scene.params
     grid = lambda a: a.reshape(shape + a.shape[1:])  # noqa: E731
     xi_inf = grid(raw.xi_inf)
     chi = plan.chi.reshape(shape)
-    stable = physics.stable_sliding(chi, plan.mu1.reshape(shape), p.A).astype(np.int8)
+    gamma_used = physics.inertia_number(scene.V, p.D0, p.g) * line_uses_inertia(
+        physics.inertia_number(scene.V, p.D0, p.g) / p.A, scene.model, scene.model_tol)
+    stable = physics.stable_sliding(chi, plan.mu1.reshape(shape), p.A, gamma_used[None, :]).astype(np.int8)
     xi_in = np.asarray(physics.xi_inertial(physics.inertia_number(scene.V, p.D0, p.g)[None, :], chi))
     data = {
         "xi_inf": _var(DIMS, xi_inf, "1", "relaxed slip after the stop in units of D0, Dx_inf/D0"),
         "slip_inf": _var(DIMS, p.D0 * xi_inf, "m", "relaxed slip after the stop Dx_inf"),
         "stress_relaxation": _var(DIMS, chi * xi_inf, "1", "reduced stress relaxation K Dx_inf/(M g) = chi xi_inf"),
-        "stable": _var(DIMS, stable, "1", "steady sliding at V is linearly stable (quasi-static model)",
+        "stable": _var(DIMS, stable, "1", "steady sliding at V is linearly stable (model of chi_c)",
                        flag_values=np.array([0, 1], np.int8), flag_meanings="unstable stable"),
+        **_model_variables(scene, choice, grid),
         "status": _var(DIMS, grid(raw.status), "1", "numerical status of the point", **flag_attrs()),
         "steps": _var(DIMS, grid(raw.steps), "1", "steps taken by the point (fine run of the first pass)"),
         "xi_inertial": _var(DIMS, xi_in, "1", "slip of a pure inertial stop (constant friction) in units of D0, "
@@ -115,7 +144,19 @@ def build_dataset(scene: Scene, plan: Plan, raw: RawResult, history: str = "") -
                    history, raw.seconds)
     attrs["plan_hash"] = plan.hash()
     attrs.update({f"plan_{k}": v for k, v in plan.describe().items()})
+    attrs["plan_model"] = _describe_models(scene, choice)
     return xr.Dataset(data, coords=_coords(scene), attrs=attrs)
+
+
+def _describe_models(scene: Scene, choice: ModelChoice) -> str:
+    n_in = int(np.count_nonzero(choice.inertial))
+    inertial = (f"inertial at {n_in} point(s): rodas3 (L-stable Rosenbrock, analytic Jacobian) in contact-age time "
+                f"on (xi, ln(xi' psi)), handed over to the quasi-static form once inertia is below 0.1 rtol, error "
+                f"estimate |x(rtol) - x(rtol/{TIGHTER:g})|")
+    if scene.model == "auto":
+        return (f"auto (model_tol {scene.model_tol:g}): quasi-static at {choice.inertial.size - n_in} point(s), "
+                f"{inertial}")
+    return f"{scene.model} (forced)" + (f"; {inertial}" if scene.model == "inertial" else "")
 
 
 def _attrs(scene: Scene, title: str, comment: str, history: str, seconds: float) -> dict[str, object]:
@@ -144,8 +185,9 @@ def build_driven_dataset(scene: Scene, out: dict[str, np.ndarray], seconds: floa
     grid = lambda a: a.reshape(shape)  # noqa: E731
     chi = physics.reduced_stiffness(scene.K_over_M, p.D0, p.g)[:, None] * np.ones(shape)
     mu1 = physics.mu1(scene.V, p.m1, p.m2, p.V0)[None, :] * np.ones(shape)
-    gamma_v = physics.inertia_number(scene.V, p.D0, p.g) * (scene.model == "inertial")
-    gamma = gamma_v[None, :] * np.ones(shape)
+    gamma_v = physics.inertia_number(scene.V, p.D0, p.g)
+    inertial = grid(out["inertial"])
+    gamma = gamma_v[None, :] * inertial  # per point: the model it used
     root = physics.characteristic_roots(chi, mu1, p.A, gamma)[..., 0]  # the leading root (sorted)
     with np.errstate(divide="ignore"):
         period_linear = np.where(root.imag != 0.0, 2.0 * np.pi / np.abs(root.imag), np.nan)
@@ -156,8 +198,9 @@ def build_driven_dataset(scene: Scene, out: dict[str, np.ndarray], seconds: floa
                        **regime_attrs),
         "status": _var(DIMS, grid(out["status"]), "1", "numerical status of the point", **flag_attrs()),
         "stable": _var(DIMS, physics.stable_sliding(chi, mu1, p.A, gamma).astype(np.int8), "1",
-                       f"steady sliding at V is linearly stable ({scene.model} model)",
+                       "steady sliding at V is linearly stable (model used by the point)",
                        flag_values=np.array([0, 1], np.int8), flag_meanings="unstable stable"),
+        "model": _var(DIMS, inertial.astype(np.int8), "1", "model used for the point", **MODEL_FLAG),
         "growth_rate_linear": _var(DIMS, root.real, "1",
                                    "reduced growth rate of small oscillations, linear theory Re sigma (per unit tau)"),
         "period_linear": _var(DIMS, period_linear, "1",
@@ -175,11 +218,14 @@ def build_driven_dataset(scene: Scene, out: dict[str, np.ndarray], seconds: floa
     if "amplitude" in scene.observables:
         data["amplitude"] = _var(DIMS, grid(out["amplitude"]), "1",
                                  "half the peak-to-peak spring stretch tau - xi on the attractor (0: steady sliding)")
+    if scene.model == "auto":
+        data["model_error"] = _var(DIMS, np.broadcast_to(gamma_v / p.A, shape).copy(), "1",
+                                   "relative shift of the Hopf line (and of chi where the linear growth rate changes "
+                                   "sign) if the quasi-static model is used: gamma/A",
+                                   comment=f"quasi-static where gamma/A <= model_tol = {scene.model_tol:g} (and the "
+                                           "run did not break down: regime runaway is run again with inertia)")
     coords = _coords(scene)
     coords["V"].attrs["long_name"] = "driving velocity"
-    coords["chi_c_quasistatic"] = coords["chi_c"]
-    coords["chi_c"] = _var("V", physics.chi_c_inertial(mu1[0], p.A, gamma_v), "1",
-                           f"reduced stiffness on the Hopf line of the {scene.model} model (NaN: no Hopf line)")
     coords["Omega_c"] = _var("V", physics.Omega_c(scene.V, mu1[0], p.A, p.D0),
                              "s-1", "critical pulsation on the Hopf line (V/D0) sqrt(mu1/A) (NaN: no line)")
     attrs = _attrs(scene, "Stability of steady sliding and stick-slip of the Baumberger-Gauthier spring-block model "

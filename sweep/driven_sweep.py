@@ -10,12 +10,14 @@ import xarray as xr
 
 from . import physics
 from .dataset import build_driven_dataset
-from .models.driven import DECAYED, GROWTH_RTOL, NEUTRAL_SPREAD, RUNAWAY_XI_DOT, STATIONARY_TOL, simulate_batch
+from .model_choice import line_uses_inertia
+from .models.driven import DECAYED, GROWTH_RTOL, NEUTRAL_SPREAD, RUNAWAY_XI_DOT, STATIONARY_TOL, Regime, simulate_batch
 from .progress import Progress
 from .scene import Scene
 
 __all__ = ["run_driven", "stepper_rtol"]
 
+W_TEXT = ", w = ln xi' with inertia"
 CHUNK = 1024
 """Points per progress update."""
 
@@ -29,9 +31,11 @@ def stepper_rtol(rtol: float) -> float:
 def describe(scene: Scene) -> dict[str, str]:
     """What the driven run chose, for the Dataset attrs."""
     return {
-        "model": scene.model + (" (gamma = V^2/(g D0) per V)" if scene.model == "inertial" else ""),
+        "model": {"auto": f"auto (model_tol {scene.model_tol:g}): inertial where gamma/A > model_tol and where the "
+                          f"quasi-static run broke down (regime runaway), quasi-static elsewhere (variable model)",
+                  "inertial": "inertial (gamma = V^2/(g D0) per V)", "quasistatic": "quasistatic"}[scene.model],
         "method": f"dp5 (adaptive, PI control) in tau on (z = tau - xi, u = ln psi"
-                  f"{', w = ln xi' if scene.model == 'inertial' else ''}), local rtol "
+                  f"{W_TEXT if scene.model != 'quasistatic' else ''}), local rtol "
                   f"{stepper_rtol(scene.rtol):g} x max(perturbation, |z|)",
         "regime_rule": (f"runaway: slip velocity > {RUNAWAY_XI_DOT:g} V; steady: state below {DECAYED:g} x "
                         f"perturbation or 3 per-cycle growth rates < 0 agreeing to {GROWTH_RTOL:g}; stationary: "
@@ -50,17 +54,31 @@ def run_driven(scene: Scene, progress: bool | None = None, history: str = "") ->
     k = np.repeat(chi / p.A, scene.V.size)
     a = np.tile(mu1 / p.A, scene.K_over_M.size)
     b = np.full(k.size, p.m2 / p.A)
-    gamma = physics.inertia_number(scene.V, p.D0, p.g) if scene.model == "inertial" else np.zeros(scene.V.size)
-    g = np.tile(gamma / p.A, scene.K_over_M.size)
+    gamma_over_A = physics.inertia_number(scene.V, p.D0, p.g) / p.A
+    G = np.tile(gamma_over_A, scene.K_over_M.size)
+    inertial = np.tile(line_uses_inertia(gamma_over_A, scene.model, scene.model_tol), scene.K_over_M.size)
     n = k.size
     out = {"regime": np.zeros(n, np.int8), "status": np.zeros(n, np.int8), "growth_rate": np.full(n, np.nan),
            "period": np.full(n, np.nan), "amplitude": np.full(n, np.nan), "cycles": np.zeros(n, np.int64),
            "steps": np.zeros(n, np.int64), "peak_w": np.full(n, np.nan)}
+
+    def simulate(points: np.ndarray, bar: Progress) -> None:
+        for start in range(0, points.size, CHUNK):
+            sel = points[start:start + CHUNK]
+            part = {name: v[sel] for name, v in out.items()}
+            simulate_batch(k[sel], a[sel], b[sel], G[sel] * inertial[sel], scene.perturbation,
+                           stepper_rtol(scene.rtol), scene.max_cycles, scene.max_steps, *part.values())
+            for name, v in part.items():
+                out[name][sel] = v
+            bar.update(sel.size)
+
     t0 = time.perf_counter()
     with Progress(n, enabled=progress) as bar:
-        for start in range(0, n, CHUNK):
-            sl = slice(start, min(n, start + CHUNK))
-            simulate_batch(k[sl], a[sl], b[sl], g[sl], scene.perturbation, stepper_rtol(scene.rtol), scene.max_cycles,
-                           scene.max_steps, *(v[sl] for v in out.values()))
-            bar.update(sl.stop - sl.start)
+        simulate(np.arange(n), bar)
+    if scene.model == "auto":  # the quasi-static model broke down: inertia is needed there
+        again = np.flatnonzero((out["regime"] == Regime.RUNAWAY) & ~inertial & (G > 0.0))
+        inertial[again] = True
+        with Progress(again.size, enabled=progress and again.size > 0) as bar:
+            simulate(again, bar)
+    out["inertial"] = inertial
     return build_driven_dataset(scene, out, time.perf_counter() - t0, describe(scene), history=history)

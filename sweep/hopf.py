@@ -32,8 +32,10 @@ import xarray as xr
 from . import physics
 from .dataset import REFERENCES, versions
 from .errors import InputError
+from .model_choice import MODEL_FLAG, line_uses_inertia
 from .models.driven import Regime, simulate_point
 from .params import FrictionParams
+from .scene import MODEL_TOL_RANGE, MODELS
 
 __all__ = ["locate_hopf", "with_simulated_line"]
 
@@ -42,6 +44,8 @@ SIGN_CYCLES = 4
 STEPPER_RTOL = 1e-10
 BRACKET = 0.1
 """Initial bracket chi_c_linear x (1 -+ BRACKET), widened by the same factors until the measured signs differ."""
+INERTIA_NEGLIGIBLE = 1e-2
+"""Inertia is left out of the line's location where gamma/A < INERTIA_NEGLIGIBLE x rtol (:func:`_locate`)."""
 TYPE_DISTANCE = 0.004
 SQRT_LAW_SPREAD = 0.15
 LARGE_PERTURBATION = 0.5
@@ -65,7 +69,13 @@ def _run(k: float, a: float, b: float, g: float, perturbation: float):
 
 def _locate(a: float, b: float, g: float, rtol: float) -> tuple[float, int]:
     """Reduced critical stiffness k_c = chi_c/A where the measured growth rate changes sign, bracketed around
-    the linear value a (1 + g); (value, evaluations)."""
+    the linear value a (1 + g); (value, evaluations).
+
+    Inertia moves the line by g = gamma/A relative; below INERTIA_NEGLIGIBLE x rtol that shift is far inside the
+    bracket, and the explicit driven stepper, whose steps follow the inertial time gamma/A, would take ~1/g steps
+    per cycle for nothing: the line is then located with g = 0 (the bifurcation type still uses the true g)."""
+    if g < INERTIA_NEGLIGIBLE * rtol:
+        g = 0.0
     lo, hi = a * (1.0 + g) * (1.0 - BRACKET), a * (1.0 + g) * (1.0 + BRACKET)
     evaluations = 2
     g_lo, g_hi = _growth(lo, a, b, g), _growth(hi, a, b, g)
@@ -108,19 +118,23 @@ def _bifurcation(k_c: float, a: float, b: float, g: float) -> tuple[str, float]:
     return "undetermined", math.nan
 
 
-def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "quasistatic", rtol: float = 1e-3,
-                bifurcation: bool = True) -> xr.Dataset:
+def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto", rtol: float = 1e-3,
+                bifurcation: bool = True, model_tol: float = 1e-2) -> xr.Dataset:
     """The Hopf line over the velocities ``V`` [m s-1] (Dataset over V).
 
     Variables: ``K_over_M_c`` [s-2] located by simulation (bisection on the sign of the measured growth rate to a
     relative width ``rtol``), ``K_over_M_c_linear`` [s-2] (eq. 3), ``chi_c`` [1], ``Omega_c`` [s-1] (eq. 4),
     ``bifurcation`` (flag: none / supercritical / subcritical / degenerate / undetermined; decided from
     simulations, module docstring) and ``limit_cycle_amplitude`` [1] just below a supercritical line. NaN and
-    "none" where mu1(V) <= 0: steady sliding is then stable at every stiffness. ``model``: "quasistatic" or
-    "inertial" (the full Newton equation with gamma = V^2/(g D0); linear line chi_c = mu1 (1 + gamma/A)).
+    "none" where mu1(V) <= 0: steady sliding is then stable at every stiffness. ``model``: "quasistatic",
+    "inertial" (the full Newton equation with gamma = V^2/(g D0); linear line chi_c = mu1 (1 + gamma/A)) or "auto"
+    (default): per V, inertial where gamma/A > ``model_tol``, the relative shift of the line by inertia (flag
+    variable ``model``).
     """
-    if model not in ("quasistatic", "inertial"):
-        raise InputError(f"model must be 'quasistatic' or 'inertial', got {model!r}")
+    if model not in MODELS:
+        raise InputError(f"model must be one of {list(MODELS)}, got {model!r}")
+    if not (math.isfinite(model_tol) and MODEL_TOL_RANGE[0] <= model_tol <= MODEL_TOL_RANGE[1]):
+        raise InputError(f"model_tol must be in [{MODEL_TOL_RANGE[0]:g}, {MODEL_TOL_RANGE[1]:g}], got {model_tol!r}")
     if not isinstance(params, FrictionParams):
         raise InputError(f"params must be a sweep.FrictionParams, got {type(params).__name__}")
     v = np.asarray(V, dtype=float).reshape(-1)
@@ -130,7 +144,8 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "quasis
         raise InputError(f"rtol must be in [1e-8, 0.1] (relative width of the located bracket), got {rtol!r}")
     p = params
     mu1 = np.asarray(physics.mu1(v, p.m1, p.m2, p.V0), dtype=float)
-    gamma = np.asarray(physics.inertia_number(v, p.D0, p.g), dtype=float) * (model == "inertial")
+    inertial = line_uses_inertia(np.asarray(physics.inertia_number(v, p.D0, p.g)) / p.A, model, model_tol)
+    gamma = np.asarray(physics.inertia_number(v, p.D0, p.g), dtype=float) * inertial
     chi_c, kinds, amps, evals = (np.full(v.size, np.nan), np.zeros(v.size, np.int8), np.full(v.size, np.nan),
                                  np.zeros(v.size, np.int64))
     for i, m in enumerate(mu1):
@@ -148,9 +163,9 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "quasis
     ds = xr.Dataset(
         {
             "K_over_M_c": var(chi_c * to_km, "s-2", "K/M on the Hopf line, located by simulation"),
-            "K_over_M_c_linear": var(np.asarray(physics.hopf_K_over_M(v, p.A, p.m1, p.m2, p.D0, p.V0, p.g,
-                                                                      inertial=model == "inertial")), "s-2",
-                                     "K/M on the Hopf line, linear theory (eq. 3)"),
+            "K_over_M_c_linear": var(np.asarray(physics.chi_c_inertial(mu1, p.A, gamma)) * to_km, "s-2",
+                                     "K/M on the Hopf line, linear theory (eq. 3; times 1 + gamma/A with inertia)"),
+            "model": var(inertial.astype(np.int8), "1", "model used at this V", **MODEL_FLAG),
             "gamma": var(np.asarray(physics.inertia_number(v, p.D0, p.g)), "1", "inertia number V^2/(g D0)"),
             "chi_c": var(chi_c, "1", "reduced critical stiffness located by simulation"),
             "Omega_c": var(np.asarray(physics.Omega_c(v, mu1, p.A, p.D0)), "s-1",
@@ -165,7 +180,9 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "quasis
         },
         coords={"V": var(v, "m s-1", "driving velocity")},
         attrs={"Conventions": "CF-1.11", "title": "Hopf line of the Baumberger-Gauthier spring-block model",
-               "source": versions(), "references": REFERENCES, "model": model, "rtol": rtol,
+               "source": versions(), "references": REFERENCES, "rtol": rtol,
+               "model": model + (f" (model_tol {model_tol:g}: inertial where gamma/A > model_tol)"
+                                 if model == "auto" else ""),
                "method": (f"bisection on the sign of the growth rate measured over {SIGN_CYCLES} cycles of a "
                           f"{SIGN_PERTURBATION:g} perturbation (dp5, local rtol {STEPPER_RTOL:g}); type from runs "
                           f"at {TYPE_DISTANCE:g} and {4 * TYPE_DISTANCE:g} below and above the line"),
@@ -174,10 +191,11 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "quasis
     return ds
 
 
-def with_simulated_line(ds: xr.Dataset, params: FrictionParams, model: str = "quasistatic") -> xr.Dataset:
+def with_simulated_line(ds: xr.Dataset, params: FrictionParams, model: str = "auto",
+                        model_tol: float = 1e-2) -> xr.Dataset:
     """``ds`` (a sweep over V) with the coordinate ``K_over_M_c_simulated`` [s-2]: the Hopf line of ``model``
     located by simulation at each V (:func:`locate_hopf` without the type; ~2 ms per velocity), next to the
     analytic chi_c."""
-    line = locate_hopf(params, ds["V"].values, model=model, bifurcation=False)
+    line = locate_hopf(params, ds["V"].values, model=model, bifurcation=False, model_tol=model_tol)
     attrs = {**line["K_over_M_c"].attrs, "comment": line.attrs["method"]}
     return ds.assign_coords(K_over_M_c_simulated=("V", line["K_over_M_c"].values, attrs))

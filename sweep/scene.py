@@ -29,7 +29,9 @@ OBSERVABLES = ("xi_inf", "trajectory", "slip_at", "t50", "t90")
 DRIVEN_OBSERVABLES = ("regime", "growth_rate", "period", "amplitude")
 """Observables of the driven protocol (regime, with status, is always stored)."""
 DRIVEN_METHODS = ("auto", "dp5")
-MODELS = ("quasistatic", "inertial")
+MODELS = ("auto", "quasistatic", "inertial")
+MODEL_TOL_RANGE = (1e-6, 0.5)
+"""Allowed bound on the relative error of the model choice (Scene.model_tol)."""
 PERTURBATION_RANGE = (1e-8, 1.0)
 """Allowed initial spring stretch of the driven scene (reduced, z = tau - xi)."""
 DEFAULT_ATOL = {"xi_inf": 1e-12, "trajectory": 1e-12, "slip_at": 1e-12, "t50": 0.0, "t90": 0.0}
@@ -108,10 +110,16 @@ class Scene:
         driven only: initial spring stretch z(0) = tau - xi away from steady sliding (reduced, 1e-8..1).
     max_cycles : int
         driven only: oscillation cycles per point before it is left ``undecided`` (>= 4).
-    model : "quasistatic" | "inertial"
-        The paper's quasi-static model, or (driven only, so far) the full Newton equation with the inertia number
-        gamma = V^2/(g D0). The inertial stop scene and the per-point automatic choice (model="auto",
-        model_tol) are not implemented yet: asking for them is an error.
+    model : "auto" | "quasistatic" | "inertial"
+        The paper's quasi-static model, the full Newton equation with the inertia number gamma = V^2/(g D0)
+        (PHYSICS.md 3a/3b), or (default) per point the quasi-static model where its estimated error is at most
+        ``model_tol`` and the inertial one elsewhere (sweep/model_choice.py; the file records the choice per point
+        in ``model`` and the estimate in ``model_error``). Stop scenes with the inertial model compute the relaxed
+        slip only (observables = ("xi_inf",)); with "auto", a point that needs inertia while time-resolved
+        observables are asked for keeps its quasi-static values with status model_error_above_tol.
+    model_tol : float
+        Bound on the relative error of the model choice, 1e-6 <= model_tol <= 0.5 (default 1e-2); ``rtol`` bounds
+        the numerical error of the model used.
     """
 
     protocol: str
@@ -129,7 +137,8 @@ class Scene:
     max_steps: int = 1_000_000
     perturbation: float = 1e-3
     max_cycles: int = 2000
-    model: str = "quasistatic"
+    model: str = "auto"
+    model_tol: float = 1e-2
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen dataclass)
@@ -206,13 +215,8 @@ class Scene:
         if isinstance(self.max_cycles, bool) or not isinstance(self.max_cycles, (int, np.integer)) \
                 or self.max_cycles < 4:
             raise InputError(f"max_cycles must be an integer >= 4, got {self.max_cycles!r}")
-        if self.model not in MODELS:
-            raise InputError(f"model must be one of {list(MODELS)} (model='auto' is not implemented yet), "
-                             f"got {self.model!r}")
+        self._check_model()
         if self.protocol != "driven":
-            if self.model != "quasistatic":
-                raise InputError(f"protocol 'stop' runs the quasi-static model only so far (the inertial stop "
-                                 f"scene is not implemented yet), got model={self.model!r}")
             return
         if self.method not in DRIVEN_METHODS:
             raise InputError(f"protocol 'driven' runs the adaptive dp5 stepper: method must be one of "
@@ -221,6 +225,24 @@ class Scene:
                                      ("t_obs", self.t_obs, ())):
             if value != default:
                 raise InputError(f"{name} is not used by protocol 'driven' (leave it at {default!r}), got {value!r}")
+
+    def _check_model(self) -> None:
+        if self.model not in MODELS:
+            raise InputError(f"model must be one of {list(MODELS)}, got {self.model!r}")
+        tol = require_positive("model_tol", self.model_tol)
+        if not MODEL_TOL_RANGE[0] <= tol <= MODEL_TOL_RANGE[1]:
+            raise InputError(f"model_tol must be in [{MODEL_TOL_RANGE[0]:g}, {MODEL_TOL_RANGE[1]:g}] (relative "
+                             f"error of the model choice), got {tol!r}")
+        object.__setattr__(self, "model_tol", tol)
+        if self.protocol == "stop" and self.model == "inertial":
+            if self.observables != ("xi_inf",):
+                raise InputError(f"model 'inertial' computes the relaxed slip only (observables = ['xi_inf']), got "
+                                 f"observables={list(self.observables)}")
+            for name, value, default in (("method", self.method, "auto"), ("step", self.step, None),
+                                         ("precision", self.precision, "float64")):
+                if value != default:
+                    raise InputError(f"{name} is not used by model 'inertial' (its stepper is the adaptive "
+                                     f"Rosenbrock rodas3; leave {name} at {default!r}), got {value!r}")
 
     def _check_trajectory_tau(self) -> None:
         try:
@@ -270,7 +292,8 @@ class Scene:
         if self.protocol == "driven":
             lines.append(f"perturbation = {self.perturbation!r}")
             lines.append(f"max_cycles = {int(self.max_cycles)}")
-            lines.append(f'model = "{self.model}"')
+        lines.append(f'model = "{self.model}"')
+        lines.append(f"model_tol = {self.model_tol!r}")
         lines.append("[atol]")
         lines += [f"{k} = {v!r}" for k, v in sorted(self.atol.items())]
         lines.append("[params]")
@@ -362,11 +385,11 @@ def _read_toml(source: str | Path) -> dict[str, Any]:
 
 def hopf_config(source: str | Path) -> tuple[FrictionParams, np.ndarray, dict[str, Any]]:
     """(params, V axis, keyword arguments of sweep.locate_hopf) from a TOML file with preset and/or [params], a
-    [V] axis table and optionally rtol and model (other scene keys, e.g. [K_over_M], are ignored)."""
+    [V] axis table and optionally rtol, model and model_tol (other scene keys, e.g. [K_over_M], are ignored)."""
     cfg = _read_toml(source)
     if "V" not in cfg:
         raise InputError("hopf needs the [V] axis table of velocities [m s-1]")
-    kwargs = {k: cfg[k] for k in ("rtol", "model") if k in cfg}
+    kwargs = {k: cfg[k] for k in ("rtol", "model", "model_tol") if k in cfg}
     return _params_from(cfg), _axis_from_toml("V", cfg["V"]), kwargs
 
 

@@ -33,6 +33,10 @@ class Status(IntEnum):
     QUASISTATIC_BREAKDOWN = 6
     """Driven scene: the slip velocity passed the threshold in the file's attrs (regime runaway): the quasi-static
     model no longer describes the point (inertia is needed)."""
+    MODEL_ERROR_ABOVE_TOL = 7
+    """Stop scene with model="auto" and time-resolved observables: the quasi-static model's estimated error
+    (``model_error``) exceeds model_tol, and the inertial model computes the relaxed slip only: the quasi-static
+    values are kept for inspection (ask for observables = ["xi_inf"] to get the inertial result)."""
 
 
 def flag_attrs() -> dict[str, object]:

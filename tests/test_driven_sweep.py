@@ -30,7 +30,9 @@ def driven(**kw) -> sweep.Scene:
     (dict(observables=("xi_inf",)), "observables"),
     (dict(step=0.1), "step"),
     (dict(precision="float32"), "precision"),
-    (dict(model="auto"), "model"),
+    (dict(model="newtonian"), "model"),
+    (dict(model_tol=0.0), "model_tol"),
+    (dict(model_tol=0.9), "model_tol"),
 ])
 def test_bad_driven_scene_names_the_parameter(kw, name):
     with pytest.raises(InputError, match=name):
@@ -40,7 +42,7 @@ def test_bad_driven_scene_names_the_parameter(kw, name):
 def test_driven_grid_follows_the_linear_theory():
     """Where the linear growth rate is clearly negative the regime is steady and the measured rate (from at
     least two cycles) equals it; where clearly positive the point is not steady; every status is a known one."""
-    ds = sweep.run_sweep(driven(), progress=False)
+    ds = sweep.run_sweep(driven(model="quasistatic"), progress=False)
     regime, lin, grow = ds["regime"].values, ds["growth_rate_linear"].values, ds["growth_rate"].values
     clearly_stable, clearly_unstable = lin < -1e-3, lin > 1e-3
     assert clearly_stable.sum() >= 5 and clearly_unstable.sum() >= 3
@@ -80,9 +82,11 @@ def test_cli_runs_a_driven_scene(tmp_path, capsys):
     assert (tmp_path / "p.png").stat().st_size > 10_000
 
 
-def test_stop_scene_refuses_the_inertial_model_it_does_not_have():
-    with pytest.raises(InputError, match="model"):
-        sweep.Scene(protocol="stop", params=PARAMS, K_over_M=KM, V=V, model="inertial")
+def test_inertial_stop_scene_refuses_what_it_does_not_compute():
+    """The inertial stop computes the relaxed slip only, with its own stepper."""
+    for kw in (dict(observables=("xi_inf", "trajectory")), dict(method="rk4"), dict(precision="float32", rtol=1e-4)):
+        with pytest.raises(InputError, match="model 'inertial'"):
+            sweep.Scene(protocol="stop", params=PARAMS, K_over_M=KM, V=V, model="inertial", **kw)
 
 
 def test_inertial_driven_grid_follows_its_own_linear_theory():

@@ -10,7 +10,8 @@ PARAMS = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0033, D0=0.7e-6)
 
 
 def scene(**kw):
-    base = dict(protocol="stop", params=PARAMS, K_over_M=np.logspace(2, 7, 23), V=np.logspace(-8, -3, 17), step=0.12)
+    base = dict(protocol="stop", params=PARAMS, K_over_M=np.logspace(2, 7, 23), V=np.logspace(-8, -3, 17), step=0.12,
+                model="quasistatic")  # the two quasi-static paths are compared
     return sweep.Scene(**{**base, **kw})
 
 

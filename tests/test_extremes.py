@@ -102,6 +102,7 @@ def reference(chi, A, mu1, m2):
 @functools.cache
 def _run(params, K_over_M, V, rtol, method, max_steps):
     scene = sweep.Scene(protocol="stop", params=params, K_over_M=K_over_M, V=V, rtol=rtol, method=method,
+                        model="quasistatic",
                         max_steps=max_steps)
     with np.errstate(**FPE):
         ds = sweep.run_sweep(scene, progress=False)
@@ -407,7 +408,8 @@ def scenes(draw, m2_over_A=M2_OVER_A_ANY, n_K=(1, 5), n_V=(1, 4)):
     V = np.unique(V0 * np.exp(np.array(lnV)))
     rtol = draw(log_uniform(1e-8, 1e-3))
     method = draw(st.sampled_from(("auto",) + METHODS))
-    return sweep.Scene(protocol="stop", params=params, K_over_M=K, V=V, rtol=rtol, method=method, max_steps=50_000)
+    return sweep.Scene(protocol="stop", params=params, K_over_M=K, V=V, rtol=rtol, method=method, max_steps=50_000,
+                       model="quasistatic")
 
 
 @PROPERTY

@@ -80,7 +80,7 @@ def test_inertial_line_by_simulation_matches_the_analytic_line_for_gamma_over_A_
     np.testing.assert_allclose(ds["gamma"].values / params.A, ratios, rtol=1e-12)
     np.testing.assert_allclose(ds["K_over_M_c_linear"], params.g / params.D0 * params.m1 * (1 + ratios), rtol=1e-12)
     np.testing.assert_allclose(ds["K_over_M_c"], ds["K_over_M_c_linear"], rtol=6e-4)
-    quasi = sweep.locate_hopf(params, v[-1:], bifurcation=False)  # the quasi-static line is 11x lower there
+    quasi = sweep.locate_hopf(params, v[-1:], model="quasistatic", bifurcation=False)  # 11x lower there
     assert float(ds["K_over_M_c"][-1]) / float(quasi["K_over_M_c"][0]) == pytest.approx(11.0, rel=1e-3)
 
 
