@@ -14,8 +14,9 @@ overflows in finite time), before any exponent can overflow.
 
 With inertia (gamma = V^2/(g D0) > 0) the Newton equation gamma xi'' = chi z - dmu(psi) - A ln(xi' psi) makes
 w = ln xi' a third state, w' = ((chi z - dmu)/A - u - w) e^-w A/gamma, relaxing at the rate A/(gamma xi'): stiff
-for small gamma/A and in long stick phases, where this explicit stepper takes many steps (max_steps then leaves the
-point undecided); near steady sliding (xi' ~ 1) it is cheap, which is where the Hopf line is located.
+for small gamma/A and in the stick phases of stick-slip (xi' << 1). A step whose size times that rate exceeds
+STIFF_SWITCH is taken with the L-stable RODAS3 and the analytic 3x3 Jacobian (:func:`inertial_system`) instead of
+Dormand-Prince; near steady sliding (xi' ~ 1, where the Hopf line is located) the explicit stepper stays in use.
 
 The run starts from steady sliding with the spring stretched by ``perturbation`` (z(0) = perturbation, u(0) = 0).
 Each cycle of the oscillation is cut at its maximum of z (z' = 1 - e^w turns negative, located by Newton on exact
@@ -49,7 +50,9 @@ from enum import IntEnum
 import numpy as np
 from numba import njit, prange
 
+from ..jitcache import pin_module
 from ..solvers import DP5
+from ..solvers.rosenbrock_step import ERROR_EXPONENT, make_rodas3_step, scratch
 from ..status import Status
 from .stop import EXP_MAX, FAST
 
@@ -84,6 +87,9 @@ NEUTRAL_START = 2.0
 """...and only where the first cycle is no larger than NEUTRAL_START x the amplitude of the linear oscillation
 through the initial state: an orbit that grew within its first cycle (far below the line) reached a limit cycle,
 however flat its later cycles are."""
+STIFF_SWITCH = 1.5
+"""A step runs RODAS3 instead of Dormand-Prince where h times the inertial mode's rate exceeds this (DP5 is
+stable up to ~3.3 on the negative axis; half of that leaves the explicit steps accuracy-limited)."""
 MIN_CYCLES = 3
 HISTORY = 4  # cycles kept for the decisions
 
@@ -130,26 +136,67 @@ def _step(z, u, w, h, k, a, b, g, kz, ku, kw):
     return z1, u1, w1, ez, eu, ew, w_max
 
 
+@njit(inline="always", fastmath=FAST, error_model="numpy")
+def inertial_system(s, y, p, f, J, ft, jacobian):
+    """The inertial driven equations (:func:`_rates`, g > 0) with their Jacobian in (z, u, w), for the stiff
+    phases (:func:`sweep.solvers.rosenbrock_step.make_rodas3_step`; autonomous: df/dtau = 0)."""
+    k, a, b, g = p
+    z, u, w = y[0], y[1], y[2]
+    balance = k * z - u * (a + b * u) - u
+    e, e_u, c = math.exp(min(w, EXP_MAX)), math.exp(min(-u, EXP_MAX)), math.exp(min(-w, EXP_MAX)) / g
+    f[0], f[1], f[2] = 1.0 - e, e_u - e, (balance - w) * c
+    if jacobian:
+        J[0, 0], J[0, 1], J[0, 2] = 0.0, 0.0, -e
+        J[1, 0], J[1, 1], J[1, 2] = 0.0, -e_u, -e
+        J[2, 0], J[2, 1], J[2, 2] = k * c, -(a + 2.0 * b * u + 1.0) * c, -(1.0 + balance - w) * c
+        ft[0], ft[1], ft[2] = 0.0, 0.0, 0.0
+
+
+_stiff_step = make_rodas3_step(inertial_system)
+
+
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def _extremum(z0, u0, w0, h, dz0, dz1, k, a, b, g, kz, ku, kw):
+def _stiffness(z, u, w, k, a, b, g):
+    """|dw'/dw| of the inertial equations: the rate of the stiff mode A/(gamma xi') (0 without inertia)."""
+    if g == 0.0:
+        return 0.0
+    balance = k * z - u * (a + b * u) - u
+    return abs(1.0 + balance - w) * math.exp(min(-w, EXP_MAX)) / g
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def _advance(stiff, z, u, w, h, k, a, b, g, kz, ku, kw, work):
+    """One step of size h from (z, u, w) whose rates are in kz[0], ku[0], kw[0]: Dormand-Prince, or RODAS3 where
+    ``stiff``; returns (z1, u1, w1, ez, eu, ew) (NaN if the Rosenbrock matrix was singular)."""
+    if not stiff:
+        return _step(z, u, w, h, k, a, b, g, kz, ku, kw)[:6]
+    y, y_new, err, K, M, piv, f, ft, ys = work
+    y[0], y[1], y[2] = z, u, w
+    if not _stiff_step(0.0, y, h, (k, a, b, g), y_new, err, K, M, piv, f, ft, ys):
+        return math.nan, math.nan, math.nan, math.nan, math.nan, math.nan
+    return y_new[0], y_new[1], y_new[2], err[0], err[1], err[2]
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def _extremum(stiff, z0, u0, w0, h, dz0, dz1, k, a, b, g, kz, ku, kw, work):
     """Time offset theta*h and value of the extremum of z inside a step of size h from (z0, u0, w0) where z'
     changes sign (dz0 at the start, dz1 at the end): linear interpolation of z' as a first guess, then Newton on
-    exact partial steps of size theta*h (z'' = -xi' (ln xi')')."""
+    exact partial steps of size theta*h with the step's own method (z'' = -xi' (ln xi')')."""
     theta = dz0 / (dz0 - dz1)
     for _ in range(4):
         kz[0], ku[0], kw[0], _lw = _rates(z0, u0, w0, k, a, b, g)
-        zt, ut, wt, _ez, _eu, _ew, _wm = _step(z0, u0, w0, theta * h, k, a, b, g, kz, ku, kw)
+        zt, ut, wt, _ez, _eu, _ew = _advance(stiff, z0, u0, w0, theta * h, k, a, b, g, kz, ku, kw, work)
         dz, du, dw, lw = _rates(zt, ut, wt, k, a, b, g)
         dlw = k * dz - (a + 2.0 * b * ut) * du - du if g == 0.0 else dw
         ddz = -math.exp(min(lw, EXP_MAX)) * dlw
-        if ddz == 0.0:
+        if ddz == 0.0 or not math.isfinite(ddz):
             break
         delta = -dz / (ddz * h)
         theta = min(max(theta + delta, 0.0), 1.0)
         if abs(delta) < 1e-12:
             break
     kz[0], ku[0], kw[0], _lw = _rates(z0, u0, w0, k, a, b, g)
-    zt, _ut, _wt, _ez, _eu, _ew, _wm = _step(z0, u0, w0, theta * h, k, a, b, g, kz, ku, kw)
+    zt = _advance(stiff, z0, u0, w0, theta * h, k, a, b, g, kz, ku, kw, work)[0]
     return theta * h, zt
 
 
@@ -190,15 +237,18 @@ def simulate_point(k, a, b, g, perturbation, rtol, max_cycles, max_steps):
     cycles, steps = 0, 0
     w_peak = -math.inf
     err_prev = 1e-4
+    work = (np.empty(3), np.empty(3), np.empty(3), *scratch(3))
     dz, du, dw, _lw = _rates(z, u, w, k, a, b, g)
     while steps < max_steps:
         kz[0], ku[0], kw[0] = dz, du, dw
-        z1, u1, w1, ez, eu, ew, _w_max = _step(z, u, w, h, k, a, b, g, kz, ku, kw)
+        # explicit where it is stable, RODAS3 where the inertial mode's rate would hold the explicit step down
+        stiff = h * _stiffness(z, u, w, k, a, b, g) > STIFF_SWITCH
+        z1, u1, w1, ez, eu, ew = _advance(stiff, z, u, w, h, k, a, b, g, kz, ku, kw, work)
         steps += 1
         scale = rtol * max(size, abs(z1), abs(u1), abs(w1))
         err = max(abs(ez), abs(eu), abs(ew)) / scale
         if not err <= 1.0:  # rejected (NaN included: a stage beyond the exponent clamp)
-            h *= max(0.2, 0.9 * err ** -0.2) if math.isfinite(err) else 0.25
+            h *= max(0.2, 0.9 * err ** (ERROR_EXPONENT if stiff else -0.2)) if math.isfinite(err) else 0.25
             if h < 1e-15 * (1.0 + tau):
                 return Regime.UNDECIDED, STEP_UNDERFLOW, grow[-1], per[-1], math.nan, cycles, steps, w_peak
             continue
@@ -214,7 +264,7 @@ def simulate_point(k, a, b, g, perturbation, rtol, max_cycles, max_steps):
         if norm < 0.1 * perturbation and not math.isfinite(t_tenth):
             norm_tenth, t_tenth = norm, tau + h
         if dz > 0.0 and dz1 <= 0.0:  # a maximum of z: a cycle ends
-            dt, z_top = _extremum(z, u, w, h, dz, dz1, k, a, b, g, kz, ku, kw)
+            dt, z_top = _extremum(stiff, z, u, w, h, dz, dz1, k, a, b, g, kz, ku, kw, work)
             t_peak = tau + dt
             if z_min < math.inf and math.isfinite(t_max_prev):
                 cycles += 1
@@ -232,13 +282,15 @@ def simulate_point(k, a, b, g, perturbation, rtol, max_cycles, max_steps):
                     return Regime.UNDECIDED, OK, grow[-1], per[-1], math.nan, cycles, steps, w_peak
             t_max_prev = t_peak
         elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
-            _dt, z_min = _extremum(z, u, w, h, dz, dz1, k, a, b, g, kz, ku, kw)
+            _dt, z_min = _extremum(stiff, z, u, w, h, dz, dz1, k, a, b, g, kz, ku, kw, work)
         z, u, w, tau = z1, u1, w1, tau + h
         dz, du, dw = dz1, du1, dw1
         size = max(size, abs(z))
-        # PI step-size control (Gustafsson), exponents 0.7/5 and 0.4/5
         err = max(err, 1e-10)
-        h *= min(5.0, max(0.2, 0.9 * err ** -0.14 * err_prev ** 0.08))
+        if stiff:
+            h *= min(5.0, max(0.2, 0.9 * err ** ERROR_EXPONENT))
+        else:  # PI step-size control (Gustafsson), exponents 0.7/5 and 0.4/5
+            h *= min(5.0, max(0.2, 0.9 * err ** -0.14 * err_prev ** 0.08))
         err_prev = err
     return Regime.UNDECIDED, MAX_STEPS, grow[-1], per[-1], math.nan, cycles, steps, w_peak
 
@@ -299,3 +351,6 @@ def simulate_driven(chi: float, mu1: float, m2: float, A: float, perturbation: f
     return {"regime": Regime(regime).name.lower(), "status": Status(status).name.lower(), "growth_rate": g,
             "period": T, "amplitude": amp,
             "cycles": int(cycles), "steps": int(steps), "peak_log_velocity": w}
+
+
+pin_module(__name__)

@@ -37,8 +37,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ..jitcache import pin, pin_module
-from ..solvers.rosenbrock import RODAS3
+from ..jitcache import pin_module
+from ..solvers.rosenbrock_step import ERROR_EXPONENT, make_rodas3_step, scratch
 from ..status import Status
 from .stop import EXP_MAX, FAST, tail_integral, tail_is_accurate, tail_slip
 
@@ -51,108 +51,61 @@ HANDOVER_FRACTION = 0.1
 """The inertial term is handed over once below this fraction of rtol (module docstring)."""
 H_START = 1e-3
 """First step in s, times min(1, G, 1/k): the initial layer lasts s ~ G, the stiff start 1/k."""
-LN_R_MAX = 600.0
-"""Cap of ln R in the right-hand side (comment there)."""
 H_FLOOR = 8.0 * 2.220446049250313e-16
 """Smallest step in s, relative to s, before a point is flagged step_underflow (a few ulps: below it s + h
 stops moving). Relative, not absolute: where a fast rebound (k/G large) drops xi' towards 0, ln(xi' psi) has a
 log singularity that the steps resolve down to ~1e-16 near s ~ 0.05, and then grow again."""
 SAFETY, GROW_MAX, SHRINK_MIN = 0.9, 5.0, 0.2
 """Step controller h_new = h min(GROW_MAX, max(SHRINK_MIN, SAFETY err^(-1/3))) (the embedded order is 2)."""
-
-# RODAS3's transformed coefficients (sweep/solvers/rosenbrock.py), read once into constants for the compiler.
-_GAM = RODAS3.gamma
-(_, _, _, _), (_A21, _, _, _), (_A31, _A32, _, _), (_A41, _A42, _A43, _) = RODAS3.a
-(_, _, _, _), (_C21, _, _, _), (_C31, _C32, _, _), (_C41, _C42, _C43, _) = RODAS3.c
-_AL2, _AL3, _AL4 = RODAS3.alpha_x[1:]
-_G1, _G2, _G3, _G4 = RODAS3.gamma_x
-_M1, _M2, _M3, _M4 = RODAS3.m
-_E1, _E2, _E3, _E4 = RODAS3.e
-_SAME_F2 = _A21 == 0.0 and _AL2 == 0.0
-_ERROR_EXPONENT = -1.0 / (RODAS3.order_hat + 1)
+LN_R_MAX = 600.0
+"""Cap of ln R in the right-hand side (comment there)."""
 
 
 @njit(inline="always", fastmath=FAST, error_model="numpy")
-def inertial_rhs(s, xi, q, k, a, b, G):
-    """(f_xi, f_q, J11, J12, J21, J22, df_xi/ds, df_q/ds) of the inertial system in s (module docstring)."""
+def inertial_system(s, y, p, f, J, ft, jacobian):
+    """The inertial system in s (module docstring) for :func:`sweep.solvers.rosenbrock_step.make_rodas3_step`:
+    y = (xi, q), p = (k, a, b, G)."""
+    k, a, b, G = p
+    xi, q = y[0], y[1]
     u = s - xi
     g = a + 2.0 * b * u
     P = k * xi + u * (a + b * u) + q
     # R capped at e^LN_R_MAX: beyond that the inertial term relaxes in far less than any step (L-stability then
-    # slaves it), and the capped value keeps the 2x2 solve in range when xi' plunges towards 0 in a rebound
+    # slaves it), and the capped value keeps the linear algebra in range when xi' plunges towards 0 in a rebound
     R = math.exp(min(2.0 * u - q - math.log(G), LN_R_MAX))
     E = math.exp(q) if q < EXP_MAX else math.nan
-    return (E, 1.0 - E - P * R,
-            0.0, E, R * (2.0 * P - k + g), R * (P - 1.0) - E,
-            0.0, -R * (g + 2.0 * P))
+    f[0], f[1] = E, 1.0 - E - P * R
+    if jacobian:
+        J[0, 0], J[0, 1] = 0.0, E
+        J[1, 0], J[1, 1] = R * (2.0 * P - k + g), R * (P - 1.0) - E
+        ft[0], ft[1] = 0.0, -R * (g + 2.0 * P)
 
 
 @njit(inline="always", fastmath=FAST, error_model="numpy")
-def quasistatic_rhs(s, xi, y, k, a, b, G):
-    """The same for the quasi-static model in s with the first-order inertial correction y (module docstring):
-    dxi/ds = E, dy/ds = J y + S; G = 0 leaves y at 0."""
+def quasistatic_system(s, y, p, f, J, ft, jacobian):
+    """The quasi-static model in s with the first-order inertial correction (module docstring): y = (xi, y),
+    dxi/ds = E, dy/ds = J y + S; p = (k, a, b, G), G = 0 leaves y at 0."""
+    k, a, b, G = p
+    xi, corr = y[0], y[1]
     u = s - xi
     g = a + 2.0 * b * u
     expo = -(k * xi + u * (a + b * u))
-    if expo > EXP_MAX:
-        return math.nan, math.nan, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    E = math.exp(expo)
-    J = E * (g - k)
-    dJ_ds, dJ_dxi = -g * J + 2.0 * b * E, (g - k) * J - 2.0 * b * E
-    if G == 0.0:
-        return E, 0.0, J, 0.0, 0.0, J, -g * E, 0.0
-    w = G * math.exp(2.0 * (expo - u))
+    E = math.exp(expo) if expo < EXP_MAX else math.nan
+    dE = E * (g - k)
+    w = G * math.exp(2.0 * (expo - u)) if G > 0.0 else 0.0
     Q = k * E + (g + 1.0) * (1.0 - E)
     S = w * Q
-    dQ_ds = -k * g * E + 2.0 * b * (1.0 - E) + g * (g + 1.0) * E
-    dQ_dxi = k * (g - k) * E - 2.0 * b * (1.0 - E) - (g + 1.0) * (g - k) * E
-    dS_ds = -2.0 * (g + 1.0) * S + w * dQ_ds
-    dS_dxi = 2.0 * (g - k + 1.0) * S + w * dQ_dxi
-    return E, J * y + S, J, 0.0, y * dJ_dxi + dS_dxi, J, -g * E, y * dJ_ds + dS_ds
+    f[0], f[1] = E, dE * corr + S
+    if jacobian:
+        dQ_ds = -k * g * E + 2.0 * b * (1.0 - E) + g * (g + 1.0) * E
+        dQ_dxi = k * (g - k) * E - 2.0 * b * (1.0 - E) - (g + 1.0) * (g - k) * E
+        J[0, 0], J[0, 1] = dE, 0.0
+        J[1, 0], J[1, 1] = corr * ((g - k) * dE - 2.0 * b * E) + 2.0 * (g - k + 1.0) * S + w * dQ_dxi, dE
+        ft[0], ft[1] = -g * E, corr * (-g * dE + 2.0 * b * E) - 2.0 * (g + 1.0) * S + w * dQ_ds
 
 
-def _make_step(rhs):
-    """One RODAS3 step of a 2-state system given by ``rhs`` (:func:`inertial_rhs` or :func:`quasistatic_rhs`):
-    (y1, y2, e1, e2) = new state and embedded error estimate (HW IV.7.25'; the 2x2 matrix I/(h gamma) - J is
-    inverted once per step). The estimate is not filtered by (I - h gamma J)^-1: tried, it let steps grow past
-    where the inertial term changes sign and ended sample2 runs in step_underflow."""
-
-    @njit(inline="always", fastmath=FAST, error_model="numpy")
-    def step(s, y1, y2, h, k, a, b, G):
-        f1, f2, j11, j12, j21, j22, t1, t2 = rhs(s, y1, y2, k, a, b, G)
-        d = 1.0 / (h * _GAM)
-        m11, m12, m21, m22 = d - j11, -j12, -j21, d - j22
-        det = m11 * m22 - m12 * m21
-        i11, i12, i21, i22 = m22 / det, -m12 / det, -m21 / det, m11 / det
-        # stage 1
-        r1, r2 = f1 + _G1 * h * t1, f2 + _G1 * h * t2
-        u11, u12 = i11 * r1 + i12 * r2, i21 * r1 + i22 * r2
-        # stage 2
-        if not _SAME_F2:
-            f1, f2 = rhs(s + _AL2 * h, y1 + _A21 * u11, y2 + _A21 * u12, k, a, b, G)[:2]
-        r1, r2 = f1 + _C21 * u11 / h + _G2 * h * t1, f2 + _C21 * u12 / h + _G2 * h * t2
-        u21, u22 = i11 * r1 + i12 * r2, i21 * r1 + i22 * r2
-        # stage 3
-        f1, f2 = rhs(s + _AL3 * h, y1 + _A31 * u11 + _A32 * u21, y2 + _A31 * u12 + _A32 * u22, k, a, b, G)[:2]
-        r1 = f1 + (_C31 * u11 + _C32 * u21) / h + _G3 * h * t1
-        r2 = f2 + (_C31 * u12 + _C32 * u22) / h + _G3 * h * t2
-        u31, u32 = i11 * r1 + i12 * r2, i21 * r1 + i22 * r2
-        # stage 4
-        f1, f2 = rhs(s + _AL4 * h, y1 + _A41 * u11 + _A42 * u21 + _A43 * u31,
-                     y2 + _A41 * u12 + _A42 * u22 + _A43 * u32, k, a, b, G)[:2]
-        r1 = f1 + (_C41 * u11 + _C42 * u21 + _C43 * u31) / h + _G4 * h * t1
-        r2 = f2 + (_C41 * u12 + _C42 * u22 + _C43 * u32) / h + _G4 * h * t2
-        u41, u42 = i11 * r1 + i12 * r2, i21 * r1 + i22 * r2
-        return (y1 + _M1 * u11 + _M2 * u21 + _M3 * u31 + _M4 * u41,
-                y2 + _M1 * u12 + _M2 * u22 + _M3 * u32 + _M4 * u42,
-                _E1 * u11 + _E2 * u21 + _E3 * u31 + _E4 * u41,
-                _E1 * u12 + _E2 * u22 + _E3 * u32 + _E4 * u42)
-
-    return pin(step, rhs.py_func.__name__)
-
-
-inertial_step = _make_step(inertial_rhs)
-quasistatic_step = _make_step(quasistatic_rhs)
+inertial_step = make_rodas3_step(inertial_system)
+quasistatic_step = make_rodas3_step(quasistatic_system)
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
@@ -188,9 +141,11 @@ def relax(k, a, b, G, inertial, rtol, atol, max_steps):
     Returns (xi_inf, y_inf, status, steps, s_handover): y_inf the first-order correction (0 for the inertial model),
     s_handover the contact-age time at which inertia was dropped (0 for the quasi-static model).
     """
-    s, xi, v = 0.0, 0.0, 0.0  # v: q (inertial phase) or y (quasi-static phase)
+    y, y_new, err_v = np.zeros(2), np.empty(2), np.empty(2)  # (xi, q) inertial, (xi, y) quasi-static
+    K, M, piv, f, ft, ys = scratch(2)
+    s = 0.0
     phase_inertial = inertial
-    g_sens = 0.0 if inertial else G
+    p_inertial, p_quasi = (k, a, b, G), (k, a, b, 0.0 if inertial else G)
     h = H_START * min(1.0, G, 1.0 / k)
     eps = HANDOVER_FRACTION * rtol
     s_handover = 0.0
@@ -198,33 +153,36 @@ def relax(k, a, b, G, inertial, rtol, atol, max_steps):
     while steps < max_steps:
         steps += 1
         if phase_inertial:
-            x1, v1, e1, e2 = inertial_step(s, xi, v, h, k, a, b, G)
-            err2 = abs(e2) / rtol
+            done = inertial_step(s, y, h, p_inertial, y_new, err_v, K, M, piv, f, ft, ys)
+            err2 = abs(err_v[1]) / rtol
         else:
-            x1, v1, e1, e2 = quasistatic_step(s, xi, v, h, k, a, b, g_sens)
-            err2 = abs(e2) / (rtol * max(abs(v), abs(v1)) + atol * G)
-        err = max(abs(e1) / (rtol * max(abs(xi), abs(x1)) + atol), err2)
-        if not (math.isfinite(err) and math.isfinite(x1) and math.isfinite(v1)):
+            done = quasistatic_step(s, y, h, p_quasi, y_new, err_v, K, M, piv, f, ft, ys)
+            err2 = abs(err_v[1]) / (rtol * max(abs(y[1]), abs(y_new[1])) + atol * G)
+        err = max(abs(err_v[0]) / (rtol * max(abs(y[0]), abs(y_new[0])) + atol), err2)
+        if not (done and math.isfinite(err) and math.isfinite(y_new[0]) and math.isfinite(y_new[1])):
             h *= SHRINK_MIN  # an overflow in a stage: retry smaller, flag once the step underflows
             if h < H_FLOOR * s:
                 return math.nan, math.nan, NONFINITE, steps, s_handover
             continue
-        factor = min(GROW_MAX, max(SHRINK_MIN, SAFETY * err ** _ERROR_EXPONENT)) if err > 0.0 else GROW_MAX
+        factor = min(GROW_MAX, max(SHRINK_MIN, SAFETY * err ** ERROR_EXPONENT)) if err > 0.0 else GROW_MAX
         if err > 1.0:
             h *= factor
             if h < H_FLOOR * s:
                 return math.nan, math.nan, STEP_UNDERFLOW, steps, s_handover
             continue
-        s, xi, v = s + h, x1, v1
+        s += h
+        y[0], y[1] = y_new[0], y_new[1]
         h *= factor
+        xi = y[0]
         if phase_inertial:
-            if _inertia_negligible(s, xi, v, k, a, b, G, eps):
-                phase_inertial, v, s_handover = False, 0.0, s
+            if _inertia_negligible(s, xi, y[1], k, a, b, G, eps):
+                phase_inertial, y[1], s_handover = False, 0.0, s
             continue
         u = s - xi
         E = math.exp(-(k * xi + u * (a + b * u)))
         if tail_is_accurate(k, a, b, u, E, rtol * xi + atol):
-            return xi + tail_slip(k, a, b, u, E), _tail_correction(k, a, b, g_sens, u, E, v), OK, steps, s_handover
+            return (xi + tail_slip(k, a, b, u, E), _tail_correction(k, a, b, p_quasi[3], u, E, y[1]), OK, steps,
+                    s_handover)
     return math.nan, math.nan, MAX_STEPS, steps, s_handover
 
 
