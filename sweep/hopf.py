@@ -10,14 +10,16 @@ beside it. Where mu1(V) <= 0 there is no line (steady sliding is stable at every
 
 The bifurcation type is decided from simulations, never assumed:
 
-* supercritical: just below the line a small perturbation grows into a stationary limit cycle (regime stick_slip)
-  at two distances d and 4d (d = TYPE_DISTANCE), with amplitudes in the ratio of the square root law (2, within
-  SQRT_LAW_SPREAD);
+* supercritical: just below the line a small perturbation grows into stationary limit cycles (regime
+  stick_slip) whose amplitudes follow the square root law: of the runs at distances d, 2d and 4d (d =
+  TYPE_DISTANCE), the closest and farthest decided ones in the ratio sqrt(d2/d1) within SQRT_LAW_SPREAD;
+* subcritical: above the line (at d, then at d/4, still outside the located bracket) a large start
+  (LARGE_PERTURBATION, or 1.2x the largest stick-slip cycle found below) keeps a stick-slip attractor while a
+  small one decays (hysteresis; the window can be narrow: m2 = 0 at gamma/A = 0.1 keeps cycles at 0.1 % above the
+  line, not at 0.4 %);
 * degenerate: no limit cycle on either side: just below the line a small start runs away, just above it a large
   start decays (quasi-static m2 = 0, whose orbits at the line are neutral; the located line is a bracket, so the
   neutral orbits themselves are tested at the exact line in tests/test_driven.py);
-* subcritical: just above the line a large start (LARGE_PERTURBATION, or 1.2x the stick-slip cycle found just
-  below if larger) keeps a stick-slip attractor while a small one decays (hysteresis);
 * undetermined: none of these (e.g. a slow transient left undecided); the type is not guessed.
 """
 
@@ -98,24 +100,30 @@ def _locate(a: float, b: float, g: float, rtol: float) -> tuple[float, int]:
     return 0.5 * (lo + hi), evaluations
 
 
-def _bifurcation(k_c: float, a: float, b: float, g: float) -> tuple[str, float]:
+def _bifurcation(k_c: float, a: float, b: float, g: float, rtol: float) -> tuple[str, float]:
     """Type of the bifurcation at k_c (module docstring) and the limit-cycle amplitude at distance TYPE_DISTANCE
-    below the line (NaN if there is none)."""
-    below = [_run(k_c * (1.0 - f * TYPE_DISTANCE), a, b, g, 1e-4) for f in (1.0, 4.0)]
-    if all(r == Regime.STICK_SLIP for r, _ in below):
-        ratio = below[1][1] / below[0][1]
-        if abs(ratio / 2.0 - 1.0) <= SQRT_LAW_SPREAD:
-            return "supercritical", below[0][1]
-    # a large start: at least the size of the stick-slip cycle found just below, which a subcritical (inverted)
-    # line keeps on its stable side too
-    large = max(LARGE_PERTURBATION, 1.2 * below[0][1]) if below[0][0] == Regime.STICK_SLIP else LARGE_PERTURBATION
-    above_large = _run(k_c * (1.0 + TYPE_DISTANCE), a, b, g, large)
-    if below[0][0] == Regime.RUNAWAY and above_large[0] == Regime.STEADY:
+    below the line (NaN if none was decided there)."""
+    distances = TYPE_DISTANCE * np.array([1.0, 2.0, 4.0])
+    below = [_run(k_c * (1.0 - d), a, b, g, 1e-4) for d in distances]
+    cycles = [(d, amp) for d, (regime, amp) in zip(distances, below) if regime == Regime.STICK_SLIP]
+    amp_near = below[0][1] if below[0][0] == Regime.STICK_SLIP else math.nan
+    if len(cycles) >= 2:
+        (d1, a1), (d2, a2) = cycles[0], cycles[-1]
+        if abs(a2 / a1 / math.sqrt(d2 / d1) - 1.0) <= SQRT_LAW_SPREAD:
+            return "supercritical", amp_near
+    # a large start: at least the size of the stick-slip cycles found below, which a subcritical (inverted) line
+    # keeps on its stable side too, within a window that can be narrow (two distances above the line, the closer
+    # one still outside the located bracket)
+    large = max([LARGE_PERTURBATION] + [1.2 * amp for _, amp in cycles])
+    first_large = None
+    for d in (TYPE_DISTANCE, max(0.25 * TYPE_DISTANCE, rtol)):  # the bracket reaches rtol/2 above k_c
+        above_large = _run(k_c * (1.0 + d), a, b, g, large)[0]
+        first_large = above_large if first_large is None else first_large
+        if above_large == Regime.STICK_SLIP and _run(k_c * (1.0 + d), a, b, g, 1e-4)[0] == Regime.STEADY:
+            return "subcritical", amp_near
+    if below[0][0] == Regime.RUNAWAY and first_large == Regime.STEADY:
         return "degenerate", math.nan
-    above_small = _run(k_c * (1.0 + TYPE_DISTANCE), a, b, g, 1e-4)
-    if above_large[0] == Regime.STICK_SLIP and above_small[0] == Regime.STEADY:
-        return "subcritical", math.nan
-    return "undetermined", math.nan
+    return "undetermined", amp_near
 
 
 def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto", rtol: float = 1e-3,
@@ -154,7 +162,7 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
         k_c, evals[i] = _locate(m / p.A, p.m2 / p.A, gamma[i] / p.A, rtol)
         chi_c[i] = k_c * p.A
         if bifurcation and math.isfinite(k_c):
-            kind, amps[i] = _bifurcation(k_c, m / p.A, p.m2 / p.A, gamma[i] / p.A)
+            kind, amps[i] = _bifurcation(k_c, m / p.A, p.m2 / p.A, gamma[i] / p.A, rtol)
             kinds[i] = BIFURCATIONS.index(kind)
         elif math.isfinite(k_c):
             kinds[i] = BIFURCATIONS.index("undetermined")
@@ -174,7 +182,7 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
                                flag_values=np.arange(len(BIFURCATIONS), dtype=np.int8),
                                flag_meanings=" ".join(BIFURCATIONS)),
             "limit_cycle_amplitude": var(amps, "1", f"stick-slip amplitude (tau - xi) at {TYPE_DISTANCE:g} below "
-                                         "a supercritical line"),
+                                         "the line (NaN: none decided there)"),
             "simulations": var(evals, "1", "driven simulations spent on locating the line"),
             "mu1": var(mu1, "1", "velocity-weakening slope mu1(V)"),
         },

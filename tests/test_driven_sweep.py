@@ -105,3 +105,25 @@ def test_inertial_driven_grid_follows_its_own_linear_theory():
     quasi_unstable = ds["chi"].values[:, None] < ds["chi_c_quasistatic"].values[None, :]
     assert np.any((ds["stable"].values == 0) & ~quasi_unstable)  # unstable only because of inertia
     assert "inertial" in ds.attrs["plan_model"] and 'model = "inertial"' in ds.attrs["scene"]
+
+
+def test_auto_driven_model_per_velocity_and_breakdowns_run_again_with_inertia():
+    """model="auto": inertia where gamma/A > model_tol; below the quasi-static line with m2 = 0 the quasi-static run
+    breaks down (runaway), so the point is run again with inertia and reaches stick-slip (the stick phases are
+    stiff at gamma/A = 2e-3: RODAS3 steps); model_error is the line's relative shift gamma/A; chi_c follows the
+    model of each V, chi_c_quasistatic is kept."""
+    params = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0, D0=0.7e-6)
+    ratios = np.array([2e-3, 5e-2])
+    v = np.sqrt(ratios * params.g * params.D0 * params.A)
+    km = np.array([0.98, 1.2]) * params.m1 * params.g / params.D0
+    ds = sweep.run_sweep(sweep.Scene(protocol="driven", params=params, K_over_M=km, V=v), progress=False)
+    np.testing.assert_array_equal(ds["model"].values, [[1, 1], [0, 1]])
+    np.testing.assert_array_equal(ds["regime"].values, [[Regime.STICK_SLIP, Regime.STICK_SLIP],
+                                                        [Regime.STEADY, Regime.STEADY]])
+    assert np.all(ds["status"].values == sweep.Status.OK)
+    np.testing.assert_allclose(ds["model_error"].values, np.broadcast_to(ratios, (2, 2)), rtol=1e-12)
+    np.testing.assert_allclose(ds["chi_c"].values, params.m1 * np.array([1.0, 1.0 + ratios[1]]), rtol=1e-12)
+    np.testing.assert_allclose(ds["chi_c_quasistatic"].values, params.m1, rtol=1e-12)
+    forced = sweep.run_sweep(sweep.Scene(protocol="driven", params=params, K_over_M=km[:1], V=v[:1],
+                                         model="quasistatic"), progress=False)
+    assert forced["regime"].values[0, 0] == Regime.RUNAWAY and "model_error" not in forced
