@@ -1,6 +1,9 @@
-"""Cost of the Hopf line and of the driven scene (quasi-static model), with the map of both lines.
+"""Cost of the Hopf line and of the driven scene, with the map of both lines.
 
-* the inertial line (sample2 with m2 = 0, gamma/A = 1e-3 .. 10 over 10 velocities) against mu1 (1 + gamma/A);
+* the inertial line (sample2 with m2 = 0, gamma/A = 1e-3 .. 10 over 10 velocities) against mu1 (1 + gamma/A),
+  and its bifurcation type at each velocity;
+* the inertial driven scene deep in stick-slip (the same parameters, chi = 0.3..1.5 chi_c, gamma/A 1e-3..1): stiff
+  stick phases, RODAS3 steps there; points per second and regimes (none should be undecided);
 * locating the line over 50 velocities (sample2, V 0.1..6 um/s where mu1 > 0, and 10..100 um/s where it is not):
   sweep.locate_hopf by simulation (with and without the bifurcation type) vs the analytic line (eq. 3), side by
   side, and the largest relative distance between the two lines;
@@ -57,6 +60,14 @@ def main() -> None:
     v_fast = np.sqrt(np.logspace(-3, 1, 10) * PARAMS.g * PARAMS.D0 * PARAMS.A)
     t_inertial, inertial = best_of(lambda: sweep.locate_hopf(inertial_params, v_fast, model="inertial",
                                                              bifurcation=False), 1)
+    t_inertial_typed, inertial_typed = best_of(lambda: sweep.locate_hopf(inertial_params, v_fast, model="inertial"), 1)
+    inertial_kinds = [inertial_typed["bifurcation"].attrs["flag_meanings"].split()[c]
+                      for c in inertial_typed["bifurcation"].values]
+    deep = sweep.Scene(protocol="driven", params=inertial_params, model="inertial",
+                       K_over_M=np.linspace(0.3, 1.5, 13) * PARAMS.m1 * PARAMS.g / PARAMS.D0,
+                       V=np.sqrt(np.logspace(-3, 0, 7) * PARAMS.g * PARAMS.D0 * PARAMS.A))
+    t_deep, deep_ds = best_of(lambda: sweep.run_sweep(deep, progress=False), 1)
+    deep_regimes = {r.name.lower(): int(np.count_nonzero(deep_ds["regime"].values == r)) for r in Regime}
     has_line = np.isfinite(lin)
     rel = np.abs(line["K_over_M_c"].values[has_line] / lin[has_line] - 1)
     names = line["bifurcation"].attrs["flag_meanings"].split()
@@ -85,9 +96,15 @@ def main() -> None:
                  "simulations_per_velocity_mean": float(line_only["simulations"].values[has_line].mean()),
                  "max_rel_distance_to_linear": float(rel.max()), "bifurcation_counts": kinds},
         "inertial_line": {"params": "sample2 with m2 = 0", "gamma_over_A": [1e-3, 10.0], "velocities": 10,
-                          "seconds_1thread": t_inertial,
+                          "seconds_1thread": t_inertial, "seconds_with_type_1thread": t_inertial_typed,
+                          "bifurcation_by_gamma_over_A": dict(zip((inertial_typed["gamma"].values / PARAMS.A).round(
+                              4).astype(str).tolist(), inertial_kinds)),
                           "max_rel_distance_to_linear": float(np.max(np.abs(
                               inertial["K_over_M_c"].values / inertial["K_over_M_c_linear"].values - 1)))},
+        "inertial_driven_deep_stick_slip": {"shape": list(deep.shape), "chi_over_chi_c": [0.3, 1.5],
+                                            "gamma_over_A": [1e-3, 1.0], "seconds_1thread": t_deep,
+                                            "points_per_s": deep.n_points / t_deep, "regimes": deep_regimes,
+                                            "mean_steps": float(deep_ds["steps"].values.mean())},
         "driven_grid": {"shape": list(scene.shape), **driven, "regimes": regimes,
                         "steady_iff_linearly_stable_fraction": float(agree.mean())},
         "benchmark_wall_s": time.perf_counter() - t_start,

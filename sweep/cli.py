@@ -32,8 +32,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"{'grid':>28}: {scene.shape[0]} K/M x {scene.shape[1]} V, rtol {scene.rtol:g}, "
               f"observables {', '.join(scene.observables)}")
         print(f"{'model':>28}: {scene.model}" + (f" (model_tol {scene.model_tol:g}: per point, inertial where the "
-                                                  f"estimated error of the quasi-static model is larger; the "
-                                                  f"estimate and the inertial points are not in the time estimate)"
+                                                  f"estimated error of the quasi-static model is larger)"
                                                   if scene.model == "auto" else ""))
         print(f"{'estimated steps per point':>28}: {mean_steps:.0f} (mean of a pilot subsample)")
         print(f"{'estimated time':>28}: {seconds:.1f} s on this machine")

@@ -194,8 +194,8 @@ def warm_up(scene: Scene, plan: Plan) -> float:
 
 
 def estimate_seconds(scene: Scene, plan: Plan | None = None, sample: int = 256) -> tuple[float, float]:
-    """Estimate the wall time of the whole sweep from strided pilot subsamples of ``sample`` and 4 x ``sample``
-    points.
+    """Estimate the wall time of the whole sweep (with the choice of model and its inertial points) from strided
+    pilot subsamples of ``sample`` and 4 x ``sample`` points.
 
     Returns (estimated seconds, mean steps per point of the pilot). A call has a fixed cost (~0.4 ms: chunking,
     the ladder's array work, thread start) besides its cost per point, so the estimate is fixed + marginal x N
@@ -204,11 +204,25 @@ def estimate_seconds(scene: Scene, plan: Plan | None = None, sample: int = 256) 
     not inflate the estimate. Sweeps of at most 4 x ``sample`` points are timed whole.
     """
     plan = plan or make_plan(scene)
+    from .model_choice import choose_stop_models, warm_up_models  # (imports this module)
+
     warm_up(scene, plan)
+    if scene.model != "quasistatic":
+        warm_up_models()
+
+    def run(pilot: np.ndarray) -> RawResult:
+        t0 = time.perf_counter()
+        if scene.model == "inertial":
+            raw = RawResult.empty(pilot.size, 0)
+        else:
+            raw = execute(scene, plan, pilot, progress=False)
+        choose_stop_models(scene, plan, raw, pilot)
+        raw.seconds = time.perf_counter() - t0
+        return raw
 
     def timed_pilot(n: int) -> tuple[float, RawResult, int]:
         pilot = np.arange(0, plan.n_points, max(1, plan.n_points // n))
-        runs = [execute(scene, plan, pilot, progress=False) for _ in range(3)]
+        runs = [run(pilot) for _ in range(3)]
         return min(r.seconds for r in runs), runs[0], pilot.size
 
     t_big, res, n_big = timed_pilot(4 * sample)

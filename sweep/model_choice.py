@@ -73,56 +73,59 @@ def _gamma_over_A(scene: Scene) -> np.ndarray:
     return np.tile(gamma, scene.K_over_M.size)
 
 
-def solve_inertial(scene: Scene, plan: Plan, raw: RawResult, points: np.ndarray) -> None:
-    """Replace the relaxed slip of ``points`` (flat indices with a finite limit) in ``raw`` by the inertial
-    model's, with the error estimate |x(rtol) - x(rtol/TIGHTER)| (the tighter value is kept)."""
-    if points.size == 0:
+def solve_inertial(scene: Scene, plan: Plan, raw: RawResult, rows: np.ndarray, idx: np.ndarray) -> None:
+    """Replace the relaxed slip of the rows ``rows`` of ``raw`` (whose rows are the plan's points ``idx``; points
+    with a finite limit) by the inertial model's, with the error estimate |x(rtol) - x(rtol/TIGHTER)| (the tighter
+    value is kept)."""
+    if rows.size == 0:
         return
-    g = _gamma_over_A(scene)[points]
-    args = (plan.k[points], plan.a[points], plan.b[points], g, True)
+    pts = idx[rows]
+    args = (plan.k[pts], plan.a[pts], plan.b[pts], _gamma_over_A(scene)[pts], True)
     atol = scene.atol["xi_inf"]
     fine = relax_points(*args, scene.rtol / TIGHTER, atol / TIGHTER, scene.max_steps)
     coarse = relax_points(*args, scene.rtol, atol, scene.max_steps)
-    raw.xi_inf[points] = fine["xi_inf"]
-    raw.xi_inf_err[points] = np.abs(fine["xi_inf"] - coarse["xi_inf"])
-    raw.status[points] = np.where(fine["status"] != Status.OK, fine["status"], coarse["status"])
-    raw.steps[points] = fine["steps"]
-    raw.work[points] = fine["steps"] + coarse["steps"]
+    raw.xi_inf[rows] = fine["xi_inf"]
+    raw.xi_inf_err[rows] = np.abs(fine["xi_inf"] - coarse["xi_inf"])
+    raw.status[rows] = np.where(fine["status"] != Status.OK, fine["status"], coarse["status"])
+    raw.steps[rows] = fine["steps"]
+    raw.work[rows] = fine["steps"] + coarse["steps"]
 
 
-def choose_stop_models(scene: Scene, plan: Plan, raw: RawResult) -> ModelChoice:
-    """Decide the model of every point of a stop scene, solve the inertial ones, and update ``raw`` in place
-    (module docstring)."""
+def choose_stop_models(scene: Scene, plan: Plan, raw: RawResult, idx: np.ndarray | None = None) -> ModelChoice:
+    """Decide the model of the points ``idx`` (default: all; the rows of ``raw``) of a stop scene, solve the
+    inertial ones, and update ``raw`` in place (module docstring)."""
     t0 = time.perf_counter()
-    n = plan.n_points
-    finite = np.flatnonzero(plan.finite)
+    idx = np.arange(plan.n_points) if idx is None else np.asarray(idx)
+    n = idx.size
+    finite = np.flatnonzero(plan.finite[idx])  # rows
     if scene.model != "auto":
         if scene.model == "inertial":
-            solve_inertial(scene, plan, raw, finite)
-        return ModelChoice(np.full(n, scene.model == "inertial") & plan.finite, None, time.perf_counter() - t0)
-    G = _gamma_over_A(scene)
-    estimate = relax_points(plan.k[finite], plan.a[finite], plan.b[finite], G[finite], False, ESTIMATE_RTOL,
-                            scene.atol["xi_inf"], scene.max_steps)
+            solve_inertial(scene, plan, raw, finite, idx)
+        return ModelChoice(np.full(n, scene.model == "inertial") & plan.finite[idx], None, time.perf_counter() - t0)
+    pts = idx[finite]
+    G = _gamma_over_A(scene)[pts]
+    estimate = relax_points(plan.k[pts], plan.a[pts], plan.b[pts], G, False, ESTIMATE_RTOL, scene.atol["xi_inf"],
+                            scene.max_steps)
     model_error = np.full(n, np.nan)
     ok = estimate["status"] == Status.OK
     model_error[finite[ok]] = np.abs(estimate["correction"][ok] / estimate["xi_inf"][ok])
-    trusted = G * (1.0 + plan.k + np.abs(plan.a)) <= FIRST_ORDER_TRUST
+    trusted = G * (1.0 + plan.k[pts] + np.abs(plan.a[pts])) <= FIRST_ORDER_TRUST
     measure = np.zeros(n, bool)
-    measure[finite] = ~ok | ~trusted[finite] | (ESTIMATE_MARGIN * model_error[finite] > scene.model_tol)
-    points = np.flatnonzero(measure)
-    quasistatic = raw.xi_inf[points].copy()
+    measure[finite] = ~ok | ~trusted | (ESTIMATE_MARGIN * model_error[finite] > scene.model_tol)
+    rows = np.flatnonzero(measure)
+    quasistatic = raw.xi_inf[rows].copy()
     if scene.time_resolved:  # keep the quasi-static values; the inertial xi_inf only measures the gap
         probe = RawResult.empty(n, 0)
-        solve_inertial(scene, plan, probe, points)
-        inertial_xi = probe.xi_inf[points]
+        solve_inertial(scene, plan, probe, rows, idx)
+        inertial_xi = probe.xi_inf[rows]
     else:
-        solve_inertial(scene, plan, raw, points)
-        inertial_xi = raw.xi_inf[points]
+        solve_inertial(scene, plan, raw, rows, idx)
+        inertial_xi = raw.xi_inf[rows]
     with np.errstate(invalid="ignore", divide="ignore"):
         measured = np.abs(inertial_xi / quasistatic - 1.0)
-    model_error[points] = np.where(np.isfinite(measured), measured, model_error[points])
+    model_error[rows] = np.where(np.isfinite(measured), measured, model_error[rows])
     if scene.time_resolved:
-        over = points[~(measured <= scene.model_tol)]
+        over = rows[~(measured <= scene.model_tol)]
         raw.status[over[raw.status[over] == Status.OK]] = Status.MODEL_ERROR_ABOVE_TOL
         return ModelChoice(np.zeros(n, bool), model_error, time.perf_counter() - t0)
     return ModelChoice(measure, model_error, time.perf_counter() - t0)
