@@ -34,7 +34,7 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "") -> 
             raw.status[~plan.finite] = Status.NO_FINITE_LIMIT
         else:
             raw = execute(scene, plan, progress=progress)
-        choice = choose_stop_models(scene, plan, raw)
+        choice = choose_stop_models(scene, plan, raw, progress=progress)
         mark_error_above_tol(scene, raw)
         raw.seconds += choice.seconds
         ds = build_dataset(scene, plan, raw, choice, history=history or "sweep.run_sweep")

@@ -152,7 +152,7 @@ def _describe_models(scene: Scene, choice: ModelChoice) -> str:
     n_in = int(np.count_nonzero(choice.inertial))
     inertial = (f"inertial at {n_in} point(s): rodas3 (L-stable Rosenbrock, analytic Jacobian) in contact-age time "
                 f"on (xi, ln(xi' psi)), handed over to the quasi-static form once inertia is below 0.1 rtol, error "
-                f"estimate |x(rtol) - x(rtol/{TIGHTER:g})|")
+                f"estimate |x(rtol/{TIGHTER:g}) - x(rtol/{TIGHTER**2:g})| (local tolerances)")
     if scene.model == "auto":
         return (f"auto (model_tol {scene.model_tol:g}): quasi-static at {choice.inertial.size - n_in} point(s), "
                 f"{inertial}")

@@ -135,3 +135,33 @@ def test_model_tol_is_checked_before_any_work():
     for bad in (0.0, 1.0, float("nan")):
         with pytest.raises(InputError, match="model_tol"):
             stop(params, [1e3], [1e-6], model_tol=bad)
+
+
+def test_first_order_estimate_where_trusted_is_within_the_routing_margin_of_the_true_gap():
+    """Where model="auto" trusts the first-order estimate (gamma/A (1 + (chi + |mu1|)/A) <= FIRST_ORDER_TRUST), the
+    true gap (inertial vs quasi-static model, both solved tightly) is within [1/ESTIMATE_MARGIN, ESTIMATE_MARGIN]
+    of the estimate, so routing on ESTIMATE_MARGIN x estimate <= model_tol keeps the true error within model_tol,
+    over chi/A 0.1..1e3, mu1/A -4..10 and m2/A 0..2; and well beyond the trusted range it is not (the expansion
+    fails where the slider rebounds inertially), which is why such points are measured instead."""
+    from sweep.model_choice import ESTIMATE_MARGIN, ESTIMATE_RTOL, FIRST_ORDER_TRUST
+    from sweep.models.stop_inertial import relax
+
+    def ratio(k, a, b, G):
+        inertial = relax(k, a, b, G, True, 1e-9, 1e-15, 10**7)
+        quasi = relax(k, a, b, G, False, 1e-9, 1e-15, 10**7)
+        estimate = relax(k, a, b, G, False, ESTIMATE_RTOL, 1e-12, 10**7)
+        assert inertial[2] == quasi[2] == estimate[2] == sweep.Status.OK
+        return (inertial[0] / quasi[0] - 1.0) / abs(estimate[1] / estimate[0])
+
+    ratios = []
+    for k in np.logspace(-1, 3, 5):
+        for a in (-4.0, -1.0, 0.1, 1.0, 10.0):
+            for b in (0.0, 0.5, 2.0):
+                if (b == 0.0 and a <= 0.0) or k <= a:
+                    continue
+                for trust in (0.5 * FIRST_ORDER_TRUST, FIRST_ORDER_TRUST):
+                    ratios.append(ratio(k, a, b, trust / (1.0 + k + abs(a))))
+    ratios = np.array(ratios)
+    assert ratios.size > 40
+    assert np.all((ratios >= 1.0 / ESTIMATE_MARGIN) & (ratios <= ESTIMATE_MARGIN)), (ratios.min(), ratios.max())
+    assert ratio(1e3, 2.0, 0.0, 1.0) > 10.0  # a rebound: gamma/A (1 + (chi + |mu1|)/A) = 1e3
