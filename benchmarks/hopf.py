@@ -7,8 +7,9 @@
 * locating the line over 50 velocities (sample2, V 0.1..6 um/s where mu1 > 0, and 10..100 um/s where it is not):
   sweep.locate_hopf by simulation (with and without the bifurcation type) vs the analytic line (eq. 3), side by
   side, and the largest relative distance between the two lines;
-* throughput of the driven scene: run_sweep on a 40 x 20 (K/M, V) grid of sample2, points per second, per
-  regime (mean steps and cycles), 1 thread and 2 threads;
+* throughput of the driven scene: run_sweep on a 40 x 20 (K/M, V) grid of sample2, quasi-static, points per
+  second, per regime (mean steps and cycles), 1 thread and 2 threads; and with model="auto", where the
+  quasi-static breakdowns (regime runaway) are run again with inertia (gamma/A 2e-5..2e-3 there: stiff);
 * the regime map with the analytic and the simulated Hopf lines (sweep.plot.plot_regimes, PNG).
 
 Writes benchmarks/results/hopf.json and hopf.png. Run: python benchmarks/hopf.py (~1 min on 2 cores).
@@ -73,20 +74,32 @@ def main() -> None:
     names = line["bifurcation"].attrs["flag_meanings"].split()
     kinds = {names[c]: int(n) for c, n in zip(*np.unique(line["bifurcation"].values, return_counts=True))}
 
-    scene = sweep.Scene(protocol="driven", params=PARAMS, **GRID)
+    def regimes_of(ds):
+        out = {}
+        for r in Regime:
+            sel = ds["regime"].values == r
+            if sel.any():
+                out[r.name.lower()] = {"points": int(sel.sum()), "mean_steps": float(ds["steps"].values[sel].mean()),
+                                       "mean_cycles": float(ds["cycles"].values[sel].mean())}
+        return out
+
+    scene = sweep.Scene(protocol="driven", params=PARAMS, model="quasistatic", **GRID)
     sweep.run_sweep(scene, progress=False)
     driven = {}
     for threads in (1, 2):
         numba.set_num_threads(threads)
         t, ds = best_of(lambda: sweep.run_sweep(scene, progress=False))
         driven[f"threads_{threads}"] = {"seconds": t, "points_per_s": scene.n_points / t}
-    regimes = {}
-    for r in Regime:
-        sel = ds["regime"].values == r
-        if sel.any():
-            regimes[r.name.lower()] = {"points": int(sel.sum()), "mean_steps": float(ds["steps"].values[sel].mean()),
-                                       "mean_cycles": float(ds["cycles"].values[sel].mean())}
+    regimes = regimes_of(ds)
     agree = (ds["regime"].values == Regime.STEADY) == (ds["stable"].values == 1)
+    # model="auto" (the default): the quasi-static breakdowns (runaway) of the same grid run again with inertia
+    auto_scene = sweep.Scene(protocol="driven", params=PARAMS, **GRID)
+    t_auto, ds_auto = best_of(lambda: sweep.run_sweep(auto_scene, progress=False), 1)
+    statuses = ds_auto["status"].attrs["flag_meanings"].split()
+    driven_auto = {"threads": numba.get_num_threads(), "seconds": t_auto, "points_per_s": scene.n_points / t_auto,
+                   "points_run_with_inertia": int(ds_auto["model"].values.sum()), "regimes": regimes_of(ds_auto),
+                   "status": {statuses[c]: int(n) for c, n in zip(*np.unique(ds_auto["status"].values,
+                                                                             return_counts=True))}}
     result = {
         "benchmark": "hopf", "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "machine": machine_info(),
         "sweep_source_digest_start_end": [digest0, sweep_digest()], "loadavg_start_end": [load0, loadavg()],
@@ -105,8 +118,9 @@ def main() -> None:
                                             "gamma_over_A": [1e-3, 1.0], "seconds_1thread": t_deep,
                                             "points_per_s": deep.n_points / t_deep, "regimes": deep_regimes,
                                             "mean_steps": float(deep_ds["steps"].values.mean())},
-        "driven_grid": {"shape": list(scene.shape), **driven, "regimes": regimes,
+        "driven_grid": {"shape": list(scene.shape), "model": "quasistatic", **driven, "regimes": regimes,
                         "steady_iff_linearly_stable_fraction": float(agree.mean())},
+        "driven_grid_auto": driven_auto,
         "benchmark_wall_s": time.perf_counter() - t_start,
     }
     OUT.mkdir(exist_ok=True)
