@@ -2,43 +2,60 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 
 import xarray as xr
 
-from .dataset import build_dataset
-from .driven_sweep import run_driven
-from .engine import RawResult, execute, mark_error_above_tol
+from .dataset import build_dataset, build_driven_dataset
+from .driven_sweep import CHUNK as DRIVEN_CHUNK
+from .driven_sweep import describe, driven_chunk
+from .engine import CHUNK_POINTS
 from .hopf import with_simulated_line
-from .model_choice import choose_stop_models
+from .io import save
+from .journal import Journal
 from .params import FrictionParams
 from .plan import make_plan
+from .runner import JOURNAL_FORMAT, run_chunks, stop_chunk, stop_outputs
 from .scene import Scene
-from .status import Status
 
 __all__ = ["run_sweep", "solve_point"]
 
 
-def run_sweep(scene: Scene, progress: bool | None = None, history: str = "") -> xr.Dataset:
+def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", output: str | os.PathLike | None = None,
+              resume: bool = False, chunk_size: int | None = None) -> xr.Dataset:
     """Run ``scene`` and return its Dataset (dims K_over_M, V; see the README's output contract).
 
     ``progress``: None shows a bar on an interactive terminal for sweeps longer than ~2 s; True/False force it.
     ``history`` is recorded in the file's history attribute (the CLI passes its command line).
+    ``output``: also write the Dataset there (netCDF4). The run then journals every finished chunk beside it
+    (``<output>.journal``, sweep/journal.py) so that a killed or interrupted run loses nothing: run again with
+    ``resume=True`` to compute only the missing chunks (refused if the scene or plan differs). ``chunk_size``:
+    points per chunk (default engine.CHUNK_POINTS for stop, driven_sweep.CHUNK for driven scenes); part of
+    what a resume checks.
     """
+    history = history or "sweep.run_sweep"
     if scene.protocol == "driven":
-        ds = run_driven(scene, progress=progress, history=history or "sweep.run_sweep")
+        compute, plan_hash, size = driven_chunk(scene), "", chunk_size or DRIVEN_CHUNK
     else:
         plan = make_plan(scene)
-        if scene.model == "inertial":  # nothing quasi-static to compute
-            raw = RawResult.empty(plan.n_points, 0)
-            raw.status[~plan.finite] = Status.NO_FINITE_LIMIT
-        else:
-            raw = execute(scene, plan, progress=progress)
-        choice = choose_stop_models(scene, plan, raw, progress=progress)
-        mark_error_above_tol(scene, raw)
-        raw.seconds += choice.seconds
-        ds = build_dataset(scene, plan, raw, choice, history=history or "sweep.run_sweep")
-    return with_simulated_line(ds, scene.params, scene.model, scene.model_tol)
+        compute, plan_hash, size = stop_chunk(scene, plan), plan.hash(), chunk_size or CHUNK_POINTS
+    journal = None
+    if output is not None:
+        identity = {"format": JOURNAL_FORMAT, "scene": scene.to_toml(), "plan_hash": plan_hash, "chunk_size": size,
+                    "n_points": scene.n_points}
+        journal = Journal.open(output, identity, resume)
+    flat, seconds = run_chunks(scene.n_points, compute, size, journal, progress)
+    if scene.protocol == "driven":
+        ds = build_driven_dataset(scene, flat, seconds, describe(scene), history=history)
+    else:
+        raw, choice = stop_outputs(flat, seconds)
+        ds = build_dataset(scene, plan, raw, choice, history=history)
+    ds = with_simulated_line(ds, scene.params, scene.model, scene.model_tol)
+    if journal is not None:
+        save(ds, output)
+        journal.remove()
+    return ds
 
 
 def solve_point(params: FrictionParams, K_over_M: float, V: float, rtol: float = 1e-6,

@@ -37,9 +37,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"{'estimated steps per point':>28}: {mean_steps:.0f} (mean of a pilot subsample)")
         print(f"{'estimated time':>28}: {seconds:.1f} s on this machine")
         return 0
-    from .api import run_sweep
     from .engine import warm_up
-    from .io import save
     from .model_choice import warm_up_models
     from .plot import plot_landscape
 
@@ -51,9 +49,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     locate_hopf(scene.params, scene.V[:1], bifurcation=False)  # compile / load the kernel of the simulated line
     compile_s += time.perf_counter() - t_line
     t0 = time.perf_counter()
-    ds = run_sweep(scene, progress=None if not args.quiet else False,
-                   history=_history())
-    out = save(ds, args.output)
+    ds = _run_to_file(scene, args)
+    out = args.output
     elapsed = time.perf_counter() - t0
     print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, {scene.n_points / max(elapsed, 1e-9):,.0f} "
           f"points/s; kernel {'compiled' if compile_s > 2 else 'loaded'} in {compile_s:.1f} s beforehand)")
@@ -70,9 +67,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 def _run_driven(scene, args: argparse.Namespace) -> int:
     """``sweep run`` of a driven scene: one simulation per point (no plan, no pilot estimate)."""
-    from .api import run_sweep
     from .driven_sweep import describe
-    from .io import save
     from .plot import plot_regimes
 
     if args.dry_run:
@@ -81,9 +76,8 @@ def _run_driven(scene, args: argparse.Namespace) -> int:
         print(f"{'grid':>28}: {scene.shape[0]} K/M x {scene.shape[1]} V, observables {', '.join(scene.observables)}")
         return 0
     t0 = time.perf_counter()
-    ds = run_sweep(scene, progress=None if not args.quiet else False,
-                   history=_history())
-    out = save(ds, args.output)
+    ds = _run_to_file(scene, args)
+    out = args.output
     elapsed = time.perf_counter() - t0
     print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, including compilation on a first run)")
     print(_flag_summary(ds, "status"))
@@ -91,6 +85,14 @@ def _run_driven(scene, args: argparse.Namespace) -> int:
     print(_flag_summary(ds, "regime"))
     print(f"wrote {plot_regimes(ds, args.png or out.with_suffix('.png'))}")
     return 0
+
+
+def _run_to_file(scene, args: argparse.Namespace):
+    """run_sweep into args.output, journaled (resumable with --resume)."""
+    from .api import run_sweep
+
+    return run_sweep(scene, progress=None if not args.quiet else False, history=_history(), output=args.output,
+                     resume=args.resume, chunk_size=args.chunk_size)
 
 
 def _history() -> str:
@@ -164,6 +166,16 @@ def _cmd_hopf(args: argparse.Namespace) -> int:
     return 0
 
 
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {value}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="sweep", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -173,6 +185,11 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
     run.add_argument("--dry-run", action="store_true", help="print the plan and an estimated time, then exit")
     run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--resume", action="store_true",
+                     help="continue an interrupted run into the same output: compute only the chunks missing from "
+                          "its journal (OUTPUT.journal), after checking that the scene and plan are the same")
+    run.add_argument("--chunk-size", type=_positive_int, default=None,
+                     help="points per chunk (journal entry); default 4096 for stop, 1024 for driven scenes")
     run.set_defaults(func=_cmd_run)
     plot = sub.add_parser("plot", help="draw the landscape map of a sweep file")
     plot.add_argument("file")
@@ -193,11 +210,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    from .runner import Interrupted
+
     try:
         return args.func(args)
     except (InputError, FileNotFoundError) as exc:
         print(f"sweep: error: {exc}", file=sys.stderr)
         return 2
+    except Interrupted as exc:  # Ctrl-C during a journaled run: nothing finished is lost
+        print(f"sweep: {exc}", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

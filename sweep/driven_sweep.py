@@ -3,8 +3,6 @@ with inertia (Scene.model)."""
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import xarray as xr
 
@@ -12,14 +10,13 @@ from . import physics
 from .dataset import build_driven_dataset
 from .model_choice import line_uses_inertia
 from .models.driven import DECAYED, GROWTH_RTOL, NEUTRAL_SPREAD, RUNAWAY_XI_DOT, STATIONARY_TOL, Regime, simulate_batch
-from .progress import Progress
 from .scene import Scene
 
-__all__ = ["run_driven", "stepper_rtol"]
+__all__ = ["driven_chunk", "run_driven", "stepper_rtol"]
 
 W_TEXT = ", w = ln xi' with inertia"
 CHUNK = 1024
-"""Points per progress update."""
+"""Points per chunk of a driven sweep (one progress update, one journal entry)."""
 
 
 def stepper_rtol(rtol: float) -> float:
@@ -46,8 +43,9 @@ def describe(scene: Scene) -> dict[str, str]:
     }
 
 
-def run_driven(scene: Scene, progress: bool | None = None, history: str = "") -> xr.Dataset:
-    """Simulate every point of a driven ``scene`` and return its Dataset."""
+def driven_chunk(scene: Scene):
+    """compute(points) -> per-point arrays of a driven ``scene`` (sweep/runner.py): one simulation per point, and
+    with model="auto" a second one with inertia where the quasi-static run broke down (regime runaway)."""
     p = scene.params
     chi = physics.reduced_stiffness(scene.K_over_M, p.D0, p.g)
     mu1 = physics.mu1(scene.V, p.m1, p.m2, p.V0)
@@ -56,29 +54,35 @@ def run_driven(scene: Scene, progress: bool | None = None, history: str = "") ->
     b = np.full(k.size, p.m2 / p.A)
     gamma_over_A = physics.inertia_number(scene.V, p.D0, p.g) / p.A
     G = np.tile(gamma_over_A, scene.K_over_M.size)
-    inertial = np.tile(line_uses_inertia(gamma_over_A, scene.model, scene.model_tol), scene.K_over_M.size)
-    n = k.size
-    out = {"regime": np.zeros(n, np.int8), "status": np.zeros(n, np.int8), "growth_rate": np.full(n, np.nan),
-           "period": np.full(n, np.nan), "amplitude": np.full(n, np.nan), "cycles": np.zeros(n, np.int64),
-           "steps": np.zeros(n, np.int64), "peak_w": np.full(n, np.nan)}
+    line_inertial = np.tile(line_uses_inertia(gamma_over_A, scene.model, scene.model_tol), scene.K_over_M.size)
 
-    def simulate(points: np.ndarray, bar: Progress) -> None:
-        for start in range(0, points.size, CHUNK):
-            sel = points[start:start + CHUNK]
-            part = {name: v[sel] for name, v in out.items()}
-            simulate_batch(k[sel], a[sel], b[sel], G[sel] * inertial[sel], scene.perturbation,
-                           stepper_rtol(scene.rtol), scene.max_cycles, scene.max_steps, *part.values())
-            for name, v in part.items():
-                out[name][sel] = v
-            bar.update(sel.size)
+    def simulate(g: np.ndarray, inertial: np.ndarray) -> dict[str, np.ndarray]:
+        n = g.size
+        out = {"regime": np.zeros(n, np.int8), "status": np.zeros(n, np.int8), "growth_rate": np.full(n, np.nan),
+               "period": np.full(n, np.nan), "amplitude": np.full(n, np.nan), "cycles": np.zeros(n, np.int64),
+               "steps": np.zeros(n, np.int64), "peak_w": np.full(n, np.nan)}
+        simulate_batch(k[g], a[g], b[g], G[g] * inertial, scene.perturbation, stepper_rtol(scene.rtol),
+                       scene.max_cycles, scene.max_steps, *out.values())
+        return out
 
-    t0 = time.perf_counter()
-    with Progress(n, enabled=progress) as bar:
-        simulate(np.arange(n), bar)
-    if scene.model == "auto":  # the quasi-static model broke down: inertia is needed there
-        again = np.flatnonzero((out["regime"] == Regime.RUNAWAY) & ~inertial & (G > 0.0))
-        inertial[again] = True
-        with Progress(again.size, enabled=progress and again.size > 0) as bar:
-            simulate(again, bar)
-    out["inertial"] = inertial
-    return build_driven_dataset(scene, out, time.perf_counter() - t0, describe(scene), history=history)
+    def compute(points: np.ndarray) -> dict[str, np.ndarray]:
+        inertial = line_inertial[points].copy()
+        out = simulate(points, inertial)
+        if scene.model == "auto":  # the quasi-static model broke down: inertia is needed there
+            again = np.flatnonzero((out["regime"] == Regime.RUNAWAY) & ~inertial & (G[points] > 0.0))
+            if again.size:
+                inertial[again] = True
+                for name, value in simulate(points[again], inertial[again]).items():
+                    out[name][again] = value
+        out["inertial"] = inertial
+        return out
+
+    return compute
+
+
+def run_driven(scene: Scene, progress: bool | None = None, history: str = "") -> xr.Dataset:
+    """Simulate every point of a driven ``scene`` (in memory) and return its Dataset."""
+    from .runner import run_chunks
+
+    flat, seconds = run_chunks(scene.n_points, driven_chunk(scene), CHUNK, None, progress)
+    return build_driven_dataset(scene, flat, seconds, describe(scene), history=history)

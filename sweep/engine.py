@@ -30,11 +30,13 @@ from .scene import Scene
 from .solvers import METHODS
 from .status import Status
 
-__all__ = ["RawResult", "estimate_seconds", "execute", "warm_up"]
+__all__ = ["CHUNK_POINTS", "RawResult", "chunk_points", "estimate_seconds", "execute", "run_points", "warm_up"]
 
 FRACTIONS = np.array([0.5, 0.9])
 """Fractions of the relaxed slip whose times are reported as t50 and t90."""
 ORDER_SEED = 20261121
+CHUNK_POINTS = 4096
+"""Points per chunk (one compiled batch call, one progress update, one journal entry)."""
 ERROR_ABOVE_TOL = int(Status.ERROR_ABOVE_TOL)
 
 
@@ -136,32 +138,40 @@ def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
     return out
 
 
+def run_points(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray | None = None) -> RawResult:
+    """Run the plan's points ``g`` (one chunk: one call of a compiled batch) and return their flat outputs, in the
+    order of ``g``. A point's numbers do not depend on the other points of the chunk."""
+    obs_tau = _obs_tau(scene) if obs_tau is None else obs_tau
+    if plan.lanes:
+        return _relax_in_lanes(scene, plan, g)
+    part = RawResult.empty(g.size, plan.tau_samples.size + obs_tau.shape[1])
+    stop_batch(plan.method_arrays, plan.order, plan.adaptive, plan.k[g], plan.a[g], plan.b[g], plan.s_c[g],
+               plan.finite[g], plan.step[g], plan.max_steps, scene.rtol, scene.atol["xi_inf"], plan.ctrl_tol,
+               plan.tau_samples, np.ascontiguousarray(obs_tau[g]), bool({"t50", "t90"} & set(scene.observables)),
+               part.xi_inf, part.xi_inf_err, part.status, part.steps, part.xi_at, part.u_at, part.xi_at_err,
+               part.u_at_err, part.tau_at_fraction, part.tau_at_fraction_err)
+    part.work[:] = 3 * part.steps.astype(np.int64) // 2
+    return part
+
+
+def chunk_points(n: int, chunk_size: int | None = None) -> list[np.ndarray]:
+    """The points 0..n-1 in a fixed pseudo-random order, split into chunks of at most ``chunk_size`` (default
+    CHUNK_POINTS): the costly points cluster on the grid, and every chunk (and every thread's share of it) then
+    mixes cheap and costly ones."""
+    order = np.random.default_rng(ORDER_SEED).permutation(n)
+    return np.array_split(order, max(1, math.ceil(n / (chunk_size or CHUNK_POINTS))))
+
+
 def execute(scene: Scene, plan: Plan, indices: np.ndarray | None = None, progress: bool | None = None,
             chunk_size: int | None = None) -> RawResult:
     """Run ``plan`` over the points ``indices`` (default: all) of ``scene``; returns flat outputs."""
     idx = np.arange(plan.n_points) if indices is None else np.asarray(indices)
     obs_tau = _obs_tau(scene)
-    n_t = plan.tau_samples.size + obs_tau.shape[1]
-    n = idx.size
-    out = RawResult.empty(n, n_t)
-    want_fractions = bool({"t50", "t90"} & set(scene.observables))
-    n_chunks = max(1, math.ceil(n / (chunk_size or 4096)))
-    order = np.random.default_rng(ORDER_SEED).permutation(n)
+    out = RawResult.empty(idx.size, plan.tau_samples.size + obs_tau.shape[1])
     t0 = time.perf_counter()
-    with Progress(n, enabled=progress) as bar:
-        for sel in np.array_split(order, n_chunks):
-            g = idx[sel]
-            if plan.lanes:
-                part = _relax_in_lanes(scene, plan, g)
-            else:
-                part = RawResult.empty(sel.size, n_t)
-                stop_batch(plan.method_arrays, plan.order, plan.adaptive, plan.k[g], plan.a[g], plan.b[g],
-                           plan.s_c[g], plan.finite[g], plan.step[g], plan.max_steps, scene.rtol,
-                           scene.atol["xi_inf"], plan.ctrl_tol, plan.tau_samples, np.ascontiguousarray(obs_tau[g]),
-                           want_fractions, part.xi_inf, part.xi_inf_err, part.status, part.steps, part.xi_at,
-                           part.u_at, part.xi_at_err, part.u_at_err, part.tau_at_fraction, part.tau_at_fraction_err)
-                part.work[:] = 3 * part.steps.astype(np.int64) // 2
-            out.assign(sel, part)
+    with Progress(idx.size, enabled=progress) as bar:
+        for sel in chunk_points(idx.size, chunk_size):
+            out.assign(sel, run_points(scene, plan, idx[sel], obs_tau))
             bar.update(sel.size)
     mark_error_above_tol(scene, out)
     out.seconds = time.perf_counter() - t0

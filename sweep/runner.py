@@ -1,0 +1,102 @@
+"""Running a scene chunk by chunk: one progress bar for the whole sweep, each finished chunk journaled when the
+run writes a file (sweep/journal.py: a SIGKILL or Ctrl-C loses at most the chunks in flight), then the chunks
+consolidated into flat per-point arrays.
+
+A chunk is a fixed set of points (engine.chunk_points: the same layout for a given number of points and chunk
+size) and every point's numbers depend on that point only, so the consolidated arrays are the same whatever the
+chunking, the order in which chunks finish, or how many runs it took.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from .engine import RawResult, _obs_tau, chunk_points, mark_error_above_tol, run_points
+from .journal import Journal
+from .model_choice import ModelChoice, choose_stop_models
+from .plan import Plan
+from .progress import Progress
+from .scene import Scene
+from .status import Status
+
+__all__ = ["Interrupted", "run_chunks", "stop_chunk", "stop_outputs"]
+
+JOURNAL_FORMAT = 1
+
+
+class Interrupted(RuntimeError):
+    """A journaled run was interrupted (Ctrl-C); the message says where the finished chunks are and how to resume."""
+
+
+def run_chunks(n_points: int, compute: Callable[[np.ndarray], dict[str, np.ndarray]], chunk_size: int | None,
+               journal: Journal | None, progress: bool | None) -> tuple[dict[str, np.ndarray], float]:
+    """compute(points) -> per-point arrays for each chunk not yet in ``journal``, then all chunks consolidated:
+    (arrays over the n_points points, seconds spent computing, summed over the runs that computed them)."""
+    chunks = chunk_points(n_points, chunk_size)
+    done = journal.done() if journal is not None else set()
+    results: dict[int, dict[str, np.ndarray]] = {}
+    with Progress(n_points, enabled=progress) as bar:
+        bar.update(sum(chunks[i].size for i in done))
+        try:
+            for i, points in enumerate(chunks):
+                if i in done:
+                    continue
+                t0 = time.perf_counter()
+                arrays = compute(points)
+                arrays["seconds"] = np.array(time.perf_counter() - t0)
+                if journal is not None:
+                    journal.write(i, arrays)
+                else:
+                    results[i] = arrays
+                bar.update(points.size)
+        except KeyboardInterrupt:
+            if journal is None:
+                raise
+            raise Interrupted(f"interrupted: {len(journal.done())} of {len(chunks)} chunks are saved in "
+                              f"{journal.path}; run the same command with --resume (run_sweep(..., resume=True)) "
+                              f"to compute only the rest") from None
+    flat: dict[str, np.ndarray] = {}
+    seconds = 0.0
+    for i, points in enumerate(chunks):
+        arrays = results.pop(i) if journal is None else journal.read(i)
+        seconds += float(arrays.pop("seconds"))
+        for name, value in arrays.items():
+            if name not in flat:
+                fill = np.nan if value.dtype.kind == "f" else 0
+                flat[name] = np.full((n_points,) + value.shape[1:], fill, dtype=value.dtype)
+            flat[name][points] = value
+    return flat, seconds
+
+
+def stop_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.ndarray]]:
+    """compute(points) of the stop protocol: the quasi-static kernels (unless the model is forced inertial), the
+    choice of model, the inertial points, the error_above_tol marks."""
+    obs_tau = _obs_tau(scene)
+    n_t = plan.tau_samples.size + obs_tau.shape[1]
+
+    def compute(points: np.ndarray) -> dict[str, np.ndarray]:
+        if scene.model == "inertial":
+            raw = RawResult.empty(points.size, n_t)
+            raw.status[~plan.finite[points]] = Status.NO_FINITE_LIMIT
+        else:
+            raw = run_points(scene, plan, points, obs_tau)
+            mark_error_above_tol(scene, raw)
+        choice = choose_stop_models(scene, plan, raw, points)
+        mark_error_above_tol(scene, raw)
+        arrays = {name: value for name, value in vars(raw).items() if isinstance(value, np.ndarray)}
+        arrays["inertial"] = choice.inertial
+        if choice.model_error is not None:
+            arrays["model_error"] = choice.model_error
+        return arrays
+
+    return compute
+
+
+def stop_outputs(flat: dict[str, np.ndarray], seconds: float) -> tuple[RawResult, ModelChoice]:
+    """The consolidated arrays of :func:`stop_chunk` as the kernel outputs and the model choice."""
+    fields = {name: flat[name] for name in RawResult.__dataclass_fields__ if name in flat}
+    raw = RawResult(**fields, seconds=seconds)
+    return raw, ModelChoice(flat["inertial"], flat.get("model_error"), 0.0)

@@ -1,0 +1,145 @@
+"""Nothing lost: chunked runs journal their chunks (sweep/journal.py), survive SIGKILL and Ctrl-C, and resume to the
+same numbers as an uninterrupted run, whatever the chunking."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import sweep
+from sweep.errors import InputError
+from sweep.io import open_dataset
+from sweep.journal import journal_path
+
+P2 = sweep.presets["sample2"]
+M2ZERO = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0, D0=0.7e-6)
+
+
+def stop_scene(**kw) -> sweep.Scene:
+    # V up to 300 um/s: some points need inertia (model="auto"), some have no finite limit... all per point
+    base = dict(protocol="stop", params=P2, K_over_M=np.logspace(3, 6, 23), V=np.logspace(-7, -3.5, 17))
+    return sweep.Scene(**{**base, **kw})
+
+
+def driven_scene(**kw) -> sweep.Scene:
+    v = np.sqrt(np.array([2e-3, 5e-2]) * M2ZERO.g * M2ZERO.D0 * M2ZERO.A)
+    base = dict(protocol="driven", params=M2ZERO, K_over_M=np.linspace(0.9, 1.2, 12) * M2ZERO.m1 * M2ZERO.g / M2ZERO.D0,
+                V=v)
+    return sweep.Scene(**{**base, **kw})
+
+
+def assert_same_numbers(a: xr.Dataset, b: xr.Dataset) -> None:
+    """Every data variable and coordinate bitwise equal (NaN where NaN); attrs such as history may differ."""
+    assert set(a.data_vars) == set(b.data_vars)
+    for name in list(a.data_vars) + list(a.coords):
+        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+
+
+@pytest.mark.parametrize("make", [stop_scene, driven_scene], ids=["stop", "driven"])
+def test_results_do_not_depend_on_the_chunking(make):
+    scene = make()
+    whole = sweep.run_sweep(scene, progress=False)
+    for size in (1, 37):
+        assert_same_numbers(whole, sweep.run_sweep(scene, progress=False, chunk_size=size))
+    if scene.protocol == "stop":
+        assert 0 < int(whole["model"].sum()) < scene.n_points  # both models inside the chunks
+
+
+def test_a_journaled_run_writes_the_file_and_removes_its_journal(tmp_path):
+    out = tmp_path / "s.nc"
+    ds = sweep.run_sweep(stop_scene(), progress=False, output=out, chunk_size=50)
+    assert out.is_file() and not journal_path(out).exists()
+    assert_same_numbers(ds, open_dataset(out))
+
+
+def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, monkeypatch):
+    """A journal holding some chunks (as a killed run leaves it): resume computes the rest only, and the file
+    equals an uninterrupted run; a different scene, or no --resume, is refused before any work."""
+    import sweep.runner as runner
+
+    scene, out = stop_scene(), tmp_path / "s.nc"
+    calls = []
+    real_run_chunks = runner.run_chunks
+
+    def stop_after_three(n, compute, size, journal, progress):
+        def counted(points):
+            if len(calls) == 3:
+                raise KeyboardInterrupt
+            calls.append(points.size)
+            return compute(points)
+        return real_run_chunks(n, counted, size, journal, progress)
+
+    monkeypatch.setattr(sweep.api, "run_chunks", stop_after_three)
+    with pytest.raises(sweep.runner.Interrupted, match="3 of 8 chunks are saved"):
+        sweep.run_sweep(scene, progress=False, output=out, chunk_size=50)
+    monkeypatch.setattr(sweep.api, "run_chunks", real_run_chunks)
+    assert len(list(journal_path(out).glob("chunk-*.npz"))) == 3 and not out.exists()
+    with pytest.raises(InputError, match="resume"):
+        sweep.run_sweep(scene, progress=False, output=out, chunk_size=50)
+    with pytest.raises(InputError, match="differs in plan_hash, scene"):
+        sweep.run_sweep(stop_scene(rtol=1e-5), progress=False, output=out, chunk_size=50, resume=True)
+    with pytest.raises(InputError, match="differs in chunk_size"):
+        sweep.run_sweep(scene, progress=False, output=out, chunk_size=60, resume=True)
+
+    computed = []
+    real_stop_chunk = runner.stop_chunk
+
+    def counting_stop_chunk(sc, plan):
+        compute = real_stop_chunk(sc, plan)
+        return lambda points: computed.append(points.size) or compute(points)
+
+    monkeypatch.setattr(sweep.api, "stop_chunk", counting_stop_chunk)
+    resumed = sweep.run_sweep(scene, progress=False, output=out, chunk_size=50, resume=True)
+    assert sum(computed) == scene.n_points - sum(calls)
+    assert_same_numbers(resumed, sweep.run_sweep(scene, progress=False))
+    assert not journal_path(out).exists()
+
+
+def _cli(args, **kw):
+    return subprocess.Popen([sys.executable, "-m", "sweep.cli", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, **kw)
+
+
+def _wait_for_chunks(out: Path, count: int, proc, timeout: float = 120.0) -> None:
+    t0 = time.time()
+    while len(list(journal_path(out).glob("chunk-*.npz"))) < count:
+        assert proc.poll() is None, proc.communicate()
+        assert time.time() - t0 < timeout, "the run did not journal chunks in time"
+        time.sleep(0.05)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT], ids=["SIGKILL", "Ctrl-C"])
+def test_killed_or_interrupted_cli_run_resumes_to_the_uninterrupted_file(tmp_path, sig):
+    """`sweep run` killed (SIGKILL) or interrupted (Ctrl-C: exit 130, a clear message) mid-sweep keeps its
+    finished chunks; `sweep run --resume` completes them into the same numbers as an uninterrupted run."""
+    scene = driven_scene(K_over_M=np.linspace(0.9, 1.2, 40) * M2ZERO.m1 * M2ZERO.g / M2ZERO.D0)
+    config = tmp_path / "scene.toml"
+    config.write_text(scene.to_toml())
+    reference = sweep.run_sweep(scene, progress=False)  # also warms numba's cache for the subprocesses
+    out = tmp_path / "d.nc"
+    args = ["run", str(config), "-o", str(out), "-q", "--chunk-size", "2"]
+    proc = _cli(args)
+    _wait_for_chunks(out, 3, proc)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=120)
+    if sig == signal.SIGINT:
+        assert proc.returncode == 130 and "--resume" in err, err
+    else:
+        assert proc.returncode == -signal.SIGKILL
+    assert not out.exists() and journal_path(out).is_dir()
+    done = len(list(journal_path(out).glob("chunk-*.npz")))
+    assert 3 <= done < 40
+    again = _cli(args + ["--resume"])
+    stdout, err = again.communicate(timeout=300)
+    assert again.returncode == 0, err
+    assert_same_numbers(open_dataset(out), reference)
+    assert not journal_path(out).exists()
+    assert not list(tmp_path.glob("**/*.tmp")), os.listdir(tmp_path)
