@@ -5,25 +5,29 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 
+import numpy as np
 import xarray as xr
 
+from .backends import check_backend, open_backend
 from .dataset import build_dataset, build_driven_dataset
 from .driven_sweep import CHUNK as DRIVEN_CHUNK
-from .driven_sweep import describe, driven_chunk
-from .engine import CHUNK_POINTS
+from .driven_sweep import describe
+from .engine import CHUNK_POINTS, warm_up
 from .hopf import with_simulated_line
 from .io import save
 from .journal import Journal
+from .model_choice import warm_up_models
 from .params import FrictionParams
 from .plan import make_plan
-from .runner import JOURNAL_FORMAT, run_chunks, stop_chunk, stop_outputs
+from .runner import JOURNAL_FORMAT, run_chunks, stop_outputs
 from .scene import Scene
 
 __all__ = ["run_sweep", "solve_point"]
 
 
 def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", output: str | os.PathLike | None = None,
-              resume: bool = False, chunk_size: int | None = None) -> xr.Dataset:
+              resume: bool = False, chunk_size: int | None = None, backend: str = "threads",
+              workers: int | None = None, scheduler: str | None = None) -> xr.Dataset:
     """Run ``scene`` and return its Dataset (dims K_over_M, V; see the README's output contract).
 
     ``progress``: None shows a bar on an interactive terminal for sweeps longer than ~2 s; True/False force it.
@@ -33,20 +37,24 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     ``resume=True`` to compute only the missing chunks (refused if the scene or plan differs). ``chunk_size``:
     points per chunk (default engine.CHUNK_POINTS for stop, driven_sweep.CHUNK for driven scenes); part of
     what a resume checks.
+    ``backend``: "threads" (this process, numba's threads) or "dask" (dask.distributed: a LocalCluster of
+    ``workers`` one-thread processes started for the run, default 2, or the existing cluster at ``scheduler``,
+    e.g. "tcp://host:8786"); the results are bitwise the same (sweep/backends.py).
     """
     history = history or "sweep.run_sweep"
-    if scene.protocol == "driven":
-        compute, plan_hash, size = driven_chunk(scene), "", chunk_size or DRIVEN_CHUNK
-    else:
-        plan = make_plan(scene)
-        compute, plan_hash, size = stop_chunk(scene, plan), plan.hash(), chunk_size or CHUNK_POINTS
+    plan = None if scene.protocol == "driven" else make_plan(scene)
+    size = chunk_size or (DRIVEN_CHUNK if plan is None else CHUNK_POINTS)
+    check_backend(backend, workers, scheduler)
     journal = None
     if output is not None:
-        identity = {"format": JOURNAL_FORMAT, "scene": scene.to_toml(), "plan_hash": plan_hash, "chunk_size": size,
-                    "n_points": scene.n_points}
+        identity = {"format": JOURNAL_FORMAT, "scene": scene.to_toml(),
+                    "plan_hash": "" if plan is None else plan.hash(), "chunk_size": size, "n_points": scene.n_points}
         journal = Journal.open(output, identity, resume)
-    flat, seconds = run_chunks(scene.n_points, compute, size, journal, progress)
-    if scene.protocol == "driven":
+    if backend == "dask":
+        warm_up_kernels(scene, plan)  # once, before the fan-out: the workers load them from numba's cache
+    with open_backend(backend, workers, scheduler) as imap:
+        flat, seconds = run_chunks(scene, plan, size, journal, progress, imap)
+    if plan is None:
         ds = build_driven_dataset(scene, flat, seconds, describe(scene), history=history)
     else:
         raw, choice = stop_outputs(flat, seconds)
@@ -56,6 +64,17 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
         save(ds, output)
         journal.remove()
     return ds
+
+
+def warm_up_kernels(scene: Scene, plan) -> None:
+    """Compile (or load from numba's disk cache) every kernel the scene's chunks use, on one point each."""
+    from .backends import chunk_task
+
+    if plan is not None:
+        warm_up(scene, plan)
+        warm_up_models()
+    else:
+        chunk_task(scene, None, np.arange(1))
 
 
 def solve_point(params: FrictionParams, K_over_M: float, V: float, rtol: float = 1e-6,

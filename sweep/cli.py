@@ -91,8 +91,10 @@ def _run_to_file(scene, args: argparse.Namespace):
     """run_sweep into args.output, journaled (resumable with --resume)."""
     from .api import run_sweep
 
+    dask = args.workers is not None or args.scheduler is not None
     return run_sweep(scene, progress=None if not args.quiet else False, history=_history(), output=args.output,
-                     resume=args.resume, chunk_size=args.chunk_size)
+                     resume=args.resume, chunk_size=args.chunk_size, backend="dask" if dask else "threads",
+                     workers=args.workers, scheduler=args.scheduler)
 
 
 def _history() -> str:
@@ -190,6 +192,12 @@ def build_parser() -> argparse.ArgumentParser:
                           "its journal (OUTPUT.journal), after checking that the scene and plan are the same")
     run.add_argument("--chunk-size", type=_positive_int, default=None,
                      help="points per chunk (journal entry); default 4096 for stop, 1024 for driven scenes")
+    run.add_argument("--workers", type=_positive_int, default=None,
+                     help="run the chunks on a dask LocalCluster of N one-thread worker processes (pip install "
+                          "'sweep[distributed]'); same numbers as the default threads backend")
+    run.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                     help="run the chunks on an existing dask cluster, e.g. tcp://host:8786 (its workers need sweep "
+                          "installed)")
     run.set_defaults(func=_cmd_run)
     plot = sub.add_parser("plot", help="draw the landscape map of a sweep file")
     plot.add_argument("file")

@@ -84,5 +84,5 @@ def run_driven(scene: Scene, progress: bool | None = None, history: str = "") ->
     """Simulate every point of a driven ``scene`` (in memory) and return its Dataset."""
     from .runner import run_chunks
 
-    flat, seconds = run_chunks(scene.n_points, driven_chunk(scene), CHUNK, None, progress)
+    flat, seconds = run_chunks(scene, None, CHUNK, None, progress)
     return build_driven_dataset(scene, flat, seconds, describe(scene), history=history)

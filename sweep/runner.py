@@ -9,7 +9,6 @@ chunking, the order in which chunks finish, or how many runs it took.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 
 import numpy as np
@@ -31,27 +30,27 @@ class Interrupted(RuntimeError):
     """A journaled run was interrupted (Ctrl-C); the message says where the finished chunks are and how to resume."""
 
 
-def run_chunks(n_points: int, compute: Callable[[np.ndarray], dict[str, np.ndarray]], chunk_size: int | None,
-               journal: Journal | None, progress: bool | None) -> tuple[dict[str, np.ndarray], float]:
-    """compute(points) -> per-point arrays for each chunk not yet in ``journal``, then all chunks consolidated:
-    (arrays over the n_points points, seconds spent computing, summed over the runs that computed them)."""
-    chunks = chunk_points(n_points, chunk_size)
+def run_chunks(scene: Scene, plan: Plan | None, chunk_size: int | None, journal: Journal | None,
+               progress: bool | None, imap=None) -> tuple[dict[str, np.ndarray], float]:
+    """Every chunk of ``scene`` not yet in ``journal``, computed through ``imap`` (sweep/backends.py; default: in
+    this process), then all chunks consolidated: (arrays over the scene's points, seconds spent computing them,
+    summed over chunks and over the runs that computed them)."""
+    from .backends import _threads
+
+    imap = imap or _threads
+    chunks = chunk_points(scene.n_points, chunk_size)
     done = journal.done() if journal is not None else set()
     results: dict[int, dict[str, np.ndarray]] = {}
-    with Progress(n_points, enabled=progress) as bar:
+    todo = ((i, points) for i, points in enumerate(chunks) if i not in done)
+    with Progress(scene.n_points, enabled=progress) as bar:
         bar.update(sum(chunks[i].size for i in done))
         try:
-            for i, points in enumerate(chunks):
-                if i in done:
-                    continue
-                t0 = time.perf_counter()
-                arrays = compute(points)
-                arrays["seconds"] = np.array(time.perf_counter() - t0)
+            for i, arrays in imap(scene, plan, todo):
                 if journal is not None:
                     journal.write(i, arrays)
                 else:
                     results[i] = arrays
-                bar.update(points.size)
+                bar.update(chunks[i].size)
         except KeyboardInterrupt:
             if journal is None:
                 raise
@@ -66,7 +65,7 @@ def run_chunks(n_points: int, compute: Callable[[np.ndarray], dict[str, np.ndarr
         for name, value in arrays.items():
             if name not in flat:
                 fill = np.nan if value.dtype.kind == "f" else 0
-                flat[name] = np.full((n_points,) + value.shape[1:], fill, dtype=value.dtype)
+                flat[name] = np.full((scene.n_points,) + value.shape[1:], fill, dtype=value.dtype)
             flat[name][points] = value
     return flat, seconds
 

@@ -67,20 +67,22 @@ def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, 
 
     scene, out = stop_scene(), tmp_path / "s.nc"
     calls = []
-    real_run_chunks = runner.run_chunks
+    real_chunk = runner.stop_chunk
 
-    def stop_after_three(n, compute, size, journal, progress):
+    def interrupted_after_three(sc, plan):
+        compute = real_chunk(sc, plan)
+
         def counted(points):
             if len(calls) == 3:
                 raise KeyboardInterrupt
             calls.append(points.size)
             return compute(points)
-        return real_run_chunks(n, counted, size, journal, progress)
+        return counted
 
-    monkeypatch.setattr(sweep.api, "run_chunks", stop_after_three)
-    with pytest.raises(sweep.runner.Interrupted, match="3 of 8 chunks are saved"):
+    monkeypatch.setattr(runner, "stop_chunk", interrupted_after_three)
+    with pytest.raises(runner.Interrupted, match="3 of 8 chunks are saved"):
         sweep.run_sweep(scene, progress=False, output=out, chunk_size=50)
-    monkeypatch.setattr(sweep.api, "run_chunks", real_run_chunks)
+    monkeypatch.setattr(runner, "stop_chunk", real_chunk)
     assert len(list(journal_path(out).glob("chunk-*.npz"))) == 3 and not out.exists()
     with pytest.raises(InputError, match="resume"):
         sweep.run_sweep(scene, progress=False, output=out, chunk_size=50)
@@ -90,13 +92,12 @@ def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, 
         sweep.run_sweep(scene, progress=False, output=out, chunk_size=60, resume=True)
 
     computed = []
-    real_stop_chunk = runner.stop_chunk
 
     def counting_stop_chunk(sc, plan):
-        compute = real_stop_chunk(sc, plan)
+        compute = real_chunk(sc, plan)
         return lambda points: computed.append(points.size) or compute(points)
 
-    monkeypatch.setattr(sweep.api, "stop_chunk", counting_stop_chunk)
+    monkeypatch.setattr(runner, "stop_chunk", counting_stop_chunk)
     resumed = sweep.run_sweep(scene, progress=False, output=out, chunk_size=50, resume=True)
     assert sum(computed) == scene.n_points - sum(calls)
     assert_same_numbers(resumed, sweep.run_sweep(scene, progress=False))
@@ -143,3 +144,77 @@ def test_killed_or_interrupted_cli_run_resumes_to_the_uninterrupted_file(tmp_pat
     assert_same_numbers(open_dataset(out), reference)
     assert not journal_path(out).exists()
     assert not list(tmp_path.glob("**/*.tmp")), os.listdir(tmp_path)
+
+
+# --- dask.distributed ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("make", [stop_scene, driven_scene], ids=["stop", "driven"])
+def test_dask_backend_gives_bitwise_the_same_numbers(make):
+    """A LocalCluster of 2 one-thread workers, another chunking: the same numbers as the threads backend."""
+    scene = make()
+    threads = sweep.run_sweep(scene, progress=False)
+    on_dask = sweep.run_sweep(scene, progress=False, backend="dask", workers=2, chunk_size=29)
+    assert_same_numbers(threads, on_dask)
+
+
+def test_dask_workers_run_one_numba_thread_each():
+    """NUMBA_NUM_THREADS reaches the worker processes before numba is imported there (the nanny's pre-spawn
+    environment), and each worker has one thread."""
+    from sweep.backends import _dask
+
+    def numba_threads():
+        import numba
+        return numba.get_num_threads()
+
+    with _dask(2, None) as client:
+        assert set(client.run(numba_threads).values()) == {1}
+        assert {w["nthreads"] for w in client.scheduler_info()["workers"].values()} == {1}
+
+
+def test_a_worker_killed_mid_sweep_is_retried_and_the_run_completes(tmp_path):
+    """SIGKILL of one dask worker process while chunks are in flight: the nanny restarts it, dask reruns its
+    chunks, and the journaled run completes to the same numbers."""
+    import threading
+
+    from distributed import Client, LocalCluster
+
+    scene = driven_scene(K_over_M=np.linspace(0.9, 1.2, 40) * M2ZERO.m1 * M2ZERO.g / M2ZERO.D0)
+    reference = sweep.run_sweep(scene, progress=False)
+    out = tmp_path / "d.nc"
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        pids = client.run(os.getpid)
+        result = {}
+        run = threading.Thread(target=lambda: result.setdefault("ds", sweep.run_sweep(
+            scene, progress=False, output=out, chunk_size=2, backend="dask", scheduler=cluster.scheduler_address)))
+        run.start()
+        t0 = time.time()
+        while len(list(journal_path(out).glob("chunk-*.npz"))) < 3:
+            assert run.is_alive() and time.time() - t0 < 120
+            time.sleep(0.05)
+        os.kill(next(iter(pids.values())), signal.SIGKILL)
+        run.join(timeout=300)
+        assert not run.is_alive()
+        assert set(client.run(os.getpid).values()) != set(pids.values())  # a new worker process took over
+    assert_same_numbers(result["ds"], reference)
+    assert_same_numbers(open_dataset(out), reference)
+
+
+def test_a_local_cluster_leaves_the_drivers_environment_as_it_was():
+    """The nannies of a LocalCluster run in this process and set the workers' variables in os.environ; they are put
+    back (numba would refuse to compile here with a NUMBA_NUM_THREADS that differs from its thread pool)."""
+    from sweep.backends import WORKER_ENV, _dask
+
+    before = {key: os.environ.get(key) for key in WORKER_ENV}
+    with _dask(1, None):
+        assert {key: os.environ.get(key) for key in WORKER_ENV} == before
+    assert {key: os.environ.get(key) for key in WORKER_ENV} == before
+
+
+@pytest.mark.parametrize("kw, name", [(dict(backend="mpi"), "backend"), (dict(workers=2), "workers"),
+                                      (dict(backend="dask", workers=0), "workers"),
+                                      (dict(backend="dask", workers=2, scheduler="tcp://x:1"), "scheduler")])
+def test_bad_backend_arguments_name_the_parameter(kw, name, tmp_path):
+    with pytest.raises(InputError, match=name):
+        sweep.run_sweep(stop_scene(), progress=False, output=tmp_path / "x.nc", **kw)
+    assert not journal_path(tmp_path / "x.nc").exists()  # refused before any work

@@ -1,0 +1,142 @@
+"""Where the chunks of a sweep run: in this process (numba's own threads) or on a dask.distributed cluster.
+
+Either way a chunk is the same task, :func:`chunk_task` (the plan made once by the driver, the chunk's points,
+the same compiled kernels), and its results come back to the driver, the single writer of the journal and of the
+file. A point's numbers depend on that point only and the kernels use no reassociating fastmath flags, so the
+results are bitwise the same whatever the backend, the chunking and the number of workers (on one instruction set).
+
+dask workers run one thread each with NUMBA_NUM_THREADS=1, set through ``distributed.nanny.pre-spawn-environ``
+(the nanny does not set it, and numba reads it once, at import): otherwise every worker process would start as
+many numba threads as the machine has cores. The driver compiles (or loads) the kernels before the fan-out, so
+that the workers find them in numba's on-disk cache instead of each compiling them.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
+
+import numpy as np
+
+from .errors import InputError
+from .plan import Plan
+from .scene import Scene
+
+__all__ = ["BACKENDS", "check_backend", "chunk_task", "open_backend"]
+
+BACKENDS = ("threads", "dask")
+IN_FLIGHT_PER_WORKER = 2
+"""Chunks submitted ahead per worker: enough to keep workers busy, few enough to bound the driver's memory."""
+WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+
+
+def chunk_task(scene: Scene, plan: Plan | None, points: np.ndarray) -> dict[str, np.ndarray]:
+    """Compute one chunk (any backend): per-point arrays plus ``seconds``, the time it took."""
+    from .driven_sweep import driven_chunk
+    from .runner import stop_chunk
+
+    t0 = time.perf_counter()
+    compute = driven_chunk(scene) if scene.protocol == "driven" else stop_chunk(scene, plan)
+    arrays = compute(points)
+    arrays["seconds"] = np.array(time.perf_counter() - t0)
+    return arrays
+
+
+def _threads(scene: Scene, plan: Plan | None, todo: Iterable[tuple[int, np.ndarray]]):
+    for i, points in todo:
+        yield i, chunk_task(scene, plan, points)
+
+
+@contextmanager
+def _dask(workers: int | None, scheduler: str | None):
+    """A dask Client: connected to ``scheduler``, or on a LocalCluster of ``workers`` one-thread processes."""
+    try:
+        import dask
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise InputError("backend 'dask' needs dask.distributed: pip install 'sweep[distributed]'") from None
+    if scheduler is not None:
+        with Client(scheduler) as client:
+            yield client
+        return
+    env = {**dask.config.get("distributed.nanny.pre-spawn-environ", {}), **WORKER_ENV}
+    saved = {key: os.environ.get(key) for key in env}
+    try:
+        with dask.config.set({"distributed.nanny.pre-spawn-environ": env}):
+            with LocalCluster(n_workers=workers or 2, threads_per_worker=1, processes=True,
+                              dashboard_address=None) as cluster, Client(cluster) as client:
+                _restore(saved)
+                yield client
+    finally:
+        _restore(saved)
+
+
+def _restore(saved: dict[str, str | None]) -> None:
+    """Undo the nanny's update of this process's environment (a LocalCluster's nannies run in the driver and set
+    the pre-spawn variables in os.environ for good: numba re-reads NUMBA_NUM_THREADS when it compiles and refuses a
+    value that differs from its running thread pool)."""
+    for key, value in saved.items():
+        if value is None:
+            os.environ.pop(key, None)
+        else:
+            os.environ[key] = value
+
+
+def _on_dask(client, scene: Scene, plan: Plan | None, todo: Iterable[tuple[int, np.ndarray]]):
+    """Submit the chunks (a bounded number in flight) and yield them as they complete; dask retries a chunk whose
+    worker died."""
+    from distributed import as_completed
+
+    scene_f = client.scatter(scene, broadcast=True)
+    plan_f = None if plan is None else client.scatter(plan, broadcast=True)  # made once, shipped once per worker
+    todo = iter(todo)
+    limit = IN_FLIGHT_PER_WORKER * max(1, len(client.scheduler_info()["workers"]))
+    pending = as_completed()
+    index = {}
+
+    def submit_next() -> bool:
+        item = next(todo, None)
+        if item is None:
+            return False
+        i, points = item
+        future = client.submit(chunk_task, scene_f, plan_f, points, key=f"sweep-chunk-{i}-{id(todo)}", retries=3)
+        index[future.key] = i
+        pending.add(future)
+        return True
+
+    for _ in range(limit):
+        if not submit_next():
+            break
+    for future in pending:
+        yield index.pop(future.key), future.result()
+        future.release()
+        submit_next()
+
+
+def check_backend(backend: str, workers: int | None, scheduler: str | None) -> None:
+    """InputError naming the argument if the backend arguments are not allowed (before any work)."""
+    if backend not in BACKENDS:
+        raise InputError(f"backend must be one of {list(BACKENDS)}, got {backend!r}")
+    if backend == "threads":
+        if workers is not None or scheduler is not None:
+            raise InputError("workers and scheduler are for backend 'dask' (the threads backend uses numba's threads: "
+                             "NUMBA_NUM_THREADS)")
+        return
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise InputError(f"workers must be an integer >= 1, got {workers!r}")
+    if workers is not None and scheduler is not None:
+        raise InputError("give workers (a local cluster started for this run) or scheduler (an existing one), not both")
+
+
+@contextmanager
+def open_backend(backend: str = "threads", workers: int | None = None, scheduler: str | None = None) -> Iterator:
+    """A function imap(scene, plan, todo) -> iterator of (chunk index, arrays) as chunks complete, for the duration
+    of the context (a dask cluster started here is shut down on exit)."""
+    check_backend(backend, workers, scheduler)
+    if backend == "threads":
+        yield _threads
+        return
+    with _dask(workers, scheduler) as client:
+        yield lambda scene, plan, todo: _on_dask(client, scene, plan, todo)
