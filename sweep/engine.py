@@ -87,10 +87,12 @@ class RawResult:
     seconds: float = 0.0
 
     @classmethod
-    def empty(cls, n: int, n_t: int) -> RawResult:
+    def empty(cls, n: int, n_t: int, n_fractions: int = FRACTIONS.size) -> RawResult:
+        """NaN-filled outputs of n points with n_t sampled times; ``n_fractions`` = 0 where no t50/t90 is computed
+        (the relaxed-slip lanes: 32 bytes per point less on a 1e7-point sweep)."""
         nan = lambda *shape: np.full(shape, np.nan)  # noqa: E731
         return cls(nan(n), nan(n), np.zeros(n, np.int8), np.zeros(n, np.int32), nan(n, n_t), nan(n, n_t),
-                   nan(n, n_t), nan(n, n_t), nan(n, 2), nan(n, 2), np.zeros(n, np.int64))
+                   nan(n, n_t), nan(n, n_t), nan(n, n_fractions), nan(n, n_fractions), np.zeros(n, np.int64))
 
     def assign(self, sel: np.ndarray, part: RawResult) -> None:
         for name, value in vars(part).items():
@@ -122,7 +124,7 @@ def _lane_runner(scene: Scene, plan: Plan, method: str):
 def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
     """Relaxed slip of the points g through the lane kernels (one per method of the plan), each point down its own
     step ladder (sweep/ladder.py: a pilot pair, then rungs until a checked estimate meets the tolerance)."""
-    out = RawResult.empty(g.size, 0)
+    out = RawResult.empty(g.size, 0, 0)
     out.status[~plan.finite[g]] = NO_FINITE_LIMIT
     out.steps[~plan.finite[g]] = 0
     for m, method in enumerate(plan.point_methods):
@@ -167,7 +169,7 @@ def execute(scene: Scene, plan: Plan, indices: np.ndarray | None = None, progres
     """Run ``plan`` over the points ``indices`` (default: all) of ``scene``; returns flat outputs."""
     idx = np.arange(plan.n_points) if indices is None else np.asarray(indices)
     obs_tau = _obs_tau(scene)
-    out = RawResult.empty(idx.size, plan.tau_samples.size + obs_tau.shape[1])
+    out = RawResult.empty(idx.size, plan.tau_samples.size + obs_tau.shape[1], 0 if plan.lanes else FRACTIONS.size)
     t0 = time.perf_counter()
     with Progress(idx.size, enabled=progress) as bar:
         for sel in chunk_points(idx.size, chunk_size):
@@ -223,7 +225,7 @@ def estimate_seconds(scene: Scene, plan: Plan | None = None, sample: int = 256) 
     def run(pilot: np.ndarray) -> RawResult:
         t0 = time.perf_counter()
         if scene.model == "inertial":
-            raw = RawResult.empty(pilot.size, 0)
+            raw = RawResult.empty(pilot.size, 0, 0)
         else:
             raw = execute(scene, plan, pilot, progress=False)
         choose_stop_models(scene, plan, raw, pilot)

@@ -142,7 +142,7 @@ def choose_stop_models(scene: Scene, plan: Plan, raw: RawResult, idx: np.ndarray
     rows = np.flatnonzero(measure)
     quasistatic = raw.xi_inf[rows].copy()
     if scene.time_resolved:  # keep the quasi-static values; the inertial xi_inf only measures the gap
-        probe = RawResult.empty(n, 0)
+        probe = RawResult.empty(n, 0, 0)
         solve_inertial(scene, plan, probe, rows, idx, progress)
         inertial_xi = probe.xi_inf[rows]
     else:

@@ -40,7 +40,17 @@ def run_chunks(scene: Scene, plan: Plan | None, chunk_size: int | None, journal:
     imap = imap or _threads
     chunks = chunk_points(scene.n_points, chunk_size)
     done = journal.done() if journal is not None else set()
-    results: dict[int, dict[str, np.ndarray]] = {}
+    flat: dict[str, np.ndarray] = {}
+    seconds = [0.0]
+
+    def consolidate(points: np.ndarray, arrays: dict[str, np.ndarray]) -> None:
+        seconds[0] += float(arrays.pop("seconds"))
+        for name, value in arrays.items():
+            if name not in flat:
+                fill = np.nan if value.dtype.kind == "f" else 0
+                flat[name] = np.full((scene.n_points,) + value.shape[1:], fill, dtype=value.dtype)
+            flat[name][points] = value
+
     todo = ((i, points) for i, points in enumerate(chunks) if i not in done)
     with Progress(scene.n_points, enabled=progress) as bar:
         bar.update(sum(chunks[i].size for i in done))
@@ -48,8 +58,7 @@ def run_chunks(scene: Scene, plan: Plan | None, chunk_size: int | None, journal:
             for i, arrays in imap(scene, plan, todo):
                 if journal is not None:
                     journal.write(i, arrays)
-                else:
-                    results[i] = arrays
+                consolidate(chunks[i], arrays)  # into the flat arrays at once: no second copy of the chunks
                 bar.update(chunks[i].size)
         except KeyboardInterrupt:
             if journal is None:
@@ -57,17 +66,9 @@ def run_chunks(scene: Scene, plan: Plan | None, chunk_size: int | None, journal:
             raise Interrupted(f"interrupted: {len(journal.done())} of {len(chunks)} chunks are saved in "
                               f"{journal.path}; run the same command with --resume (run_sweep(..., resume=True)) "
                               f"to compute only the rest") from None
-    flat: dict[str, np.ndarray] = {}
-    seconds = 0.0
-    for i, points in enumerate(chunks):
-        arrays = results.pop(i) if journal is None else journal.read(i)
-        seconds += float(arrays.pop("seconds"))
-        for name, value in arrays.items():
-            if name not in flat:
-                fill = np.nan if value.dtype.kind == "f" else 0
-                flat[name] = np.full((scene.n_points,) + value.shape[1:], fill, dtype=value.dtype)
-            flat[name][points] = value
-    return flat, seconds
+    for i in sorted(done):  # chunks of an earlier run, from the journal
+        consolidate(chunks[i], journal.read(i))
+    return flat, seconds[0]
 
 
 def stop_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.ndarray]]:
@@ -78,7 +79,7 @@ def stop_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
         if scene.model == "inertial":
-            raw = RawResult.empty(points.size, n_t)
+            raw = RawResult.empty(points.size, n_t, 0)
             raw.status[~plan.finite[points]] = Status.NO_FINITE_LIMIT
         else:
             raw = run_points(scene, plan, points, obs_tau)
