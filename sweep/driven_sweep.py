@@ -4,15 +4,13 @@ with inertia (Scene.model)."""
 from __future__ import annotations
 
 import numpy as np
-import xarray as xr
 
 from . import physics
-from .dataset import build_driven_dataset
 from .model_choice import line_uses_inertia
 from .models.driven import DECAYED, GROWTH_RTOL, NEUTRAL_SPREAD, RUNAWAY_XI_DOT, STATIONARY_TOL, Regime, simulate_batch
 from .scene import Scene
 
-__all__ = ["driven_chunk", "run_driven", "stepper_rtol"]
+__all__ = ["driven_chunk", "stepper_rtol"]
 
 W_TEXT = ", w = ln xi' with inertia"
 CHUNK = 1024
@@ -78,11 +76,3 @@ def driven_chunk(scene: Scene):
         return out
 
     return compute
-
-
-def run_driven(scene: Scene, progress: bool | None = None, history: str = "") -> xr.Dataset:
-    """Simulate every point of a driven ``scene`` (in memory) and return its Dataset."""
-    from .runner import run_chunks
-
-    flat, seconds = run_chunks(scene, None, CHUNK, None, progress)
-    return build_driven_dataset(scene, flat, seconds, describe(scene), history=history)
