@@ -57,8 +57,10 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     if plan is None:
         ds = build_driven_dataset(scene, flat, seconds, describe(scene), history=history)
     else:
-        raw, choice = stop_outputs(flat, seconds)
-        ds = build_dataset(scene, plan, raw, choice, history=history)
+        ds = build_dataset(scene, plan, *stop_outputs(flat, seconds), history=history)
+    # the Dataset holds what it needs; the plan's and the unused outputs' per-point arrays (~100 bytes per point)
+    # go before the netCDF write, whose copies are the peak of a large run's memory
+    del plan, flat
     ds = with_simulated_line(ds, scene.params, scene.model, scene.model_tol)
     if journal is not None:
         save(ds, output)

@@ -45,29 +45,27 @@ def driven_chunk(scene: Scene):
     """compute(points) -> per-point arrays of a driven ``scene`` (sweep/runner.py): one simulation per point, and
     with model="auto" a second one with inertia where the quasi-static run broke down (regime runaway)."""
     p = scene.params
-    chi = physics.reduced_stiffness(scene.K_over_M, p.D0, p.g)
-    mu1 = physics.mu1(scene.V, p.m1, p.m2, p.V0)
-    k = np.repeat(chi / p.A, scene.V.size)
-    a = np.tile(mu1 / p.A, scene.K_over_M.size)
-    b = np.full(k.size, p.m2 / p.A)
-    gamma_over_A = physics.inertia_number(scene.V, p.D0, p.g) / p.A
-    G = np.tile(gamma_over_A, scene.K_over_M.size)
-    line_inertial = np.tile(line_uses_inertia(gamma_over_A, scene.model, scene.model_tol), scene.K_over_M.size)
+    n_v = scene.V.size
+    k_k = physics.reduced_stiffness(scene.K_over_M, p.D0, p.g) / p.A  # per K/M; flat index i_K n_V + i_V
+    a_v = physics.mu1(scene.V, p.m1, p.m2, p.V0) / p.A  # per V
+    G_v = physics.inertia_number(scene.V, p.D0, p.g) / p.A
+    inertial_v = line_uses_inertia(G_v, scene.model, scene.model_tol)
 
     def simulate(g: np.ndarray, inertial: np.ndarray) -> dict[str, np.ndarray]:
         n = g.size
         out = {"regime": np.zeros(n, np.int8), "status": np.zeros(n, np.int8), "growth_rate": np.full(n, np.nan),
                "period": np.full(n, np.nan), "amplitude": np.full(n, np.nan), "cycles": np.zeros(n, np.int64),
                "steps": np.zeros(n, np.int64), "peak_w": np.full(n, np.nan)}
-        simulate_batch(k[g], a[g], b[g], G[g] * inertial, scene.perturbation, stepper_rtol(scene.rtol),
-                       scene.max_cycles, scene.max_steps, *out.values())
+        simulate_batch(k_k[g // n_v], a_v[g % n_v], np.full(n, p.m2 / p.A), G_v[g % n_v] * inertial,
+                       scene.perturbation, stepper_rtol(scene.rtol), scene.max_cycles, scene.max_steps,
+                       *out.values())
         return out
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
-        inertial = line_inertial[points].copy()
+        inertial = inertial_v[points % n_v]
         out = simulate(points, inertial)
         if scene.model == "auto":  # the quasi-static model broke down: inertia is needed there
-            again = np.flatnonzero((out["regime"] == Regime.RUNAWAY) & ~inertial & (G[points] > 0.0))
+            again = np.flatnonzero((out["regime"] == Regime.RUNAWAY) & ~inertial & (G_v[points % n_v] > 0.0))
             if again.size:
                 inertial[again] = True
                 for name, value in simulate(points[again], inertial[again]).items():

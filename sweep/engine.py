@@ -100,11 +100,16 @@ class RawResult:
                 getattr(self, name)[sel] = value
 
 
-def _obs_tau(scene: Scene) -> np.ndarray:
-    """Reduced times tau = V t / D0 of the slip_at observations, per flat point."""
+def _obs_tau(scene: Scene, points: np.ndarray) -> np.ndarray:
+    """Reduced times tau = V t / D0 of the slip_at observations at the flat points (flat index i_K n_V + i_V)."""
     t = np.asarray(scene.t_obs if "slip_at" in scene.observables else (), dtype=float)
     tau_v = scene.V[:, None] * t[None, :] / scene.params.D0
-    return np.broadcast_to(tau_v[None, :, :], (*scene.shape, t.size)).reshape(scene.n_points, t.size)
+    return np.ascontiguousarray(tau_v[np.asarray(points) % scene.V.size])
+
+
+def n_samples(scene: Scene, plan: Plan) -> int:
+    """Sampled times per point: the trajectory's and the slip_at observations'."""
+    return plan.tau_samples.size + (len(scene.t_obs) if "slip_at" in scene.observables else 0)
 
 
 def _lane_runner(scene: Scene, plan: Plan, method: str):
@@ -140,16 +145,16 @@ def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
     return out
 
 
-def run_points(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray | None = None) -> RawResult:
+def run_points(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
     """Run the plan's points ``g`` (one chunk: one call of a compiled batch) and return their flat outputs, in the
     order of ``g``. A point's numbers do not depend on the other points of the chunk."""
-    obs_tau = _obs_tau(scene) if obs_tau is None else obs_tau
     if plan.lanes:
         return _relax_in_lanes(scene, plan, g)
-    part = RawResult.empty(g.size, plan.tau_samples.size + obs_tau.shape[1])
+    obs_tau = _obs_tau(scene, g)
+    part = RawResult.empty(g.size, n_samples(scene, plan))
     stop_batch(plan.method_arrays, plan.order, plan.adaptive, plan.k[g], plan.a[g], plan.b[g], plan.s_c[g],
                plan.finite[g], plan.step[g], plan.max_steps, scene.rtol, scene.atol["xi_inf"], plan.ctrl_tol,
-               plan.tau_samples, np.ascontiguousarray(obs_tau[g]), bool({"t50", "t90"} & set(scene.observables)),
+               plan.tau_samples, obs_tau, bool({"t50", "t90"} & set(scene.observables)),
                part.xi_inf, part.xi_inf_err, part.status, part.steps, part.xi_at, part.u_at, part.xi_at_err,
                part.u_at_err, part.tau_at_fraction, part.tau_at_fraction_err)
     part.work[:] = 3 * part.steps.astype(np.int64) // 2
@@ -168,12 +173,11 @@ def execute(scene: Scene, plan: Plan, indices: np.ndarray | None = None, progres
             chunk_size: int | None = None) -> RawResult:
     """Run ``plan`` over the points ``indices`` (default: all) of ``scene``; returns flat outputs."""
     idx = np.arange(plan.n_points) if indices is None else np.asarray(indices)
-    obs_tau = _obs_tau(scene)
-    out = RawResult.empty(idx.size, plan.tau_samples.size + obs_tau.shape[1], 0 if plan.lanes else FRACTIONS.size)
+    out = RawResult.empty(idx.size, n_samples(scene, plan), 0 if plan.lanes else FRACTIONS.size)
     t0 = time.perf_counter()
     with Progress(idx.size, enabled=progress) as bar:
         for sel in chunk_points(idx.size, chunk_size):
-            out.assign(sel, run_points(scene, plan, idx[sel], obs_tau))
+            out.assign(sel, run_points(scene, plan, idx[sel]))
             bar.update(sel.size)
     mark_error_above_tol(scene, out)
     out.seconds = time.perf_counter() - t0

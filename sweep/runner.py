@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .engine import RawResult, _obs_tau, chunk_points, mark_error_above_tol, run_points
+from .engine import RawResult, chunk_points, mark_error_above_tol, n_samples, run_points
 from .journal import Journal
 from .model_choice import ModelChoice, choose_stop_models
 from .plan import Plan
@@ -74,15 +74,14 @@ def run_chunks(scene: Scene, plan: Plan | None, chunk_size: int | None, journal:
 def stop_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.ndarray]]:
     """compute(points) of the stop protocol: the quasi-static kernels (unless the model is forced inertial), the
     choice of model, the inertial points, the error_above_tol marks."""
-    obs_tau = _obs_tau(scene)
-    n_t = plan.tau_samples.size + obs_tau.shape[1]
+    n_t = n_samples(scene, plan)
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
         if scene.model == "inertial":
             raw = RawResult.empty(points.size, n_t, 0)
             raw.status[~plan.finite[points]] = Status.NO_FINITE_LIMIT
         else:
-            raw = run_points(scene, plan, points, obs_tau)
+            raw = run_points(scene, plan, points)
             mark_error_above_tol(scene, raw)
         choice = choose_stop_models(scene, plan, raw, points)
         mark_error_above_tol(scene, raw)
