@@ -37,17 +37,14 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"{'estimated steps per point':>28}: {mean_steps:.0f} (mean of a pilot subsample)")
         print(f"{'estimated time':>28}: {seconds:.1f} s on this machine")
         return 0
-    from .engine import warm_up
-    from .model_choice import warm_up_models
+    from .api import warm_up_kernels
+    from .hopf import locate_hopf
     from .plot import plot_landscape
 
-    compile_s = warm_up(scene, plan)
-    t_line = time.perf_counter()
-    from .hopf import locate_hopf
-
-    warm_up_models()
+    t_warm = time.perf_counter()
+    warm_up_kernels(scene, plan)
     locate_hopf(scene.params, scene.V[:1], bifurcation=False)  # compile / load the kernel of the simulated line
-    compile_s += time.perf_counter() - t_line
+    compile_s = time.perf_counter() - t_warm
     t0 = time.perf_counter()
     ds = _run_to_file(scene, args)
     out = args.output

@@ -18,7 +18,6 @@ The model error (of neglecting inertia) is kept apart from the numerical error (
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,11 +60,10 @@ QUASISTATIC, INERTIAL = 0, 1
 @dataclass
 class ModelChoice:
     """Per flat point: ``inertial`` (bool: model used), ``model_error`` (estimated relative error of xi_inf with
-    the quasi-static model; None when the scene forced a model and nothing was estimated), seconds spent."""
+    the quasi-static model; None when the scene forced a model and nothing was estimated)."""
 
     inertial: np.ndarray
     model_error: np.ndarray | None
-    seconds: float = 0.0
 
 
 def line_uses_inertia(gamma_over_A: np.ndarray, model: str, model_tol: float) -> np.ndarray:
@@ -123,14 +121,13 @@ def choose_stop_models(scene: Scene, plan: Plan, raw: RawResult, idx: np.ndarray
                        progress: bool | None = False) -> ModelChoice:
     """Decide the model of the points ``idx`` (default: all; the rows of ``raw``) of a stop scene, solve the
     inertial ones, and update ``raw`` in place (module docstring). ``progress`` as in :func:`sweep.run_sweep`."""
-    t0 = time.perf_counter()
     idx = np.arange(plan.n_points) if idx is None else np.asarray(idx)
     n = idx.size
     finite = np.flatnonzero(plan.finite[idx])  # rows
     if scene.model != "auto":
         if scene.model == "inertial":
             solve_inertial(scene, plan, raw, finite, idx, progress)
-        return ModelChoice(np.full(n, scene.model == "inertial") & plan.finite[idx], None, time.perf_counter() - t0)
+        return ModelChoice(np.full(n, scene.model == "inertial") & plan.finite[idx], None)
     pts = idx[finite]
     G = _gamma_over_A(scene, pts)
     estimate = _relax(scene, plan, pts, False, (ESTIMATE_RTOL,), progress, "model error")[0]
@@ -155,8 +152,8 @@ def choose_stop_models(scene: Scene, plan: Plan, raw: RawResult, idx: np.ndarray
     if scene.time_resolved:
         over = rows[~(measured <= scene.model_tol)]
         raw.status[over[raw.status[over] == Status.OK]] = Status.MODEL_ERROR_ABOVE_TOL
-        return ModelChoice(np.zeros(n, bool), model_error, time.perf_counter() - t0)
-    return ModelChoice(measure, model_error, time.perf_counter() - t0)
+        return ModelChoice(np.zeros(n, bool), model_error)
+    return ModelChoice(measure, model_error)
 
 
 def warm_up_models() -> None:

@@ -98,4 +98,4 @@ def stop_outputs(flat: dict[str, np.ndarray], seconds: float) -> tuple[RawResult
     """The consolidated arrays of :func:`stop_chunk` as the kernel outputs and the model choice."""
     fields = {name: flat[name] for name in RawResult.__dataclass_fields__ if name in flat}
     raw = RawResult(**fields, seconds=seconds)
-    return raw, ModelChoice(flat["inertial"], flat.get("model_error"), 0.0)
+    return raw, ModelChoice(flat["inertial"], flat.get("model_error"))
