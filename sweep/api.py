@@ -14,12 +14,12 @@ from .driven_sweep import CHUNK as DRIVEN_CHUNK
 from .driven_sweep import describe
 from .engine import CHUNK_POINTS, warm_up
 from .hopf import with_simulated_line
-from .io import save
+from .io import open_dataset, save
 from .journal import Journal
 from .model_choice import warm_up_models
 from .params import FrictionParams
 from .plan import make_plan
-from .runner import JOURNAL_FORMAT, run_chunks, stop_outputs
+from .runner import JOURNAL_FORMAT, run_chunks, sampled_blocks, stop_outputs
 from .scene import Scene
 
 __all__ = ["run_sweep", "solve_point"]
@@ -40,6 +40,8 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     ``backend``: "threads" (this process, numba's threads) or "dask" (dask.distributed: a LocalCluster of
     ``workers`` one-thread processes started for the run, default 2, or the existing cluster at ``scheduler``,
     e.g. "tcp://host:8786"); the results are bitwise the same (sweep/backends.py).
+    With an output, the variables sampled in time (trajectory, slip_at) go from the journal into the file chunk
+    by chunk, never held whole, and the returned Dataset reads them from the file when they are used.
     """
     history = history or "sweep.run_sweep"
     plan = None if scene.protocol == "driven" else make_plan(scene)
@@ -54,18 +56,23 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
         warm_up_kernels(scene, plan)  # once, before the fan-out: the workers load them from numba's cache
     with open_backend(backend, workers, scheduler) as imap:
         flat, seconds = run_chunks(scene, plan, size, journal, progress, imap)
+    # with a journal the arrays sampled in time stayed there: written into the file chunk by chunk, never held whole
+    blocks = None
+    if journal is not None and plan is not None and {"trajectory", "slip_at"} & set(scene.observables):
+        blocks = sampled_blocks(scene, plan, size, journal)
     if plan is None:
         ds = build_driven_dataset(scene, flat, seconds, describe(scene), history=history)
     else:
-        ds = build_dataset(scene, plan, *stop_outputs(flat, seconds), history=history)
+        ds = build_dataset(scene, plan, *stop_outputs(flat, seconds), history=history, sampled=blocks is None)
     # the Dataset holds what it needs; the plan's and the unused outputs' per-point arrays (~100 bytes per point)
     # go before the netCDF write, whose copies are the peak of a large run's memory
     del plan, flat
     ds = with_simulated_line(ds, scene.params, scene.model, scene.model_tol)
-    if journal is not None:
-        save(ds, output)
-        journal.remove()
-    return ds
+    if journal is None:
+        return ds
+    save(ds, output, blocks=blocks)
+    journal.remove()
+    return ds if blocks is None else open_dataset(output, load=False)
 
 
 def warm_up_kernels(scene: Scene, plan) -> None:

@@ -13,13 +13,13 @@ import numpy as np
 import xarray as xr
 
 from . import physics
-from .engine import RawResult
+from .engine import SAMPLED, RawResult
 from .model_choice import ESTIMATE_RTOL, MODEL_FLAG, TIGHTER, ModelChoice, line_uses_inertia
 from .plan import Plan
 from .scene import Scene
 from .status import Status, flag_attrs
 
-__all__ = ["build_dataset", "build_driven_dataset", "REFERENCES"]
+__all__ = ["build_dataset", "build_driven_dataset", "sampled_variables", "REFERENCES"]
 
 REFERENCES = (
     "T. Baumberger and L. Gauthier, Creeplike relaxation at the interface between rough solids under shear, "
@@ -88,8 +88,11 @@ def _model_variables(scene: Scene, choice: ModelChoice, grid) -> dict[str, xr.Va
     return out
 
 
-def build_dataset(scene: Scene, plan: Plan, raw: RawResult, choice: ModelChoice, history: str = "") -> xr.Dataset:
-    """Assemble the Dataset of a stop sweep from the kernel's flat outputs."""
+def build_dataset(scene: Scene, plan: Plan, raw: RawResult, choice: ModelChoice, history: str = "",
+                  sampled: bool = True) -> xr.Dataset:
+    """Assemble the Dataset of a stop sweep from the kernel's flat outputs. ``sampled=False`` leaves out the
+    variables sampled in time (:func:`sampled_variables`: the trajectory and slip_at), which a journaled run
+    writes into its file chunk by chunk instead of holding them whole (sweep/io.py)."""
     shape = scene.shape
     p = scene.params
     grid = lambda a: a.reshape(shape + a.shape[1:])  # noqa: E731
@@ -116,29 +119,16 @@ def build_dataset(scene: Scene, plan: Plan, raw: RawResult, choice: ModelChoice,
     }
     errors = {"xi_inf": grid(raw.xi_inf_err), "slip_inf": p.D0 * grid(raw.xi_inf_err),
               "stress_relaxation": chi * grid(raw.xi_inf_err)}
-    n_traj = plan.tau_samples.size
-    if "trajectory" in scene.observables:
-        traj_dims = DIMS + ("tau",)
-        data["xi"] = _var(traj_dims, grid(raw.xi_at[:, :n_traj]), "1", "slip since the stop in units of D0, xi(tau)")
-        data["psi"] = _var(traj_dims, np.exp(grid(raw.u_at[:, :n_traj])), "1",
-                           "reduced contact age psi(tau) = V phi/D0")
-        errors["xi"] = grid(raw.xi_at_err[:, :n_traj])
-        errors["psi"] = data["psi"].values * np.expm1(grid(raw.u_at_err[:, :n_traj]))
-    if "slip_at" in scene.observables:
-        data["slip_at"] = _var(DIMS + ("t_obs",), p.D0 * grid(raw.xi_at[:, n_traj:]), "m",
-                               "slip since the stop at time t_obs")
-        errors["slip_at"] = p.D0 * grid(raw.xi_at_err[:, n_traj:])
     seconds_per_tau = p.D0 / scene.V[None, :]
     for name, col, pct in (("t50", 0, 50), ("t90", 1, 90)):
         if name in scene.observables:
             data[name] = _var(DIMS, grid(raw.tau_at_fraction[:, col]) * seconds_per_tau, "s",
                               f"time after the stop to reach {pct} % of the relaxed slip")
             errors[name] = grid(raw.tau_at_fraction_err[:, col]) * seconds_per_tau
-    for name, err in errors.items():
-        var = data[name]
-        var.attrs["ancillary_variables"] = f"{name}_error"
-        data[f"{name}_error"] = _var(var.dims, err, var.attrs["units"],
-                                     f"estimated absolute numerical error of {name} (Richardson pair + tail bound)")
+    data.update(_with_errors(data, errors))
+    if sampled:
+        data.update(sampled_variables(scene, plan.tau_samples.size, DIMS, *(grid(getattr(raw, name))
+                                                                            for name in SAMPLED)))
     attrs = _attrs(scene, "Relaxation landscape of the Baumberger-Gauthier spring-block model (stop scene)",
                    "points on unstable steady sliding (stable = 0) are computed and flagged by stable, not by status",
                    history, raw.seconds)
@@ -146,6 +136,36 @@ def build_dataset(scene: Scene, plan: Plan, raw: RawResult, choice: ModelChoice,
     attrs.update({f"plan_{k}": v for k, v in plan.describe().items()})
     attrs["plan_model"] = _describe_models(scene, choice)
     return xr.Dataset(data, coords=_coords(scene), attrs=attrs)
+
+
+def sampled_variables(scene: Scene, n_traj: int, dims: tuple[str, ...], xi_at: np.ndarray, u_at: np.ndarray,
+                      xi_at_err: np.ndarray, u_at_err: np.ndarray) -> dict[str, xr.Variable]:
+    """The variables sampled in time, with their errors, from the kernel's per-point samples (engine.SAMPLED:
+    arrays (..., n samples), the ``n_traj`` trajectory times first, then the slip_at times) over the leading
+    ``dims`` (the grid, or the points of one chunk)."""
+    p = scene.params
+    data, errors = {}, {}
+    if "trajectory" in scene.observables:
+        traj_dims = dims + ("tau",)
+        data["xi"] = _var(traj_dims, xi_at[..., :n_traj], "1", "slip since the stop in units of D0, xi(tau)")
+        data["psi"] = _var(traj_dims, np.exp(u_at[..., :n_traj]), "1", "reduced contact age psi(tau) = V phi/D0")
+        errors["xi"] = xi_at_err[..., :n_traj]
+        errors["psi"] = data["psi"].values * np.expm1(u_at_err[..., :n_traj])
+    if "slip_at" in scene.observables:
+        data["slip_at"] = _var(dims + ("t_obs",), p.D0 * xi_at[..., n_traj:], "m", "slip since the stop at time t_obs")
+        errors["slip_at"] = p.D0 * xi_at_err[..., n_traj:]
+    return {**data, **_with_errors(data, errors)}
+
+
+def _with_errors(data: dict[str, xr.Variable], errors: dict[str, np.ndarray]) -> dict[str, xr.Variable]:
+    """The ``<name>_error`` variables of ``errors`` (each linked from its variable in ``data``)."""
+    out = {}
+    for name, err in errors.items():
+        var = data[name]
+        var.attrs["ancillary_variables"] = f"{name}_error"
+        out[f"{name}_error"] = _var(var.dims, err, var.attrs["units"],
+                                    f"estimated absolute numerical error of {name} (Richardson pair + tail bound)")
+    return out
 
 
 def _describe_models(scene: Scene, choice: ModelChoice) -> str:

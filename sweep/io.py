@@ -3,36 +3,87 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from pathlib import Path
 
+import numpy as np
 import xarray as xr
 
 __all__ = ["save", "open_dataset"]
 
+COMPRESSION = {"zlib": True, "complevel": 4}
+GRID = ("K_over_M", "V")
+"""The dims of a sweep's grid; its points are numbered flat in C order (i_K n_V + i_V)."""
 
-def save(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+
+def save(ds: xr.Dataset, path: str | os.PathLike,
+         blocks: Iterable[tuple[int, dict[str, xr.Variable]]] | None = None) -> Path:
     """Write ``ds`` to ``path`` as netCDF4 (zlib-compressed, CF-1.11 attributes as built by the engine).
+
+    ``blocks``: variables too large to hold whole (the trajectories of a large sweep), written after ``ds`` one
+    block at a time: (first flat point, {name: Variable with dims ("point", ...)}) over consecutive points of the
+    grid, in ascending order; the first block defines each variable (dtype, trailing dims, attributes).
 
     The file is written beside its destination and renamed into place, so an interrupted write never leaves
     a truncated file under the final name. Returns the path.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    encoding = {name: {"zlib": True, "complevel": 4} for name in ds.data_vars}
+    encoding = {name: dict(COMPRESSION) for name in ds.data_vars}
     encoding.update({name: {"_FillValue": None} for name in ds.coords})
     for name, var in ds.data_vars.items():
         if var.dtype.kind in "iu":
             encoding[name]["_FillValue"] = None
     tmp = path.with_name(path.name + ".part")
     ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
+    if blocks is not None:
+        _append_blocks(tmp, blocks, ds.sizes[GRID[1]])
     os.replace(tmp, path)
     return path
 
 
-def open_dataset(path: str | os.PathLike) -> xr.Dataset:
-    """Read a file written by :func:`save` (fully loaded into memory, file closed)."""
+def _append_blocks(path: Path, blocks: Iterable[tuple[int, dict[str, xr.Variable]]], n_v: int) -> None:
+    """Write ``blocks`` (see :func:`save`) into the grid variables of the netCDF file at ``path``."""
+    import netCDF4
+
+    with netCDF4.Dataset(path, "a") as nc:
+        expected = 0
+        for start, variables in blocks:
+            if start != expected:
+                raise ValueError(f"blocks must cover consecutive points: expected point {expected}, got {start}")
+            for name, var in variables.items():
+                if name not in nc.variables:
+                    fill = np.nan if var.dtype.kind == "f" else None
+                    created = nc.createVariable(name, var.dtype, GRID + var.dims[1:], fill_value=fill,
+                                                **COMPRESSION)
+                    created.setncatts(var.attrs)
+                _write_flat(nc.variables[name], start, np.asarray(var.values), n_v)
+            expected = start + next(iter(variables.values())).shape[0]
+
+
+def _write_flat(var, start: int, values: np.ndarray, n_v: int) -> None:
+    """values[j] into the grid variable ``var`` at flat point start + j: whole rows of the grid in one write, the
+    partial rows at either end in one each."""
+    i, stop = start, start + values.shape[0]
+    while i < stop:
+        k, v = divmod(i, n_v)
+        if v == 0 and stop - i >= n_v:
+            rows = (stop - i) // n_v
+            var[k:k + rows] = values[i - start:i - start + rows * n_v].reshape((rows, n_v) + values.shape[1:])
+            i += rows * n_v
+        else:
+            end = min(stop, (k + 1) * n_v)
+            var[k, v:v + end - i] = values[i - start:end - start]
+            i = end
+
+
+def open_dataset(path: str | os.PathLike, load: bool = True) -> xr.Dataset:
+    """Read a file written by :func:`save`: fully loaded into memory and the file closed, or with ``load=False``
+    opened lazily (each variable read when used; for files too large to hold whole)."""
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no sweep file at {str(path)!r}")
+    if not load:
+        return xr.open_dataset(path, engine="netcdf4")
     with xr.open_dataset(path, engine="netcdf4") as ds:
         return ds.load()

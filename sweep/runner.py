@@ -9,11 +9,12 @@ chunking, the order in which chunks finish, or how many runs it took.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import numpy as np
+import xarray as xr
 
-from .engine import RawResult, chunk_points, mark_error_above_tol, n_samples, run_points
+from .engine import SAMPLED, RawResult, chunk_points, mark_error_above_tol, n_samples, run_points
 from .journal import Journal
 from .model_choice import ModelChoice, choose_stop_models
 from .plan import Plan
@@ -21,9 +22,10 @@ from .progress import Progress
 from .scene import Scene
 from .status import Status
 
-__all__ = ["Interrupted", "run_chunks", "stop_chunk", "stop_outputs"]
+__all__ = ["Interrupted", "run_chunks", "sampled_blocks", "stop_chunk", "stop_outputs"]
 
-JOURNAL_FORMAT = 1
+JOURNAL_FORMAT = 2
+"""2: chunks are consecutive ranges of points (1: points spread over the grid)."""
 
 
 class Interrupted(RuntimeError):
@@ -34,7 +36,8 @@ def run_chunks(scene: Scene, plan: Plan | None, chunk_size: int | None, journal:
                progress: bool | None, imap=None) -> tuple[dict[str, np.ndarray], float]:
     """Every chunk of ``scene`` not yet in ``journal``, computed through ``imap`` (sweep/backends.py; default: in
     this process), then all chunks consolidated: (arrays over the scene's points, seconds spent computing them,
-    summed over chunks and over the runs that computed them)."""
+    summed over chunks and over the runs that computed them). With a journal the arrays sampled in time
+    (engine.SAMPLED) stay there, never held whole: :func:`sampled_blocks` reads them back chunk by chunk."""
     from .backends import _threads
 
     imap = imap or _threads
@@ -46,6 +49,8 @@ def run_chunks(scene: Scene, plan: Plan | None, chunk_size: int | None, journal:
     def consolidate(points: np.ndarray, arrays: dict[str, np.ndarray]) -> None:
         seconds[0] += float(arrays.pop("seconds"))
         for name, value in arrays.items():
+            if journal is not None and name in SAMPLED:
+                continue
             if name not in flat:
                 fill = np.nan if value.dtype.kind == "f" else 0
                 flat[name] = np.full((scene.n_points,) + value.shape[1:], fill, dtype=value.dtype)
@@ -94,8 +99,24 @@ def stop_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.
     return compute
 
 
+def sampled_blocks(scene: Scene, plan: Plan, chunk_size: int | None, journal: Journal
+                   ) -> Iterator[tuple[int, dict[str, xr.Variable]]]:
+    """The variables sampled in time (dataset.sampled_variables) of the journaled chunks, one chunk at a time in
+    the order of the grid: (first flat point, variables over the chunk's points), for io.save(..., blocks=)."""
+    from .dataset import sampled_variables
+
+    for i, points in enumerate(chunk_points(scene.n_points, chunk_size)):
+        order = np.argsort(points)  # a chunk is a consecutive range of points, shuffled (engine.chunk_points)
+        arrays = journal.read(i)
+        yield int(points[order[0]]), sampled_variables(scene, plan.tau_samples.size, ("point",),
+                                                       *(arrays[name][order] for name in SAMPLED))
+
+
 def stop_outputs(flat: dict[str, np.ndarray], seconds: float) -> tuple[RawResult, ModelChoice]:
-    """The consolidated arrays of :func:`stop_chunk` as the kernel outputs and the model choice."""
-    fields = {name: flat[name] for name in RawResult.__dataclass_fields__ if name in flat}
+    """The consolidated arrays of :func:`stop_chunk` as the kernel outputs and the model choice (the arrays sampled
+    in time empty where they stayed in the journal)."""
+    n = flat["xi_inf"].size
+    fields = {name: flat[name] if name in flat else np.empty((n, 0)) for name in RawResult.__dataclass_fields__
+              if name in flat or name in SAMPLED}
     raw = RawResult(**fields, seconds=seconds)
     return raw, ModelChoice(flat["inertial"], flat.get("model_error"))

@@ -60,12 +60,43 @@ def test_a_journaled_run_writes_the_file_and_removes_its_journal(tmp_path):
     assert_same_numbers(ds, open_dataset(out))
 
 
-def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, monkeypatch):
+TIME_RESOLVED = dict(observables=("xi_inf", "trajectory", "t50", "t90", "slip_at"), t_obs=(0.05, 2.0),
+                     trajectory_tau=(1e-3, 1e5, 9))
+
+
+def test_trajectories_go_into_the_file_chunk_by_chunk_never_held_whole(tmp_path, monkeypatch):
+    """With an output the arrays sampled in time stay in the journal and are written block by block (a V row is 17
+    points: chunks of whole rows, chunks with partial rows at both ends, chunks inside a row); the file is identical
+    to the Dataset of a run held in memory."""
+    import sweep.api as api
+    import sweep.io as io
+
+    scene = stop_scene(**TIME_RESOLVED)
+    in_memory = sweep.run_sweep(scene, progress=False)
+    real_run_chunks, real_write = api.run_chunks, io._write_flat
+    held, written = [], []
+    monkeypatch.setattr(api, "run_chunks", lambda *a, **k: held.append(real_run_chunks(*a, **k)) or held[-1])
+    monkeypatch.setattr(io, "_write_flat", lambda var, start, values, n_v: written.append(values.shape[0]) or
+                        real_write(var, start, values, n_v))
+    for size in (34, 40, 5):
+        held.clear(), written.clear()
+        out = tmp_path / f"t{size}.nc"
+        returned = sweep.run_sweep(scene, progress=False, output=out, chunk_size=size)
+        flat, _ = held[0]
+        assert not {"xi_at", "u_at", "xi_at_err", "u_at_err"} & set(flat), "sampled arrays consolidated in memory"
+        assert 0 < max(written) <= size and sum(written) == 6 * scene.n_points  # xi, psi, slip_at and their errors
+        in_file = open_dataset(out)
+        xr.testing.assert_identical(in_memory.drop_attrs(deep=False), in_file.drop_attrs(deep=False))
+        xr.testing.assert_identical(in_file, returned.load())
+
+
+@pytest.mark.parametrize("kw", [{}, TIME_RESOLVED], ids=["xi_inf", "trajectories"])
+def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, monkeypatch, kw):
     """A journal holding some chunks (as a killed run leaves it): resume computes the rest only, and the file
     equals an uninterrupted run; a different scene, or no --resume, is refused before any work."""
     import sweep.runner as runner
 
-    scene, out = stop_scene(), tmp_path / "s.nc"
+    scene, out = stop_scene(**kw), tmp_path / "s.nc"
     calls = []
     real_chunk = runner.stop_chunk
 
@@ -87,7 +118,7 @@ def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, 
     with pytest.raises(InputError, match="resume"):
         sweep.run_sweep(scene, progress=False, output=out, chunk_size=50)
     with pytest.raises(InputError, match="differs in plan_hash, scene"):
-        sweep.run_sweep(stop_scene(rtol=1e-5), progress=False, output=out, chunk_size=50, resume=True)
+        sweep.run_sweep(stop_scene(rtol=1e-5, **kw), progress=False, output=out, chunk_size=50, resume=True)
     with pytest.raises(InputError, match="differs in chunk_size"):
         sweep.run_sweep(scene, progress=False, output=out, chunk_size=60, resume=True)
 
@@ -100,7 +131,7 @@ def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, 
     monkeypatch.setattr(runner, "stop_chunk", counting_stop_chunk)
     resumed = sweep.run_sweep(scene, progress=False, output=out, chunk_size=50, resume=True)
     assert sum(computed) == scene.n_points - sum(calls)
-    assert_same_numbers(resumed, sweep.run_sweep(scene, progress=False))
+    assert_same_numbers(resumed.load(), sweep.run_sweep(scene, progress=False))
     assert not journal_path(out).exists()
 
 
