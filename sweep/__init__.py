@@ -1,6 +1,7 @@
 """sweep: Numba-accelerated parameter-space sweeps of the Baumberger & Gauthier (1996) spring-block model."""
 
 from .api import run_sweep, solve_point
+from .backends import local_cluster
 from .errors import InputError
 from .hopf import locate_hopf
 from .io import open_dataset as open
@@ -11,6 +12,6 @@ from .presets import presets, provenance
 from .scene import Scene, default_scene, load_scene
 from .status import Status
 
-__all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "default_scene", "load_scene", "locate_hopf",
-           "make_plan", "open", "presets", "provenance", "run_sweep", "save", "solve_point"]
+__all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "default_scene", "load_scene", "local_cluster",
+           "locate_hopf", "make_plan", "open", "presets", "provenance", "run_sweep", "save", "solve_point"]
 __version__ = "0.1.0"

@@ -104,7 +104,8 @@ class RawResult:
 
 
 def _obs_tau(scene: Scene, points: np.ndarray) -> np.ndarray:
-    """Reduced times tau = V t / D0 of the slip_at observations at the flat points (flat index i_K n_V + i_V)."""
+    """Reduced times tau = V t / D0 of the slip_at observations at the points of the grid ``points`` (flat index
+    i_K n_V + i_V)."""
     t = np.asarray(scene.t_obs if "slip_at" in scene.observables else (), dtype=float)
     tau_v = scene.V[:, None] * t[None, :] / scene.params.D0
     return np.ascontiguousarray(tau_v[np.asarray(points) % scene.V.size])
@@ -153,7 +154,7 @@ def run_points(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
     order of ``g``. A point's numbers do not depend on the other points of the chunk."""
     if plan.lanes:
         return _relax_in_lanes(scene, plan, g)
-    obs_tau = _obs_tau(scene, g)
+    obs_tau = _obs_tau(scene, plan.flat_index(g))
     part = RawResult.empty(g.size, n_samples(scene, plan))
     stop_batch(plan.method_arrays, plan.order, plan.adaptive, plan.k[g], plan.a[g], plan.b[g], plan.s_c[g],
                plan.finite[g], plan.step[g], plan.max_steps, scene.rtol, scene.atol["xi_inf"], plan.ctrl_tol,

@@ -74,11 +74,10 @@ def line_uses_inertia(gamma_over_A: np.ndarray, model: str, model_tol: float) ->
     return np.full(g.shape, model == "inertial")
 
 
-def _gamma_over_A(scene: Scene, points: np.ndarray) -> np.ndarray:
-    """gamma/A at the flat points (flat index = i_K n_V + i_V): looked up along V, so that a chunk costs O(its
-    points), not O(the grid)."""
+def _gamma_over_A(scene: Scene, plan: Plan, points: np.ndarray) -> np.ndarray:
+    """gamma/A at the plan's ``points``: looked up along V, so that a chunk costs O(its points), not O(the grid)."""
     p = scene.params
-    return (physics.inertia_number(scene.V, p.D0, p.g) / p.A)[np.asarray(points) % scene.V.size]
+    return (physics.inertia_number(scene.V, p.D0, p.g) / p.A)[plan.flat_index(points) % scene.V.size]
 
 
 def _relax(scene: Scene, plan: Plan, pts: np.ndarray, inertial: bool, rtols: tuple[float, ...],
@@ -88,7 +87,7 @@ def _relax(scene: Scene, plan: Plan, pts: np.ndarray, inertial: bool, rtols: tup
     prange gives each thread a contiguous share; results do not depend on the order)."""
     order = np.random.default_rng(ORDER_SEED).permutation(pts.size)
     p = pts[order]
-    G = _gamma_over_A(scene, p)
+    G = _gamma_over_A(scene, plan, p)
     outs: list[list[dict[str, np.ndarray]]] = [[] for _ in rtols]
     with Progress(pts.size * len(rtols), enabled=progress, label=label) as bar:
         for start in range(0, p.size, CHUNK):
@@ -129,7 +128,7 @@ def choose_stop_models(scene: Scene, plan: Plan, raw: RawResult, idx: np.ndarray
             solve_inertial(scene, plan, raw, finite, idx, progress)
         return ModelChoice(np.full(n, scene.model == "inertial") & plan.finite[idx], None)
     pts = idx[finite]
-    G = _gamma_over_A(scene, pts)
+    G = _gamma_over_A(scene, plan, pts)
     estimate = _relax(scene, plan, pts, False, (ESTIMATE_RTOL,), progress, "model error")[0]
     model_error = np.full(n, np.nan)
     ok = estimate["status"] == Status.OK

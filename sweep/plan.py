@@ -25,7 +25,7 @@ scaled log time sigma of :mod:`sweep.models.stop`, and the step count is chosen 
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -157,6 +157,10 @@ def choose_method(scene: Scene) -> tuple[str, str]:
     raise AssertionError("AUTO_METHOD covers every rtol")
 
 
+PER_POINT = ("point_method", "step", "chi", "mu1", "k", "a", "b", "s_c", "finite")
+"""The per-point arrays of a Plan (flat over its points)."""
+
+
 @dataclass(frozen=True, eq=False)
 class Plan:
     """The resolved plan of a scene; per-point arrays are flat in C order over (K_over_M, V)."""
@@ -183,10 +187,25 @@ class Plan:
     finite: np.ndarray
     tau_samples: np.ndarray
     needs_tau: bool
+    index: np.ndarray | None = None
+    """Flat indices in the scene's grid (i_K n_V + i_V) of the points of a plan restricted by :meth:`take`; None:
+    every point of the scene, in order."""
 
     @property
     def n_points(self) -> int:
         return self.k.size
+
+    def take(self, points: np.ndarray) -> Plan:
+        """The plan of ``points`` only (indices into this plan): what one chunk needs, ~60 bytes a point, so that a
+        chunk shipped to a dask worker carries its share of the plan instead of every worker holding all of it."""
+        points = np.asarray(points)
+        return replace(self, **{name: getattr(self, name)[points] for name in PER_POINT},
+                       index=self.flat_index(points))
+
+    def flat_index(self, points: np.ndarray) -> np.ndarray:
+        """Flat indices in the scene's grid of this plan's ``points`` (for lookups along the scene's axes)."""
+        points = np.asarray(points)
+        return points if self.index is None else self.index[points]
 
     @property
     def tableau(self):

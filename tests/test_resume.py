@@ -189,17 +189,48 @@ def test_dask_backend_gives_bitwise_the_same_numbers(make):
 
 
 def test_dask_workers_run_one_numba_thread_each():
-    """NUMBA_NUM_THREADS reaches the worker processes before numba is imported there (the nanny's pre-spawn
-    environment), and each worker has one thread."""
-    from sweep.backends import _dask
+    """NUMBA_NUM_THREADS reaches the worker processes of sweep.local_cluster before numba is imported there (the
+    nanny's pre-spawn environment), and each worker has one thread."""
+    from distributed import Client
 
     def numba_threads():
         import numba
         return numba.get_num_threads()
 
-    with _dask(2, None) as client:
+    with sweep.local_cluster(2) as address, Client(address) as client:
         assert set(client.run(numba_threads).values()) == {1}
         assert {w["nthreads"] for w in client.scheduler_info()["workers"].values()} == {1}
+
+
+def test_sweep_run_on_an_existing_cluster_started_elsewhere(tmp_path):
+    """`sweep run --scheduler ADDRESS` on a cluster of separate processes (`dask scheduler`, `dask worker` with one
+    thread and NUMBA_NUM_THREADS=1, as a user would start them): the same file as the threads backend."""
+    from distributed import Client
+
+    from sweep.backends import WORKER_ENV
+
+    scheduler_file = tmp_path / "scheduler.json"
+    common = ["--scheduler-file", str(scheduler_file), "--no-dashboard"]
+    quiet = dict(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    procs = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--port", "0", *common],
+                              **quiet)]
+    try:
+        with Client(scheduler_file=str(scheduler_file), timeout=60) as client:
+            procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", "--nworkers", "2",
+                                           "--nthreads", "1", *common], env={**os.environ, **WORKER_ENV}, **quiet))
+            client.wait_for_workers(2, timeout=120)
+            address = client.scheduler.address
+        scene = stop_scene()
+        config, out = tmp_path / "scene.toml", tmp_path / "s.nc"
+        config.write_text(scene.to_toml())
+        run = _cli(["run", str(config), "-o", str(out), "-q", "--chunk-size", "40", "--scheduler", address])
+        _, err = run.communicate(timeout=600)
+        assert run.returncode == 0, err
+        assert_same_numbers(open_dataset(out), sweep.run_sweep(scene, progress=False))
+    finally:
+        for proc in procs[::-1]:
+            proc.terminate()
+            proc.wait(timeout=60)
 
 
 def test_a_worker_killed_mid_sweep_is_retried_and_the_run_completes(tmp_path):
@@ -234,10 +265,10 @@ def test_a_worker_killed_mid_sweep_is_retried_and_the_run_completes(tmp_path):
 def test_a_local_cluster_leaves_the_drivers_environment_as_it_was():
     """The nannies of a LocalCluster run in this process and set the workers' variables in os.environ; they are put
     back (numba would refuse to compile here with a NUMBA_NUM_THREADS that differs from its thread pool)."""
-    from sweep.backends import WORKER_ENV, _dask
+    from sweep.backends import WORKER_ENV
 
     before = {key: os.environ.get(key) for key in WORKER_ENV}
-    with _dask(1, None):
+    with sweep.local_cluster(1):
         assert {key: os.environ.get(key) for key in WORKER_ENV} == before
     assert {key: os.environ.get(key) for key in WORKER_ENV} == before
 
