@@ -14,6 +14,11 @@ __all__ = ["save", "open_dataset"]
 COMPRESSION = {"zlib": True, "complevel": 4}
 GRID = ("K_over_M", "V")
 """The dims of a sweep's grid; its points are numbered flat in C order (i_K n_V + i_V)."""
+BLOCK_CHUNK_BYTES = 2**20
+"""Target size of an HDF5 chunk of the variables written in blocks (HDF5 advises 10 KiB .. 1 MiB)."""
+BLOCK_CACHE_CHUNKS = 4
+"""HDF5 chunk cache of such a variable, in chunks: a block fills its chunks in order, so a few suffice (the default
+cache, 64 MiB a variable, held every chunk being written: 166 MiB for a 2e5-point trajectory sweep)."""
 
 
 def save(ds: xr.Dataset, path: str | os.PathLike,
@@ -54,11 +59,26 @@ def _append_blocks(path: Path, blocks: Iterable[tuple[int, dict[str, xr.Variable
             for name, var in variables.items():
                 if name not in nc.variables:
                     fill = np.nan if var.dtype.kind == "f" else None
+                    chunks = _row_chunks((nc.dimensions[GRID[0]].size, n_v) + var.shape[1:], var.dtype.itemsize)
                     created = nc.createVariable(name, var.dtype, GRID + var.dims[1:], fill_value=fill,
-                                                **COMPRESSION)
+                                                chunksizes=chunks, **COMPRESSION)
+                    nbytes = int(np.prod(chunks)) * var.dtype.itemsize
+                    created.set_var_chunk_cache(size=BLOCK_CACHE_CHUNKS * nbytes, nelems=101,  # hash slots: a prime
+                                              preemption=1.0)  # evict the chunks a block has completed first
                     created.setncatts(var.attrs)
                 _write_flat(nc.variables[name], start, np.asarray(var.values), n_v)
             expected = start + next(iter(variables.values())).shape[0]
+
+
+def _row_chunks(shape: tuple[int, ...], itemsize: int) -> tuple[int, ...]:
+    """HDF5 chunk shape for a grid variable written in blocks of consecutive points: whole rows of the grid (all V,
+    all trailing values) by the ~BLOCK_CHUNK_BYTES, or part of one row where a row alone is larger, so that a block
+    completes its chunks one after the other."""
+    n_k, n_v, trailing = shape[0], shape[1], shape[2:]
+    per_point = int(np.prod(trailing)) * itemsize
+    along_v = min(n_v, max(1, BLOCK_CHUNK_BYTES // per_point))
+    rows = min(n_k, max(1, BLOCK_CHUNK_BYTES // (along_v * per_point))) if along_v == n_v else 1
+    return (rows, along_v) + tuple(trailing)
 
 
 def _write_flat(var, start: int, values: np.ndarray, n_v: int) -> None:
