@@ -1,4 +1,4 @@
-"""Command line: ``sweep run | plot | hopf | info``."""
+"""Command line: ``sweep run | plot | hopf | reproduce | info``."""
 
 from __future__ import annotations
 
@@ -13,6 +13,9 @@ import numpy as np
 from .errors import InputError
 
 DEFAULT_OUT = Path("sweep-out") / "landscape.nc"
+FIGURES_OUT = Path("sweep-out") / "figures"
+FIGURE_NAMES = ("fig2", "fig3a", "fig3b", "fig4a", "fig4b")
+"""The keys of sweep.figures.FIGURES, spelt out so that the parser needs no matplotlib (tests check they agree)."""
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -166,6 +169,17 @@ def _cmd_hopf(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_reproduce(args: argparse.Namespace) -> int:
+    """``sweep reproduce NAME -o DIR``: the paper's figures, each as netCDF + PNG + a text of key numbers."""
+    from .figures import reproduce
+
+    for done in reproduce(args.name, args.output):
+        print(f"{done.name}: computed in {done.seconds:.2f} s; wrote {done.data}, {done.png}, {done.text}")
+        for line in done.key_numbers:
+            print(f"  {line}")
+    return 0
+
+
 def _positive_int(text: str) -> int:
     try:
         value = int(text)
@@ -210,6 +224,13 @@ def build_parser() -> argparse.ArgumentParser:
     hopf.add_argument("-o", "--output", type=Path, default=Path("sweep-out") / "hopf.nc", help="netCDF output")
     hopf.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
     hopf.set_defaults(func=_cmd_hopf)
+    rep = sub.add_parser("reproduce", help="regenerate the paper's figures from the presets (netCDF + PNG + key "
+                                           "numbers beside the paper's)")
+    rep.add_argument("name", choices=[*FIGURE_NAMES, "all"], metavar="NAME",
+                     help=f"one of {', '.join([*FIGURE_NAMES, 'all'])}")
+    rep.add_argument("-o", "--output", type=Path, default=FIGURES_OUT,
+                     help=f"output folder (default {FIGURES_OUT})")
+    rep.set_defaults(func=_cmd_reproduce)
     info = sub.add_parser("info", help="summarise a sweep file")
     info.add_argument("file")
     info.set_defaults(func=_cmd_info)

@@ -20,7 +20,7 @@ import xarray as xr
 from .errors import InputError
 from .plot_curves import draw_curve, draw_hopf, draw_hopf_gap, draw_psi, draw_regime_curve, draw_xi, trajectory_points
 from .plot_maps import draw_map, draw_regime_map
-from .plot_style import caption, new_figure, save
+from .plot_style import caption, figure_legend, new_figure, save
 
 __all__ = ["file_kind", "plot_file", "plot_hopf", "plot_landscape", "plot_regimes", "plot_trajectories"]
 
@@ -81,6 +81,8 @@ def plot_landscape(ds: xr.Dataset, path: str | os.PathLike, variable: str | None
             draw_map(fig, ax, ds, name)
         else:
             draw_curve(ax, ds, name, eq10=file_kind(ds) == "stop")
+    if two_d:
+        figure_legend(fig, axes)
     note = "; hatched: steady sliding unstable (stick-slip side)" if two_d else ""
     fig.suptitle(caption(ds, f"{_scene_name(ds)}{note}"), fontsize=9)
     return save(fig, path)
@@ -96,6 +98,7 @@ def plot_regimes(ds: xr.Dataset, path: str | os.PathLike) -> Path:
         draw_regime_map(fig, ax_regime, ds)
         if amplitude:
             draw_map(fig, ax_amp, ds, "amplitude")
+        figure_legend(fig, axes)
     else:
         draw_regime_curve(ax_regime, ds)
         if amplitude:

@@ -55,7 +55,8 @@ def draw_curve(ax, ds: xr.Dataset, variable: str, x: str | None = None, yscale: 
     if not stable.all():
         # the unstable part reaches its stable neighbours, so the curve has no gap where stability changes
         near = ~stable
-        near[1:], near[:-1] = near[1:] | ~stable[:-1], near[:-1] | ~stable[1:]
+        near[1:] |= ~stable[:-1]
+        near[:-1] |= ~stable[1:]
         ax.plot(xs, np.where(near, y, np.nan), "--", marker=marker, color="0.45", lw=1.4, zorder=1.9,
                 label="engine, steady sliding unstable (stick-slip)")
         _shade(ax, xs, ~stable, "stick-slip: steady sliding unstable")
@@ -109,7 +110,7 @@ def trajectory_points(ds: xr.Dataset, most: int = 6) -> list[dict[str, int]]:
 
 
 def _point_label(point: xr.Dataset) -> str:
-    return "K/M = {:.3g} s$^{{-2}}$, V = {:g} µm/s".format(float(point["K_over_M"]), float(point["V"]) * 1e6)
+    return "K/M = {:.3g} s$^{{-2}}$, V = {:.3g} µm/s".format(float(point["K_over_M"]), float(point["V"]) * 1e6)
 
 
 def _colours(n: int):

@@ -1,5 +1,6 @@
 """Maps over the (K/M, V) plane: the relaxation landscape of a stop sweep and the regime map of a driven one, each
-with the Hopf line (linear theory, and located by simulation where the file has it)."""
+with the Hopf line (linear theory, and located by simulation where the file has it). The maps label what they draw;
+the caller puts the legend below the panels (sweep.plot_style.figure_legend)."""
 
 from __future__ import annotations
 
@@ -80,4 +81,3 @@ def _hopf_lines(ax, ds: xr.Dataset, v_um: np.ndarray) -> None:
 def _frame(ax, km: np.ndarray, v_um: np.ndarray) -> None:
     ax.set(xscale="log", yscale="log", xlim=(km.min(), km.max()), ylim=(v_um.min(), v_um.max()),
            xlabel=KM_LABEL, ylabel=V_LABEL)
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=7, frameon=False)

@@ -22,7 +22,8 @@ import xarray as xr  # noqa: E402
 
 from .presets import presets  # noqa: E402
 
-__all__ = ["DPI", "SIZES", "KM_LABEL", "V_LABEL", "TAU_LABEL", "CHI_LABEL", "new_figure", "save", "label",
+__all__ = ["DPI", "SIZES", "KM_LABEL", "V_LABEL", "TAU_LABEL", "CHI_LABEL", "new_figure", "figure_legend", "save",
+           "label",
            "caption", "file_params", "preset_name", "um_per_s", "km_per_chi", "no_hopf_line_band",
            "mark_no_hopf_line", "mark_failed", "flag_names"]
 
@@ -47,6 +48,18 @@ SHORT_LABELS = {
 def new_figure(size: str = "single", ncols: int = 1):
     """(figure, axes) of one of :data:`SIZES`; ``axes`` is an array when ``ncols`` > 1."""
     return plt.subplots(1, ncols, figsize=SIZES[size], dpi=DPI, layout="constrained")
+
+
+def figure_legend(fig, axes) -> None:
+    """One legend for the whole figure, below its panels: the entries of every panel, each label once (side by
+    side maps share most of them; a legend inside a map would hide data)."""
+    entries: dict[str, object] = {}
+    for ax in np.atleast_1d(axes):
+        for handle, text in zip(*ax.get_legend_handles_labels()):
+            entries.setdefault(text, handle)
+    if entries:
+        fig.legend(list(entries.values()), list(entries), loc="outside lower center", ncol=3, fontsize=7,
+                   frameon=False)
 
 
 def save(fig, path: str | os.PathLike) -> Path:
