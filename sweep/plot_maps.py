@@ -67,7 +67,7 @@ def _hopf_lines(ax, ds: xr.Dataset, v_um: np.ndarray) -> None:
     v = np.geomspace(ds["V"].values.min(), ds["V"].values.max(), 400)
     kc = physics.hopf_K_over_M(v, p["A"], p["m1"], p["m2"], p["D0"], p.get("V0", 1e-6), p.get("g", 9.81))
     ax.plot(kc, v * 1e6, "w-", lw=2.6, zorder=3)  # a halo: the line stays visible on any colour
-    ax.plot(kc, v * 1e6, "r--", lw=1.6, zorder=3, label="Hopf line, linear theory (eq. 3)")
+    ax.plot(kc, v * 1e6, "r--", lw=1.6, zorder=3, label="Hopf line, linear theory (eq. 3, quasi-static)")
     used, quasistatic = ds["chi_c"].values, ds["chi_c_quasistatic"].values
     shifted = np.isfinite(used) & (np.abs(used - quasistatic) > 1e-3 * np.abs(quasistatic))
     if shifted.any():  # inertia moves the line by gamma/A relative where the model used has it

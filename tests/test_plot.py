@@ -104,6 +104,20 @@ def test_stop_map_shows_the_hopf_line_where_stability_flips(stop_file):
     plt.close(fig)
 
 
+def test_stop_map_draws_the_line_moved_by_inertia_where_the_model_has_it():
+    params = SAMPLE2.replace(m2=0.0)  # mu1 = m1 at every V; gamma/A = 0.21 at 100 um/s
+    ds = sweep.run_sweep(sweep.Scene(protocol="stop", params=params, K_over_M=np.logspace(4, 7, 6),
+                                     V=np.logspace(-6, -4, 4)), progress=False)
+    fig, ax = plt.subplots()
+    draw_map(fig, ax, ds, "xi_inf")
+    moved = line(ax, "Hopf line with inertia").get_xdata()
+    gamma = ds["V"].values ** 2 / (params.g * params.D0)
+    assert moved[-1] == pytest.approx(params.m1 * (1 + gamma[-1] / params.A) * params.g / params.D0, rel=1e-12)
+    np.testing.assert_allclose(line(ax, "Hopf line, linear theory").get_xdata(), params.m1 * params.g / params.D0,
+                               rtol=1e-12)
+    plt.close(fig)
+
+
 def test_driven_map_regimes_and_amplitude(driven_file):
     ds = sweep.open(driven_file)
     fig, (ax_r, ax_a) = plt.subplots(1, 2)
@@ -116,7 +130,7 @@ def test_driven_map_regimes_and_amplitude(driven_file):
     amp = ax_a.collections[0].get_array()
     assert np.array_equal(np.ma.getmaskarray(amp), (ds["amplitude"].values.T <= 0) | np.isnan(ds["amplitude"].values.T))
     for ax in (ax_r, ax_a):
-        assert "Hopf line, linear theory (eq. 3)" in labels(ax)
+        assert "Hopf line, linear theory (eq. 3, quasi-static)" in labels(ax)
     plt.close(fig)
 
 
