@@ -1,4 +1,4 @@
-"""Command line: ``sweep run | plot | hopf | info``."""
+"""Command line: ``sweep run | plot | hopf | reproduce | info``."""
 
 from __future__ import annotations
 
@@ -13,6 +13,9 @@ import numpy as np
 from .errors import InputError
 
 DEFAULT_OUT = Path("sweep-out") / "landscape.nc"
+FIGURES_OUT = Path("sweep-out") / "figures"
+FIGURE_NAMES = ("fig2", "fig3a", "fig3b", "fig4a", "fig4b")
+"""The keys of sweep.figures.FIGURES, spelt out so that the parser needs no matplotlib (tests check they agree)."""
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -39,7 +42,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         return 0
     from .api import warm_up_kernels
     from .hopf import locate_hopf
-    from .plot import plot_landscape
+    from .plot import plot_file
 
     t_warm = time.perf_counter()
     warm_up_kernels(scene, plan)
@@ -54,7 +57,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     print(_flag_summary(ds, "status"))
     print(_model_summary(ds))
     try:
-        print(f"wrote {plot_landscape(ds, args.png or out.with_suffix('.png'))}")
+        for png in plot_file(ds, args.png or out.with_suffix(".png")):
+            print(f"wrote {png}")
     except Exception as exc:  # the results are safe on disk; a failed picture must not hide that
         print(f"sweep: could not draw the picture ({type(exc).__name__}: {exc}); the data are in {out}",
               file=sys.stderr)
@@ -121,8 +125,8 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     from .plot import plot_file
 
     ds = open_dataset(args.file)
-    png = plot_file(ds, args.output or Path(args.file).with_suffix(".png"), variable=args.variable)
-    print(f"wrote {png}")
+    for png in plot_file(ds, args.output or Path(args.file).with_suffix(".png"), variable=args.variable):
+        print(f"wrote {png}")
     return 0
 
 
@@ -165,6 +169,17 @@ def _cmd_hopf(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_reproduce(args: argparse.Namespace) -> int:
+    """``sweep reproduce NAME -o DIR``: the paper's figures, each as netCDF + PNG + a text of key numbers."""
+    from .figures import reproduce
+
+    for done in reproduce(args.name, args.output):
+        print(f"{done.name}: computed in {done.seconds:.2f} s; wrote {done.data}, {done.png}, {done.text}")
+        for line in done.key_numbers:
+            print(f"  {line}")
+    return 0
+
+
 def _positive_int(text: str) -> int:
     try:
         value = int(text)
@@ -196,17 +211,26 @@ def build_parser() -> argparse.ArgumentParser:
                      help="run the chunks on an existing dask cluster, e.g. tcp://host:8786 (its workers need sweep "
                           "installed)")
     run.set_defaults(func=_cmd_run)
-    plot = sub.add_parser("plot", help="draw the landscape map of a sweep file")
+    plot = sub.add_parser("plot", help="draw the picture that fits a sweep file: stop landscape (and transients), "
+                                       "driven regimes, or Hopf line")
     plot.add_argument("file")
     plot.add_argument("-o", "--output", type=Path, help="PNG path (default: the file with .png)")
     plot.add_argument("--variable", default=None,
-                      help="variable to map (default: xi_inf for a stop sweep, the regime map for a driven one)")
+                      help="draw this (K_over_M, V) variable alone (default: xi_inf and the stress relaxation of a "
+                           "stop sweep, the regime and amplitude of a driven one)")
     plot.set_defaults(func=_cmd_plot)
     hopf = sub.add_parser("hopf", help="locate the Hopf line over the V axis of a scene file (netCDF + PNG)")
     hopf.add_argument("config", help="TOML with preset and/or [params], a [V] axis table, optional rtol, model")
     hopf.add_argument("-o", "--output", type=Path, default=Path("sweep-out") / "hopf.nc", help="netCDF output")
     hopf.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
     hopf.set_defaults(func=_cmd_hopf)
+    rep = sub.add_parser("reproduce", help="regenerate the paper's figures from the presets (netCDF + PNG + key "
+                                           "numbers beside the paper's)")
+    rep.add_argument("name", choices=[*FIGURE_NAMES, "all"], metavar="NAME",
+                     help=f"one of {', '.join([*FIGURE_NAMES, 'all'])}")
+    rep.add_argument("-o", "--output", type=Path, default=FIGURES_OUT,
+                     help=f"output folder (default {FIGURES_OUT})")
+    rep.set_defaults(func=_cmd_reproduce)
     info = sub.add_parser("info", help="summarise a sweep file")
     info.add_argument("file")
     info.set_defaults(func=_cmd_info)

@@ -1,165 +1,133 @@
-"""Pictures of sweep files: the relaxation landscape with the Hopf line."""
+"""Pictures of sweep files: ``plot_file`` draws the picture that fits the file.
+
+* stop sweep (``xi_inf``): maps of xi_inf and of the stress relaxation over (K/M, V) with the Hopf line (linear
+  theory, and located by simulation where the file has it), the stick-slip side hatched, the V range without a
+  Hopf line (mu1(V) <= 0) marked and failed points crossed; curves along the axis of a one-line grid (with eq. 10);
+  plus, where the file holds transients (``xi``, ``psi`` over ``tau``), a second picture of xi(tau) and psi(tau);
+* driven sweep (``regime``): the regime map and the stick-slip amplitude;
+* Hopf file (``K_over_M_c``, sweep.locate_hopf): K/M_c(V) by simulation and by the linear theory, and their gap.
+
+Every picture names its parameters in its title and has the units on its axes (sweep/plot_style.py).
+"""
 
 from __future__ import annotations
 
 import os
-import tomllib
 from pathlib import Path
 
-import matplotlib
+import xarray as xr
 
-matplotlib.use("Agg")  # files only; no display needed
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import xarray as xr  # noqa: E402
-from matplotlib.colors import LogNorm  # noqa: E402
+from .errors import InputError
+from .plot_curves import draw_curve, draw_hopf, draw_hopf_gap, draw_psi, draw_regime_curve, draw_xi, trajectory_points
+from .plot_maps import draw_map, draw_regime_map
+from .plot_style import caption, figure_legend, new_figure, save
 
-__all__ = ["plot_file", "plot_hopf", "plot_landscape", "plot_regimes"]
+__all__ = ["file_kind", "plot_file", "plot_hopf", "plot_landscape", "plot_regimes", "plot_trajectories"]
+
+KINDS = ("stop", "driven", "hopf")
+STOP_VARIABLES = ("xi_inf", "stress_relaxation")
 
 
-def plot_hopf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
-    """The Hopf line K/M_c(V) located by simulation (markers coloured by bifurcation type) over the linear one."""
+def file_kind(ds: xr.Dataset) -> str:
+    """"hopf" (sweep.locate_hopf), "driven" or "stop" (sweep.run_sweep) from the variables of the file."""
+    if "K_over_M_c" in ds.data_vars and "bifurcation" in ds:
+        return "hopf"
+    if "regime" in ds:
+        return "driven"
+    if "xi_inf" in ds:
+        return "stop"
+    raise InputError("not a sweep file: expected xi_inf (stop sweep), regime (driven sweep) or K_over_M_c (Hopf "
+                     f"line); found {sorted(ds.data_vars)}")
+
+
+def has_trajectories(ds: xr.Dataset) -> bool:
+    """True when a stop file holds transients xi(tau), psi(tau) (observable "trajectory")."""
+    return "xi" in ds and "psi" in ds and "tau" in ds.dims
+
+
+def plot_file(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = None) -> list[Path]:
+    """The pictures that fit the file (module docstring), written to ``path`` and, for the transients of a stop
+    sweep over more than one point, ``<path stem>_trajectories.png``. ``variable``: map or draw that variable of a
+    stop or driven file alone. Returns the paths written."""
+    kind = file_kind(ds)
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig, ax = plt.subplots(figsize=(7.0, 5.0), dpi=110)
-    v_um = ds["V"].values * 1e6
-    ax.plot(ds["K_over_M_c_linear"].values, v_um, "k-", lw=1.2, label="linear theory (eq. 3)")
-    names = ds["bifurcation"].attrs["flag_meanings"].split()
-    for code, name in enumerate(names):
-        sel = ds["bifurcation"].values == code
-        if sel.any() and name != "none":
-            ax.plot(ds["K_over_M_c"].values[sel], v_um[sel], "o", ms=4, label=f"simulation: {name}")
-    none = ~np.isfinite(ds["K_over_M_c_linear"].values)
-    if none.any():
-        ax.axhspan(v_um[none].min(), v_um[none].max(), color="0.9", label="no Hopf line (mu1(V) <= 0)")
-    ax.set(xscale="log", yscale="log", xlabel="K/M [s$^{-2}$]", ylabel="V [µm/s]",
-           title=f"Hopf line, {ds.attrs.get('model', '')} model; stick-slip at smaller K/M")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    if variable is not None:
+        if variable not in ds.data_vars or set(ds[variable].dims) != {"K_over_M", "V"}:
+            names = [n for n, v in ds.data_vars.items() if set(v.dims) == {"K_over_M", "V"}]
+            raise InputError(f"--variable must be a (K_over_M, V) variable of the file, one of {names}; "
+                             f"got {variable!r}")
+        return [plot_landscape(ds, path, variable=variable)]
+    if kind == "hopf":
+        return [plot_hopf(ds, path)]
+    if kind == "driven":
+        return [plot_regimes(ds, path)]
+    if has_trajectories(ds) and ds.sizes["K_over_M"] * ds.sizes["V"] == 1:
+        return [plot_trajectories(ds, path)]  # a single point: its transient is the whole story
+    written = [plot_landscape(ds, path)]
+    if has_trajectories(ds):
+        written.append(plot_trajectories(ds, path.with_name(path.stem + "_trajectories.png")))
+    return written
 
 
-def plot_file(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = None) -> Path:
-    """The picture that fits the file: the regime map of a driven sweep, else the stop landscape."""
-    if "regime" in ds and variable is None:
-        return plot_regimes(ds, path)
-    return plot_landscape(ds, path, variable=variable or "xi_inf")
+def plot_landscape(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = None) -> Path:
+    """Stop (or driven) sweep: ``variable`` (default: xi_inf and the stress relaxation side by side) as a log-log
+    map over (K/M, V) (sweep.plot_maps.draw_map), or as a curve along the axis of a grid with a single K/M or a
+    single V (sweep.plot_curves.draw_curve)."""
+    variables = (variable,) if variable else STOP_VARIABLES
+    fig, axes = new_figure("pair" if len(variables) > 1 else "map", len(variables))
+    two_d = min(ds.sizes["K_over_M"], ds.sizes["V"]) > 1
+    for ax, name in zip(axes if len(variables) > 1 else [axes], variables):
+        if two_d:
+            draw_map(fig, ax, ds, name)
+        else:
+            draw_curve(ax, ds, name, eq10=file_kind(ds) == "stop")
+    if two_d:
+        figure_legend(fig, axes)
+    note = "; hatched: steady sliding unstable (stick-slip side)" if two_d else ""
+    fig.suptitle(caption(ds, f"{_scene_name(ds)}{note}"), fontsize=9)
+    return save(fig, path)
 
 
 def plot_regimes(ds: xr.Dataset, path: str | os.PathLike) -> Path:
-    """Regime map of a driven sweep over (K/M, V) (categorical colours, one per regime) with the quasi-static Hopf
-    line; a single K/M or V gives the regime along the other axis."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    names = ds["regime"].attrs["flag_meanings"].split()
-    colours = ["#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8c8c8c"][: len(names)]
-    fig, ax = plt.subplots(figsize=(7.5, 5.5), dpi=110)
-    km, v_um = ds["K_over_M"].values, ds["V"].values * 1e6
-    from matplotlib.colors import BoundaryNorm, ListedColormap
-
-    cmap = ListedColormap(colours)
-    norm = BoundaryNorm(np.arange(len(names) + 1) - 0.5, len(names))
+    """Driven sweep: the regime reached from perturbed steady sliding and, where the file has it, the stick-slip
+    amplitude, over (K/M, V) with the Hopf lines (or along the axis of a one-line grid)."""
+    amplitude = "amplitude" in ds
+    fig, axes = new_figure("pair" if amplitude else "map", 2 if amplitude else 1)
+    ax_regime, ax_amp = (axes[0], axes[1]) if amplitude else (axes, None)
     if min(ds.sizes["K_over_M"], ds.sizes["V"]) > 1:
-        mesh = ax.pcolormesh(km, v_um, ds["regime"].values.T, shading="nearest", cmap=cmap, norm=norm)
-        bar = fig.colorbar(mesh, ax=ax, ticks=np.arange(len(names)))
-        bar.ax.set_yticklabels(names)
-        kc = ds["chi_c"].values * float(ds["K_over_M"][0] / ds["chi"][0])
-        ax.plot(kc, v_um, "k--", lw=1.6, label="Hopf line (linear, quasi-static)")
-        _simulated_line(ax, ds, v_um, "k")
-        ax.set(xscale="log", yscale="log", xlim=(km.min(), km.max()), ylim=(v_um.min(), v_um.max()),
-               xlabel="K/M [s$^{-2}$]", ylabel="V [µm/s]")
-        ax.legend(loc="lower right", fontsize=8)
+        draw_regime_map(fig, ax_regime, ds)
+        if amplitude:
+            draw_map(fig, ax_amp, ds, "amplitude")
+        figure_legend(fig, axes)
     else:
-        along = "V" if ds.sizes["K_over_M"] == 1 else "K_over_M"
-        line = ds.squeeze()
-        x = line[along].values * (1e6 if along == "V" else 1.0)
-        ax.scatter(x, line["regime"].values, c=[colours[r] for r in line["regime"].values])
-        ax.set(xscale="log", yticks=np.arange(len(names)), yticklabels=names,
-               xlabel="V [µm/s]" if along == "V" else "K/M [s$^{-2}$]")
-    ax.set_title(_caption(ds).replace("stop scene", "driven scene") + "\nregime reached from perturbed steady sliding",
-                 fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+        draw_regime_curve(ax_regime, ds)
+        if amplitude:
+            draw_curve(ax_amp, ds, "amplitude", eq10=False)
+    fig.suptitle(caption(ds, "driven scene: regime reached from perturbed steady sliding; stick-slip amplitude "
+                             "(blank: steady)"), fontsize=9)
+    return save(fig, path)
 
 
-def plot_landscape(ds: xr.Dataset, path: str | os.PathLike, variable: str = "xi_inf") -> Path:
-    """Picture of ``variable`` over the (K/M, V) grid, written to ``path``.
-
-    A 2-D grid gives a log-log map with the quasi-static Hopf line (K/M)_c(V) = g chi_c / D0, the stick-slip
-    side (steady sliding unstable) hatched and points with a non-ok status marked by grey crosses. A grid with
-    a single K/M or a single V gives a curve along the other axis, dashed where sliding is unstable.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig, ax = plt.subplots(figsize=(7.5, 5.5), dpi=110)
-    if min(ds.sizes["K_over_M"], ds.sizes["V"]) > 1:
-        _draw_map(fig, ax, ds, variable)
-        ax.set_title(_caption(ds) + "\nhatched: steady sliding unstable (stick-slip)", fontsize=9)
-    else:
-        _draw_curve(ax, ds, variable)
-        ax.set_title(_caption(ds), fontsize=9)
-    ax.legend(loc="lower right", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+def plot_hopf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Hopf file: K/M_c(V) both ways (located by simulation, linear theory eq. 3) and their relative gap."""
+    fig, (ax_line, ax_gap) = new_figure("pair", 2)
+    draw_hopf(ax_line, ds)
+    draw_hopf_gap(ax_gap, ds)
+    fig.suptitle(caption(ds, "Hopf line: located by simulation (bisection on the measured growth rate) and by the "
+                             "linear theory"), fontsize=9)
+    return save(fig, path)
 
 
-def _label(ds: xr.Dataset, variable: str) -> str:
-    return f"{ds[variable].attrs.get('long_name', variable)} [{ds[variable].units}]"
+def plot_trajectories(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Stop file with transients: xi(tau) (with eq. 12 and xi_inf) and psi(tau) (with its asymptotes) on log axes
+    for up to six points spread over the grid."""
+    points = trajectory_points(ds)
+    fig, (ax_xi, ax_psi) = new_figure("pair", 2)
+    draw_xi(ax_xi, ds, points)
+    draw_psi(ax_psi, ds, points)
+    fig.suptitle(caption(ds, f"{_scene_name(ds)}: transients after the stop"), fontsize=9)
+    return save(fig, path)
 
 
-def _draw_map(fig, ax, ds: xr.Dataset, variable: str) -> None:
-    km, v_um = ds["K_over_M"].values, ds["V"].values * 1e6
-    z = ds[variable].values.T  # rows: V, columns: K/M
-    finite = z[np.isfinite(z) & (z > 0)]
-    norm = LogNorm(finite.min(), finite.max()) if finite.size and finite.max() > finite.min() else None
-    mesh = ax.pcolormesh(km, v_um, np.ma.masked_invalid(z), shading="nearest", cmap="viridis", norm=norm)
-    fig.colorbar(mesh, ax=ax, label=_label(ds, variable))
-    unstable = ds["stable"].values.T == 0
-    if unstable.any():
-        ax.contourf(km, v_um, unstable.astype(float), levels=[0.5, 1.5], colors="none", hatches=["//"])
-    kc = ds["chi_c"].values * float(ds["K_over_M"][0] / ds["chi"][0])  # chi -> K/M is the factor g/D0
-    ax.plot(kc, v_um, "w-", lw=2.2)
-    ax.plot(kc, v_um, "r--", lw=1.6, label="Hopf line (linear, quasi-static)")
-    _simulated_line(ax, ds, v_um, "r")
-    failed = ds["status"].values.T != 0
-    if failed.any():
-        kk, vv = np.meshgrid(km, v_um)
-        ax.plot(kk[failed], vv[failed], "x", color="0.5", ms=3, label="status != ok")
-    ax.set(xscale="log", yscale="log", xlim=(km.min(), km.max()), ylim=(v_um.min(), v_um.max()),
-           xlabel="K/M [s$^{-2}$]", ylabel="V [µm/s]")
-
-
-def _simulated_line(ax, ds: xr.Dataset, v_um: np.ndarray, colour: str) -> None:
-    """The Hopf line located by simulation (sweep.hopf.with_simulated_line), where the file has it."""
-    if "K_over_M_c_simulated" in ds.coords:
-        ax.plot(ds["K_over_M_c_simulated"].values, v_um, "o", ms=3, mfc="none", mec=colour,
-                label="Hopf line (located by simulation)")
-
-
-def _draw_curve(ax, ds: xr.Dataset, variable: str) -> None:
-    along = "V" if ds.sizes["K_over_M"] == 1 else "K_over_M"
-    line = ds.squeeze()
-    x = line[along].values * (1e6 if along == "V" else 1.0)
-    y = np.where(line["status"].values == 0, line[variable].values, np.nan)
-    stable = line["stable"].values == 1
-    ax.plot(x, np.where(stable, y, np.nan), "-", color="C0", label="steady sliding stable")
-    ax.plot(x, np.where(stable, np.nan, y), "--", color="C0", label="unstable (stick-slip side)")
-    fixed = "V = {:g} µm/s".format(float(ds["V"][0]) * 1e6) if along == "K_over_M" else \
-        "K/M = {:g} s$^{{-2}}$".format(float(ds["K_over_M"][0]))
-    has_values = bool(np.any(np.isfinite(y) & (y > 0)))
-    if not has_values:  # e.g. every point without a finite limit: say so instead of an empty log axis
-        ax.text(0.5, 0.5, "no finite values (see status)", transform=ax.transAxes, ha="center")
-    ax.set(xscale="log", yscale="log" if has_values else "linear", ylabel=_label(ds, variable),
-           xlabel=("V [µm/s]" if along == "V" else "K/M [s$^{-2}$]") + f" at {fixed}")
-
-
-def _caption(ds: xr.Dataset) -> str:
-    params = tomllib.loads(ds.attrs["scene"]).get("params", {}) if "scene" in ds.attrs else {}
-    shown = ", ".join(f"{k}={params[k]:g}" for k in ("A", "m1", "m2", "D0") if k in params)
-    return f"stop scene, quasi-static model; {shown}"
+def _scene_name(ds: xr.Dataset) -> str:
+    return "stop scene" if file_kind(ds) == "stop" else "driven scene"

@@ -1,0 +1,83 @@
+"""Maps over the (K/M, V) plane: the relaxation landscape of a stop sweep and the regime map of a driven one, each
+with the Hopf line (linear theory, and located by simulation where the file has it). The maps label what they draw;
+the caller puts the legend below the panels (sweep.plot_style.figure_legend)."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
+
+from . import physics
+from .plot_style import KM_LABEL, V_LABEL, file_params, km_per_chi, label, mark_failed, mark_no_hopf_line, um_per_s
+
+__all__ = ["draw_map", "draw_regime_map", "REGIME_COLOURS"]
+
+REGIME_COLOURS = ["#0072b2", "#e69f00", "#009e73", "#cc79a7", "#999999"]
+"""Okabe-Ito colours (distinct for colour-blind readers), one per regime code."""
+CMAPS = {"xi_inf": "viridis", "stress_relaxation": "cividis", "amplitude": "magma"}
+
+
+def draw_map(fig, ax, ds: xr.Dataset, variable: str) -> None:
+    """``variable`` over (K/M, V), log colour scale, with the Hopf lines, the stick-slip side (steady sliding
+    unstable, ``stable`` = 0) hatched, the V range without a Hopf line marked and failed points crossed."""
+    km, v_um = ds["K_over_M"].values, um_per_s(ds)
+    z = ds[variable].values.T  # rows: V, columns: K/M
+    finite = z[np.isfinite(z) & (z > 0)]
+    norm = LogNorm(finite.min(), finite.max()) if finite.size and finite.max() > finite.min() else None
+    mesh = ax.pcolormesh(km, v_um, np.ma.masked_where(~(np.isfinite(z) & (z > 0)), z), shading="nearest",
+                         cmap=CMAPS.get(variable, "viridis"), norm=norm)
+    fig.colorbar(mesh, ax=ax, label=label(ds, variable))
+    _hatch_unstable(ax, km, v_um, ds["stable"].values.T)
+    _hopf_lines(ax, ds, v_um)
+    mark_no_hopf_line(ax, v_um, ds["mu1"].values)
+    kk, vv = np.meshgrid(km, v_um, indexing="ij")
+    mark_failed(ax, ds, kk, vv)
+    _frame(ax, km, v_um)
+
+
+def draw_regime_map(fig, ax, ds: xr.Dataset) -> None:
+    """The regime reached by each driven point (categorical colours, one per regime), with the Hopf lines."""
+    names = ds["regime"].attrs["flag_meanings"].split()
+    km, v_um = ds["K_over_M"].values, um_per_s(ds)
+    cmap = ListedColormap(REGIME_COLOURS[: len(names)])
+    norm = BoundaryNorm(np.arange(len(names) + 1) - 0.5, len(names))
+    mesh = ax.pcolormesh(km, v_um, ds["regime"].values.T, shading="nearest", cmap=cmap, norm=norm)
+    bar = fig.colorbar(mesh, ax=ax, ticks=np.arange(len(names)), label="regime")
+    bar.ax.set_yticklabels(names)
+    _hopf_lines(ax, ds, v_um)
+    mark_no_hopf_line(ax, v_um, ds["mu1"].values)
+    kk, vv = np.meshgrid(km, v_um, indexing="ij")
+    mark_failed(ax, ds, kk, vv)
+    _frame(ax, km, v_um)
+
+
+def _hatch_unstable(ax, km: np.ndarray, v_um: np.ndarray, unstable_is_zero: np.ndarray) -> None:
+    unstable = unstable_is_zero == 0
+    if unstable.any():
+        ax.contourf(km, v_um, unstable.astype(float), levels=[0.5, 1.5], colors="none", hatches=["//"], zorder=2)
+        ax.fill_between([], [], [], facecolor="none", hatch="//", label="steady sliding unstable (stick-slip side)")
+
+
+def _hopf_lines(ax, ds: xr.Dataset, v_um: np.ndarray) -> None:
+    """The quasi-static Hopf line eq. 3 from the file's parameters (dense in V, so that it runs into the edge of
+    the V range without a line), the file's own line where inertia moves it (chi_c = mu1 (1 + gamma/A)), and the
+    line located by simulation (sweep.hopf.with_simulated_line) where the file has it."""
+    p = file_params(ds)
+    v = np.geomspace(ds["V"].values.min(), ds["V"].values.max(), 400)
+    kc = physics.hopf_K_over_M(v, p["A"], p["m1"], p["m2"], p["D0"], p.get("V0", 1e-6), p.get("g", 9.81))
+    ax.plot(kc, v * 1e6, "w-", lw=2.6, zorder=3)  # a halo: the line stays visible on any colour
+    ax.plot(kc, v * 1e6, "r--", lw=1.6, zorder=3, label="Hopf line, linear theory (eq. 3, quasi-static)")
+    used, quasistatic = ds["chi_c"].values, ds["chi_c_quasistatic"].values
+    shifted = np.isfinite(used) & (np.abs(used - quasistatic) > 1e-3 * np.abs(quasistatic))
+    if shifted.any():  # inertia moves the line by gamma/A relative where the model used has it
+        ax.plot(used * km_per_chi(ds), v_um, ":", color="r", marker="+", lw=1.2, zorder=3,
+                label="Hopf line with inertia, χ$_c$ = μ$_1$ (1 + γ/A)")
+    if "K_over_M_c_simulated" in ds.coords:
+        ax.plot(ds["K_over_M_c_simulated"].values, v_um, "o", ms=3.5, mfc="none", mec="r", zorder=3,
+                label="Hopf line located by simulation")
+
+
+def _frame(ax, km: np.ndarray, v_um: np.ndarray) -> None:
+    ax.set(xscale="log", yscale="log", xlim=(km.min(), km.max()), ylim=(v_um.min(), v_um.max()),
+           xlabel=KM_LABEL, ylabel=V_LABEL)
