@@ -179,12 +179,13 @@ def test_killed_or_interrupted_cli_run_resumes_to_the_uninterrupted_file(tmp_pat
 
 # --- dask.distributed ------------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("make", [stop_scene, driven_scene], ids=["stop", "driven"])
-def test_dask_backend_gives_bitwise_the_same_numbers(make):
-    """A LocalCluster of 2 one-thread workers, another chunking: the same numbers as the threads backend."""
+@pytest.mark.parametrize("make, workers, size", [(stop_scene, 2, 29), (driven_scene, 2, 29), (stop_scene, 1, 50)],
+                         ids=["stop", "driven", "stop-1-worker"])
+def test_dask_backend_gives_bitwise_the_same_numbers(make, workers, size):
+    """A LocalCluster of one-thread workers, another chunking: the same numbers as the threads backend."""
     scene = make()
     threads = sweep.run_sweep(scene, progress=False)
-    on_dask = sweep.run_sweep(scene, progress=False, backend="dask", workers=2, chunk_size=29)
+    on_dask = sweep.run_sweep(scene, progress=False, backend="dask", workers=workers, chunk_size=size)
     assert_same_numbers(threads, on_dask)
 
 
