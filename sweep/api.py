@@ -59,7 +59,7 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     # with a journal the arrays sampled in time stayed there: written into the file chunk by chunk, never held whole
     blocks = None
     if journal is not None and plan is not None and {"trajectory", "slip_at"} & set(scene.observables):
-        blocks = sampled_blocks(scene, plan, size, journal)
+        blocks = sampled_blocks(scene, plan.tau_samples.size, size, journal)  # (holds no reference to the plan)
     if plan is None:
         ds = build_driven_dataset(scene, flat, seconds, describe(scene), history=history)
     else:

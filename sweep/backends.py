@@ -51,6 +51,8 @@ def chunk_task(scene: Scene, plan: Plan | None, points: np.ndarray) -> dict[str,
 def chunk_plan(plan: Plan | None, points: np.ndarray) -> Plan | None:
     """The share of ``plan`` that the chunk of ``points`` needs (made once by the driver for the whole scene)."""
     return None if plan is None else plan.take(points)
+
+
 def _threads(scene: Scene, plan: Plan | None, todo: Iterable[tuple[int, np.ndarray]]):
     for i, points in todo:
         yield i, chunk_task(scene, chunk_plan(plan, points), points)

@@ -99,16 +99,17 @@ def stop_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.
     return compute
 
 
-def sampled_blocks(scene: Scene, plan: Plan, chunk_size: int | None, journal: Journal
+def sampled_blocks(scene: Scene, n_traj: int, chunk_size: int | None, journal: Journal
                    ) -> Iterator[tuple[int, dict[str, xr.Variable]]]:
-    """The variables sampled in time (dataset.sampled_variables) of the journaled chunks, one chunk at a time in
-    the order of the grid: (first flat point, variables over the chunk's points), for io.save(..., blocks=)."""
+    """The variables sampled in time (dataset.sampled_variables; ``n_traj`` trajectory times) of the journaled
+    chunks, one chunk at a time in the order of the grid: (first flat point, variables over the chunk's points), for
+    io.save(..., blocks=)."""
     from .dataset import sampled_variables
 
     for i, points in enumerate(chunk_points(scene.n_points, chunk_size)):
         order = np.argsort(points)  # a chunk is a consecutive range of points, shuffled (engine.chunk_points)
         arrays = journal.read(i)
-        yield int(points[order[0]]), sampled_variables(scene, plan.tau_samples.size, ("point",),
+        yield int(points[order[0]]), sampled_variables(scene, n_traj, ("point",),
                                                        *(arrays[name][order] for name in SAMPLED))
 
 
