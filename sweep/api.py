@@ -12,7 +12,7 @@ from .backends import check_backend, open_backend
 from .dataset import build_dataset, build_driven_dataset
 from .driven_sweep import CHUNK as DRIVEN_CHUNK
 from .driven_sweep import describe
-from .engine import CHUNK_POINTS, warm_up
+from .engine import CHUNK_POINTS, n_samples, warm_up
 from .hopf import with_simulated_line
 from .io import open_dataset, save
 from .journal import Journal
@@ -58,7 +58,7 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
         flat, seconds = run_chunks(scene, plan, size, journal, progress, imap)
     # with a journal the arrays sampled in time stayed there: written into the file chunk by chunk, never held whole
     blocks = None
-    if journal is not None and plan is not None and {"trajectory", "slip_at"} & set(scene.observables):
+    if journal is not None and plan is not None and n_samples(scene, plan) > 0:
         blocks = sampled_blocks(scene, plan.tau_samples.size, size, journal)  # (holds no reference to the plan)
     if plan is None:
         ds = build_driven_dataset(scene, flat, seconds, describe(scene), history=history)
