@@ -30,7 +30,7 @@ from _common import loadavg, machine_info, sweep_digest  # noqa: E402
 
 import sweep  # noqa: E402
 from sweep import physics  # noqa: E402
-from sweep.models.driven import Regime  # noqa: E402
+from sweep.integrate.driven import Regime  # noqa: E402
 from sweep.plot import plot_regimes  # noqa: E402
 
 OUT = Path(__file__).resolve().parent / "results"

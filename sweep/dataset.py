@@ -198,7 +198,8 @@ def build_driven_dataset(scene: Scene, out: dict[str, np.ndarray], seconds: floa
                          history: str = "") -> xr.Dataset:
     """Assemble the Dataset of a driven sweep from flat outputs of :func:`sweep.models.driven.simulate_batch`
     (keys regime, status, growth_rate, period, amplitude, cycles, steps, peak_w)."""
-    from .models.driven import RUNAWAY_XI_DOT, Regime
+    from .accuracy import RUNAWAY_XI_DOT
+    from .integrate.driven import Regime
 
     shape = scene.shape
     p = scene.params

@@ -7,7 +7,8 @@ import numpy as np
 
 from . import physics
 from .model_choice import line_uses_inertia
-from .models.driven import DECAYED, GROWTH_RTOL, NEUTRAL_SPREAD, RUNAWAY_XI_DOT, STATIONARY_TOL, Regime, simulate_batch
+from .accuracy import DECAYED, GROWTH_RTOL, NEUTRAL_SPREAD, RUNAWAY_XI_DOT, STATIONARY_TOL, driven_stepper_rtol
+from .integrate.driven import DrivenOutputs, DrivenSettings, Regime, driven_batch
 from .scene import Scene
 
 __all__ = ["driven_chunk", "stepper_rtol"]
@@ -17,10 +18,7 @@ CHUNK = 1024
 """Points per chunk of a driven sweep (one progress update, one journal entry)."""
 
 
-def stepper_rtol(rtol: float) -> float:
-    """Local tolerance of the driven stepper: the regime decisions compare amplitudes of successive cycles to
-    STATIONARY_TOL (1e-7), so the integration must be far tighter than that whatever the scene's rtol."""
-    return min(1e-2 * rtol, 1e-9)
+stepper_rtol = driven_stepper_rtol
 
 
 def describe(scene: Scene) -> dict[str, str]:
@@ -50,16 +48,13 @@ def driven_chunk(scene: Scene):
     a_v = physics.mu1(scene.V, p.m1, p.m2, p.V0) / p.A  # per V
     G_v = physics.inertia_number(scene.V, p.D0, p.g) / p.A
     inertial_v = line_uses_inertia(G_v, scene.model, scene.model_tol)
+    settings = DrivenSettings(scene.perturbation, stepper_rtol(scene.rtol), scene.max_cycles, scene.max_steps)
 
     def simulate(g: np.ndarray, inertial: np.ndarray) -> dict[str, np.ndarray]:
-        n = g.size
-        out = {"regime": np.zeros(n, np.int8), "status": np.zeros(n, np.int8), "growth_rate": np.full(n, np.nan),
-               "period": np.full(n, np.nan), "amplitude": np.full(n, np.nan), "cycles": np.zeros(n, np.int64),
-               "steps": np.zeros(n, np.int64), "peak_w": np.full(n, np.nan)}
-        simulate_batch(k_k[g // n_v], a_v[g % n_v], np.full(n, p.m2 / p.A), G_v[g % n_v] * inertial,
-                       scene.perturbation, stepper_rtol(scene.rtol), scene.max_cycles, scene.max_steps,
-                       *out.values())
-        return out
+        out = DrivenOutputs.empty(g.size)
+        driven_batch()(k_k[g // n_v], a_v[g % n_v], np.full(g.size, p.m2 / p.A), G_v[g % n_v] * inertial, settings,
+                       out)
+        return out._asdict()
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
         inertial = inertial_v[points % n_v]

@@ -35,7 +35,7 @@ from . import physics
 from .dataset import REFERENCES, versions
 from .errors import InputError
 from .model_choice import MODEL_FLAG, line_uses_inertia
-from .models.driven import Regime, simulate_point
+from .integrate.driven import DrivenParams, DrivenSettings, Regime, simulate_point
 from .params import FrictionParams
 from .scene import MODEL_TOL_RANGE, MODELS
 
@@ -59,14 +59,14 @@ BIFURCATIONS = ("none", "supercritical", "subcritical", "degenerate", "undetermi
 def _growth(k: float, a: float, b: float, g: float) -> float:
     """Measured growth rate of a small perturbation at reduced stiffness k = chi/A (a = mu1/A, b = m2/A,
     g = gamma/A)."""
-    out = simulate_point(k, a, b, g, SIGN_PERTURBATION, STEPPER_RTOL, SIGN_CYCLES, MAX_STEPS)
-    return out[2]
+    return simulate_point(DrivenParams(k, a, b, g), DrivenSettings(SIGN_PERTURBATION, STEPPER_RTOL, SIGN_CYCLES,
+                                                                   MAX_STEPS)).growth_rate
 
 
 def _run(k: float, a: float, b: float, g: float, perturbation: float):
     """(regime, amplitude) of a point run to a decision."""
-    out = simulate_point(k, a, b, g, perturbation, STEPPER_RTOL, TYPE_CYCLES, MAX_STEPS)
-    return int(out[0]), out[4]
+    r = simulate_point(DrivenParams(k, a, b, g), DrivenSettings(perturbation, STEPPER_RTOL, TYPE_CYCLES, MAX_STEPS))
+    return int(r.regime), r.amplitude
 
 
 def _locate(a: float, b: float, g: float, rtol: float) -> tuple[float, int]:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from sweep import physics
-from sweep.models.driven import simulate_driven
+from sweep.integrate.driven import simulate_driven
 
 A, MU1 = 0.007, 0.0125  # sample2 at V0 (mu1 = m1): chi_c = mu1, omega_c = sqrt(mu1/A) = 1.336
 M2 = 0.0033

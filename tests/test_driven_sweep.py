@@ -11,7 +11,7 @@ import sweep
 from sweep import physics
 from sweep.cli import main
 from sweep.errors import InputError
-from sweep.models.driven import Regime
+from sweep.integrate.driven import Regime
 
 PARAMS = sweep.presets["sample2"]
 KM = np.logspace(4, 6, 8)

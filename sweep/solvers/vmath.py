@@ -26,7 +26,11 @@ from numba.extending import intrinsic
 
 from ..jitcache import pin_module
 
-__all__ = ["exp_f64", "exp_f32"]
+__all__ = ["EXP_MAX", "exp_f64", "exp_f32"]
+
+EXP_MAX = 700.0
+"""Largest exponent a model passes to exp (exp(709.8) overflows float64): beyond it a point is flagged nonfinite
+(or, where a rate is clamped, the clamp keeps it finite)."""
 
 
 @intrinsic

@@ -1,0 +1,1 @@
+"""Per-point drivers (model x stepper x controller x recorder), the SIMD lanes and the batch loops over points."""

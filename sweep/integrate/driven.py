@@ -1,0 +1,385 @@
+"""Driven scene driver (docs/physics.md 3b): one point integrated from a perturbed steady sliding until its regime
+is decided; the batch loop over flat points.
+
+Model x stepper x controller x recorder: the right-hand side of :mod:`sweep.models.driven` (with the scene's state
+law), the explicit stage loop of :mod:`sweep.solvers.explicit` with the Dormand-Prince 5(4) tableau and the PI
+controller, or, where the inertial mode is stiff (h times its rate A/(gamma xi') > STIFF_SWITCH: stick phases),
+RODAS3 (:mod:`sweep.solvers.rosenbrock_step`) with the analytic Jacobian and the I controller; what is recorded is
+the cycle history below. Near steady sliding (xi' ~ 1, where the Hopf line is located) the explicit stepper stays
+in use. A slip velocity beyond RUNAWAY_XI_DOT ends the point as ``runaway`` (the quasi-static model breaks down:
+m2 = 0 below the Hopf line overflows in finite time), before any exponent can overflow.
+
+The run starts from steady sliding with the spring stretched by ``perturbation`` (z(0) = perturbation, u(0) = 0).
+Each cycle of the oscillation is cut at its maximum of z (z' = 1 - e^w turns negative, located by Newton on exact
+partial steps, so the peak is as accurate as the stepper) and its minimum; with a_k = half the peak-to-peak
+stretch of cycle k and T_k the time between its maxima, the observables are
+
+    growth_rate = ln(a_k/a_(k-1)) / T_k    (reduced, per unit tau; Re sigma of the linear theory while small),
+    period      = T_k                      (tau units; 2 pi / Im sigma, -> 2 pi / omega_c at the line),
+    amplitude   = a_k once the cycles are stationary (0 for steady sliding).
+
+How a regime is decided (never guessed; ``undecided`` when the budget ends first; constants in sweep/accuracy.py):
+
+* ``runaway``: the slip velocity passed RUNAWAY_XI_DOT.
+* ``steady``: the state (max |z|, |u|) fell below DECAYED x perturbation, or the growth rate is negative and has
+  converged (three successive cycles agree to GROWTH_RTOL): a linear decay is then established and the
+  perturbation dies. Without two full cycles (strong damping, or an overdamped return without any) the growth
+  rate is the decay rate of the state from 0.1 to DECAYED x perturbation.
+* ``stick_slip`` / ``neutral``: the cycles are stationary, |a_k/a_(k-1) - 1| <= STATIONARY_TOL over three cycles.
+  A long transient is not mistaken for an attractor: a transient with |growth_rate| T above STATIONARY_TOL is not
+  stationary, and one below it (a drift of < 1e-7 per cycle) is called neutral only where the amplitude is still
+  that of the first cycle (within NEUTRAL_SPREAD) and the first cycle is no larger than NEUTRAL_START x the
+  linear oscillation through the initial state; other stationary cycles are a limit cycle reached from the
+  perturbation (stick_slip). Quasi-static m2 = 0 at the line is the neutral case.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from enum import IntEnum
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit, prange
+
+from ..accuracy import (
+    DECAYED,
+    GROWTH_RTOL,
+    MIN_CYCLES,
+    NEUTRAL_SPREAD,
+    NEUTRAL_START,
+    STATIONARY_TOL,
+    STIFF_SWITCH,
+    W_RUNAWAY,
+)
+from ..jitcache import pin
+from ..models.driven import DrivenParams, inertial_system, log_velocity_rate, make_driven_rhs, stiffness
+from ..models.state_laws import STATE_LAWS
+from ..solvers import DP5, RODAS3
+from ..solvers.controllers import I_CONTROLLER, PI_CONTROLLER, accepted_factor, rejected_factor
+from ..solvers.explicit import make_erk_step
+from ..solvers.fastmath import FAST
+from ..solvers.rosenbrock_step import make_rodas3_step, scratch
+from ..solvers.vmath import EXP_MAX
+from ..status import Status
+
+__all__ = ["DrivenOutputs", "DrivenParams", "DrivenResult", "DrivenSettings", "Regime", "driven_batch",
+           "simulate_driven", "simulate_point"]
+
+OK, MAX_STEPS, STEP_UNDERFLOW = int(Status.OK), int(Status.MAX_STEPS), int(Status.STEP_UNDERFLOW)
+BREAKDOWN = int(Status.QUASISTATIC_BREAKDOWN)
+H_START = 0.01
+"""First step in tau, times 1/(1 + k) (and at most 0.1 gamma/A with inertia): a fraction of the fastest time."""
+H_FLOOR = 1e-15
+"""Smallest step in tau relative to 1 + tau before the point is flagged step_underflow."""
+HISTORY = 4
+"""Cycles kept for the decisions."""
+DP5_ORDER, RODAS3_ORDER = DP5.error_order, RODAS3.order_hat
+_STAGES = DP5.stages
+
+
+class Regime(IntEnum):
+    """Outcome of a driven point (append-only, like :class:`sweep.status.Status`)."""
+
+    STEADY = 0
+    STICK_SLIP = 1
+    NEUTRAL = 2
+    RUNAWAY = 3
+    UNDECIDED = 4
+
+
+class DrivenSettings(NamedTuple):
+    """How one driven point is run (the same for every point of a scene)."""
+
+    perturbation: float
+    """Initial spring stretch z(0) [1]."""
+    rtol: float
+    """Local tolerance of the stepper (absolute floor rtol x the largest |z| met)."""
+    max_cycles: int
+    max_steps: int
+
+
+class DrivenResult(NamedTuple):
+    """One driven point's outcome; NaN where an observable does not apply (e.g. no full cycle)."""
+
+    regime: int
+    status: int
+    """ok, max_steps or step_underflow (regime undecided), quasistatic_breakdown (regime runaway)."""
+    growth_rate: float
+    period: float
+    amplitude: float
+    cycles: int
+    steps: int
+    peak_w: float
+    """Largest ln xi' met."""
+
+
+class DrivenOutputs(NamedTuple):
+    """Flat per-point output arrays of :func:`driven_batch` (one field per :class:`DrivenResult` field)."""
+
+    regime: np.ndarray
+    status: np.ndarray
+    growth_rate: np.ndarray
+    period: np.ndarray
+    amplitude: np.ndarray
+    cycles: np.ndarray
+    steps: np.ndarray
+    peak_w: np.ndarray
+
+    @classmethod
+    def empty(cls, n: int) -> DrivenOutputs:
+        nan = lambda: np.full(n, np.nan)  # noqa: E731
+        return cls(np.zeros(n, np.int8), np.zeros(n, np.int8), nan(), nan(), nan(), np.zeros(n, np.int64),
+                   np.zeros(n, np.int64), nan())
+
+
+_stiff_step = make_rodas3_step(inertial_system)
+
+
+def _make_advance(rhs, with_inertia: bool):
+    """advance(stiff, y, h, p, K, ys, y_new, err, work): one step of size h from y (rates in K[0]):
+    Dormand-Prince, or RODAS3 where ``stiff``; False if the Rosenbrock matrix was singular."""
+    erk_step = make_erk_step(rhs, 3, DP5)
+
+    @njit(inline="always", fastmath=FAST, error_model="numpy")
+    def advance(stiff, y, h, p, K, ys, y_new, err, work):
+        if with_inertia and stiff:
+            Kr, M, piv, f, ft, ysr = work
+            return _stiff_step(0.0, y, h, p, y_new, err, Kr, M, piv, f, ft, ysr)
+        erk_step(K, ys, y, h, p, y_new, err)
+        return True
+
+    return advance
+
+
+def _make_extremum(rhs, advance):
+    """extremum(stiff, y0, h, dz0, dz1, p, K, ys, yt, err, work, dy) -> (theta h, z there): the extremum of z inside
+    a step of size h from y0 where z' changes sign (dz0 at the start, dz1 at the end): linear interpolation of z' as
+    a first guess, then Newton on exact partial steps of size theta h with the step's own method
+    (z'' = -xi' (ln xi')')."""
+
+    @njit(fastmath=FAST, error_model="numpy")
+    def extremum(stiff, y0, h, dz0, dz1, p, K, ys, yt, err, work, dy):
+        theta = dz0 / (dz0 - dz1)
+        for _ in range(4):
+            rhs(y0, p, K[0])
+            advance(stiff, y0, theta * h, p, K, ys, yt, err, work)
+            lw = rhs(yt, p, dy)
+            ddz = -math.exp(min(lw, EXP_MAX)) * log_velocity_rate(yt, dy, p)
+            if ddz == 0.0 or not math.isfinite(ddz):
+                break
+            delta = -dy[0] / (ddz * h)
+            theta = min(max(theta + delta, 0.0), 1.0)
+            if abs(delta) < 1e-12:
+                break
+        rhs(y0, p, K[0])
+        advance(stiff, y0, theta * h, p, K, ys, yt, err, work)
+        return theta * h, yt[0]
+
+    return extremum
+
+
+@njit(cache=True)
+def _linear_amplitude(p, perturbation):
+    """Amplitude of the small oscillation through the initial state (z, u) = (perturbation, 0), where
+    z' = -k perturbation, in the linear theory: z = R e^(sigma_r tau) cos(omega tau + phi) with sigma = sigma_r
+    +- i omega the roots of s^2 + (k - a) s + k = 0 (docs/physics.md 3b, reduced by A); NaN without oscillation.
+    With inertia (g > 0) the start has xi' = 1, z' = 0: it is an extremum, R ~ perturbation."""
+    if p.g > 0.0:
+        return perturbation
+    disc = p.k - 0.25 * (p.k - p.a) ** 2
+    if disc <= 0.0:
+        return math.nan
+    omega, sigma_r = math.sqrt(disc), 0.5 * (p.a - p.k)
+    return perturbation * math.sqrt(1.0 + ((p.k + sigma_r) / omega) ** 2)
+
+
+@njit(cache=True)
+def _decide(amp, grow, perturbation, amp_first, a_start, cycles):
+    """The regime after a cycle (module docstring), or UNDECIDED to go on."""
+    a_k = amp[-1]
+    if a_k < DECAYED * perturbation:
+        return Regime.STEADY
+    if cycles < MIN_CYCLES + 1:
+        return Regime.UNDECIDED
+    g0, g1, g2 = grow[-3], grow[-2], grow[-1]
+    if g2 < 0.0 and abs(g1 - g2) <= GROWTH_RTOL * abs(g2) and abs(g0 - g1) <= GROWTH_RTOL * abs(g1):
+        # an established linear decay, unless the cycles are (nearly) stationary: then the stationary test decides
+        if abs(amp[-1] / amp[-2] - 1.0) > STATIONARY_TOL:
+            return Regime.STEADY
+    stationary = True
+    for i in range(HISTORY - 3, HISTORY):
+        if not abs(amp[i] / amp[i - 1] - 1.0) <= STATIONARY_TOL:
+            stationary = False
+    if stationary:
+        if abs(a_k / amp_first - 1.0) <= NEUTRAL_SPREAD and amp_first <= NEUTRAL_START * a_start:
+            return Regime.NEUTRAL
+        return Regime.STICK_SLIP
+    return Regime.UNDECIDED
+
+
+def _make_simulate(law: str, with_inertia: bool):
+    """simulate(p, settings) -> DrivenResult for one state law, compiled for the quasi-static model only
+    (``with_inertia`` False: the stiff stepper is not compiled into the loop, which was 18 % slower with it) or
+    for both."""
+    rhs = make_driven_rhs(STATE_LAWS[law])
+    advance = _make_advance(rhs, with_inertia)
+    extremum = _make_extremum(rhs, advance)
+
+    @njit(fastmath=FAST, error_model="numpy")
+    def simulate(p, settings):
+        perturbation, rtol = settings.perturbation, settings.rtol
+        K, ys = np.empty((_STAGES, 3)), np.empty(3)
+        y, y_new, err_v, dy = np.zeros(3), np.empty(3), np.empty(3), np.empty(3)
+        yt, dyt = np.empty(3), np.empty(3)  # the extremum search's own
+        y[0] = perturbation
+        tau = 0.0
+        size = perturbation  # largest |z| met: the error scale of both states (they oscillate about 0)
+        h = H_START / (1.0 + p.k) if p.g == 0.0 else min(H_START / (1.0 + p.k), 0.1 * p.g)
+        amp = np.full(HISTORY, np.nan)
+        per = np.full(HISTORY, np.nan)
+        grow = np.full(HISTORY, np.nan)
+        z_min, t_max_prev = math.inf, math.nan
+        norm_tenth, t_tenth = math.nan, math.nan
+        amp_first = math.nan
+        a_start = _linear_amplitude(p, perturbation)
+        cycles, steps = 0, 0
+        w_peak = -math.inf
+        err_prev, rejected = 1e-4, False
+        work = scratch(3)
+        rhs(y, p, dy)
+        dz = dy[0]
+        while steps < settings.max_steps:
+            K[0, 0], K[0, 1], K[0, 2] = dy[0], dy[1], dy[2]
+            # explicit where it is stable, RODAS3 where the inertial mode's rate would hold the explicit step down
+            stiff = with_inertia and p.g > 0.0 and h * stiffness(y, p) > STIFF_SWITCH
+            q = RODAS3_ORDER if stiff else DP5_ORDER
+            done = advance(stiff, y, h, p, K, ys, y_new, err_v, work)
+            steps += 1
+            scale = rtol * max(size, abs(y_new[0]), abs(y_new[1]), abs(y_new[2]))
+            err = max(abs(err_v[0]), abs(err_v[1]), abs(err_v[2])) / scale if done else math.nan
+            if not err <= 1.0:  # rejected (NaN included: a stage beyond the exponent clamp, a singular matrix)
+                h *= rejected_factor(I_CONTROLLER, err, q)
+                rejected = True
+                if h < H_FLOOR * (1.0 + tau):
+                    return DrivenResult(Regime.UNDECIDED, STEP_UNDERFLOW, grow[-1], per[-1], math.nan, cycles, steps,
+                                        w_peak)
+                continue
+            lw1 = rhs(y_new, p, dy)
+            dz1 = dy[0]
+            w_peak = max(w_peak, lw1)
+            if lw1 > W_RUNAWAY:  # an accepted state: the slip velocity itself is past the threshold
+                return DrivenResult(Regime.RUNAWAY, BREAKDOWN, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
+            norm = max(abs(y_new[0]), abs(y_new[1]), abs(y_new[2]))
+            if norm < DECAYED * perturbation:  # decayed (also without cycles: an overdamped return)
+                if not math.isfinite(grow[-1]):  # fewer than two cycles: the decay of the state since it was 0.1x
+                    grow[-1] = math.log(norm / norm_tenth) / (tau + h - t_tenth)
+                return DrivenResult(Regime.STEADY, OK, grow[-1], per[-1], 0.0, cycles, steps, w_peak)
+            if norm < 0.1 * perturbation and not math.isfinite(t_tenth):
+                norm_tenth, t_tenth = norm, tau + h
+            if dz > 0.0 and dz1 <= 0.0:  # a maximum of z: a cycle ends
+                dt, z_top = extremum(stiff, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
+                t_peak = tau + dt
+                if z_min < math.inf and math.isfinite(t_max_prev):
+                    cycles += 1
+                    for i in range(HISTORY - 1):
+                        amp[i], per[i], grow[i] = amp[i + 1], per[i + 1], grow[i + 1]
+                    amp[-1], per[-1] = 0.5 * (z_top - z_min), t_peak - t_max_prev
+                    grow[-1] = math.log(amp[-1] / amp[-2]) / per[-1] if amp[-2] > 0.0 else math.nan
+                    if cycles == 1:
+                        amp_first = amp[-1]
+                    regime = _decide(amp, grow, perturbation, amp_first, a_start, cycles)
+                    if regime != Regime.UNDECIDED:
+                        amplitude = 0.0 if regime == Regime.STEADY else amp[-1]
+                        return DrivenResult(regime, OK, grow[-1], per[-1], amplitude, cycles, steps, w_peak)
+                    if cycles >= settings.max_cycles:
+                        return DrivenResult(Regime.UNDECIDED, OK, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
+                t_max_prev = t_peak
+            elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
+                z_min = extremum(stiff, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
+            y[0], y[1], y[2] = y_new[0], y_new[1], y_new[2]
+            tau += h
+            dz = dz1
+            size = max(size, abs(y[0]))
+            factor, err_prev = accepted_factor(I_CONTROLLER if stiff else PI_CONTROLLER, err, err_prev, q, rejected)
+            h *= factor
+            rejected = False
+        return DrivenResult(Regime.UNDECIDED, MAX_STEPS, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
+
+    return pin(simulate, law, "inertial" if with_inertia else "quasistatic")
+
+
+@functools.cache
+def point_kernel(law: str = "aging"):
+    """simulate_point(p: DrivenParams, settings: DrivenSettings) -> DrivenResult for a state law: the quasi-static
+    variant where p.g = 0, the inertial one otherwise (aging law only; compiled on first use)."""
+    quasistatic = _make_simulate(law, False)
+    if law != "aging":
+        return quasistatic
+    inertial = _make_simulate(law, True)
+
+    @njit(cache=True)
+    def simulate_point(p, settings):
+        if p.g == 0.0:
+            return quasistatic(p, settings)
+        return inertial(p, settings)
+
+    return pin(simulate_point, law)
+
+
+def simulate_point(p: DrivenParams, settings: DrivenSettings, law: str = "aging") -> DrivenResult:
+    """One driven point (reduced parameters in ``p``; state z = tau - xi, u = ln psi and, with inertia,
+    w = ln xi'): see the module docstring."""
+    return point_kernel(law)(p, settings)
+
+
+@functools.cache
+def driven_batch(law: str = "aging"):
+    """run(k, a, b, g, settings, out: DrivenOutputs): every point of the flat arrays k, a, b, g in parallel (one
+    thread per point at a time; a point's arithmetic does not depend on the others). The batch loop is where a
+    target other than the CPU threads would plug in."""
+    point = point_kernel(law)
+
+    @njit(parallel=True, cache=True)
+    def batch(k, a, b, g, settings, regime, status, growth_rate, period, amplitude, cycles, steps, peak_w):
+        # the output arrays come one by one, not as a DrivenOutputs record: numba's parfors lose the writes made
+        # into the arrays of a heterogeneous record (numba 0.6x)
+        for i in prange(k.size):
+            r = point(DrivenParams(k[i], a[i], b[i], g[i]), settings)
+            regime[i], status[i], growth_rate[i], period[i] = r.regime, r.status, r.growth_rate, r.period
+            amplitude[i], cycles[i], steps[i], peak_w[i] = r.amplitude, r.cycles, r.steps, r.peak_w
+
+    pin(batch, law)
+
+    def run(k, a, b, g, settings: DrivenSettings, out: DrivenOutputs) -> None:
+        batch(k, a, b, g, settings, *out)
+
+    return run
+
+
+def simulate_driven(chi: float, mu1: float, m2: float, A: float, perturbation: float = 1e-3, rtol: float = 1e-9,
+                    max_cycles: int = 2000, max_steps: int = 5_000_000, gamma: float = 0.0,
+                    state_law: str = "aging") -> dict[str, float | str | int]:
+    """Simulate one driven point (reduced parameters chi, mu1(V), m2, A [1]); ``gamma`` = V^2/(g D0) [1] > 0 adds
+    inertia (the full Newton equation), 0 is the quasi-static model.
+
+    Returns a dict with ``regime`` (name), ``growth_rate`` [1/tau], ``period`` [tau], ``amplitude`` [1, half the
+    peak-to-peak spring stretch tau - xi], ``cycles``, ``steps`` and ``peak_log_velocity`` (largest ln xi').
+    ``perturbation`` is the initial stretch z(0) [1]; ``rtol`` the stepper's local tolerance (absolute floor
+    rtol x perturbation)."""
+    for name, value in (("A", A), ("perturbation", perturbation), ("rtol", rtol)):
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f"{name} must be finite and > 0, got {value!r}")
+    if not (math.isfinite(chi) and chi > 0.0):
+        raise ValueError(f"chi must be finite and > 0, got {chi!r}")
+    if not (math.isfinite(gamma) and gamma >= 0.0):
+        raise ValueError(f"gamma must be finite and >= 0, got {gamma!r}")
+    if state_law not in STATE_LAWS or (gamma > 0.0 and state_law != "aging"):
+        raise ValueError(f"state_law must be one of {sorted(STATE_LAWS)} (inertia with 'aging' only), got "
+                         f"{state_law!r}")
+    r = simulate_point(DrivenParams(chi / A, mu1 / A, m2 / A, gamma / A),
+                       DrivenSettings(perturbation, rtol, max_cycles, max_steps), state_law)
+    return {"regime": Regime(r.regime).name.lower(), "status": Status(r.status).name.lower(),
+            "growth_rate": r.growth_rate, "period": r.period, "amplitude": r.amplitude, "cycles": int(r.cycles),
+            "steps": int(r.steps), "peak_log_velocity": r.peak_w}
