@@ -1,4 +1,4 @@
-"""Dataset assembly: flat kernel outputs -> a self-describing CF-1.11 xarray.Dataset (DESIGN.md contract).
+"""Dataset assembly: flat kernel outputs -> a self-describing CF-1.11 xarray.Dataset (docs/design.md 5).
 
 Reduced quantities (xi, tau, chi) and dimensional ones (slip in m, times in s) never share a name.
 """

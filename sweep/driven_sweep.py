@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 
 from . import physics
-from .model_choice import line_uses_inertia
 from .accuracy import DECAYED, GROWTH_RTOL, NEUTRAL_SPREAD, RUNAWAY_XI_DOT, STATIONARY_TOL, driven_stepper_rtol
 from .integrate.driven import DrivenOutputs, DrivenSettings, Regime, driven_batch
+from .model_choice import line_uses_inertia
 from .scene import Scene
 
 __all__ = ["driven_chunk", "stepper_rtol"]

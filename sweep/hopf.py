@@ -1,4 +1,4 @@
-"""The Hopf line located by simulation (PHYSICS.md 3b): where the measured growth rate of small oscillations of the
+"""The Hopf line located by simulation (docs/physics.md 3b): where the measured growth rate of small oscillations of the
 driven scene changes sign, and the type of the bifurcation decided from simulations around it.
 
 For each V: the line is bracketed around the linear prediction chi_c = mu1(V) (1 + gamma/A) (gamma = 0 for the
@@ -34,8 +34,8 @@ import xarray as xr
 from . import physics
 from .dataset import REFERENCES, versions
 from .errors import InputError
-from .model_choice import MODEL_FLAG, line_uses_inertia
 from .integrate.driven import DrivenParams, DrivenSettings, Regime, simulate_point
+from .model_choice import MODEL_FLAG, line_uses_inertia
 from .params import FrictionParams
 from .scene import MODEL_TOL_RANGE, MODELS
 

@@ -4,7 +4,7 @@ HDF5 (netCDF4) files are not safe to kill mid-write, so a running sweep writes n
 goes into ``<output>.journal/chunk-NNNNNN.npz``, written to a temporary name, flushed to disk (fsync) and renamed
 into place (an atomic rename on POSIX). A SIGKILL at any moment therefore leaves whole chunks only, never a torn
 one. ``manifest.json`` records the run's identity: the scene's canonical TOML, the plan hash and the chunk layout
-(DESIGN.md). A run given the same output resumes only if that identity is the same, computes the missing chunks,
+(docs/design.md). A run given the same output resumes only if that identity is the same, computes the missing chunks,
 and a single writer consolidates everything into the netCDF file, after which the journal is removed.
 """
 

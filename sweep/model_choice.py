@@ -1,4 +1,4 @@
-"""Which model each point uses: quasi-static or inertial (Scene.model, Scene.model_tol; PHYSICS.md 3a-3b).
+"""Which model each point uses: quasi-static or inertial (Scene.model, Scene.model_tol; docs/physics.md 3a-3b).
 
 The model error (of neglecting inertia) is kept apart from the numerical error (rtol). With model="auto":
 

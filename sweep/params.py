@@ -1,4 +1,4 @@
-"""Friction parameters of the rate-and-state law (PHYSICS.md section 1, paper eqs. 1, 6).
+"""Friction parameters of the rate-and-state law (docs/physics.md section 1, paper eqs. 1, 6).
 
     mu(xdot, phi) = mu_d(D0/phi) + A ln(xdot phi / D0)
     mu_d(v)       = m0 - m1 ln(v/V0) + m2 [ln(v/V0)]^2

@@ -2,7 +2,7 @@
 
 Paper: T. Baumberger & L. Gauthier, "Creeplike relaxation at the interface between rough solids under
 shear", J. Phys. I France 6 (1996) 1021-1030, doi:10.1051/jp1:1996113. Equation numbers below are the
-paper's; see also PHYSICS.md.
+paper's; see also docs/physics.md.
 
 Reduced variables (paper section 4), for a slider of mass M pulled through a spring K at velocity V::
 
@@ -196,7 +196,7 @@ def xi_inf_m2zero(chi, A, m1):
     """Exact quasi-static relaxed slip for m2 = 0: xi_inf = A ln(chi/m1)/(chi - m1) [1]; A/m1 at chi = m1.
 
     Derivation. With s = int_0^tau dtau'/psi the stop equations A ln(xi' psi) = -chi xi - delta_mu(psi),
-    psi' = 1 - xi' psi (PHYSICS.md 3a, eqs. 7-8) become
+    psi' = 1 - xi' psi (docs/physics.md 3a, eqs. 7-8) become
 
         dxi/ds = E,   d(ln psi)/ds = 1 - E,   E = exp(-(chi xi + delta_mu)/A),
 
@@ -228,7 +228,7 @@ def xi_inf_from_integral(chi, A, I):
 def xi_inf_crude(chi, A, mu1):
     """Crude estimate of the relaxed slip, (A/chi) ln(1 + (chi/A)(1 + A/mu1)) [1] (eq. 10).
 
-    Eq. 9 with I ~ 1 + A/mu1. chi, A, mu1 [1]; NaN where mu1 <= 0. Not a bound: a trend (PHYSICS.md 4).
+    Eq. 9 with I ~ 1 + A/mu1. chi, A, mu1 [1]; NaN where mu1 <= 0. Not a bound: a trend (docs/physics.md 4).
     """
     mu1 = np.asarray(mu1, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):

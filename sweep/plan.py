@@ -276,7 +276,7 @@ def make_plan(scene: Scene) -> Plan:
     mu1_axis = physics.mu1(scene.V, p.m1, p.m2, p.V0)
     chi, mu1 = (x.ravel() for x in np.meshgrid(chi_axis, mu1_axis, indexing="ij"))
     k, a, b = chi / p.A, mu1 / p.A, np.full(chi.size, p.m2 / p.A)
-    # PHYSICS.md 6: finite relaxed slip iff m2 > 0, or m2 = 0 and mu1 > 0
+    # docs/physics.md 6: finite relaxed slip iff m2 > 0, or m2 = 0 and mu1 > 0
     finite = (b > 0) | ((b == 0) & (a > 0))
     method, reason = choose_method(scene)
     tab = METHODS[method]

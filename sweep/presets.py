@@ -1,4 +1,4 @@
-"""Friction-parameter presets from Baumberger & Gauthier (1996), Table I (PHYSICS.md section 5).
+"""Friction-parameter presets from Baumberger & Gauthier (1996), Table I (docs/physics.md section 5).
 
 ``presets`` is a read-only mapping name -> :class:`FrictionParams`; ``provenance`` says, per preset, where
 the numbers come from, which figures of the paper use them and how uncertain they are.

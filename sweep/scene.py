@@ -1,4 +1,4 @@
-"""Scene: a frozen, validated description of one study (DESIGN.md), built from Python or from TOML.
+"""Scene: a frozen, validated description of one study (docs/design.md), built from Python or from TOML.
 
 Everything is checked here, before any compilation or computation, and every error names its field and
 the allowed range. SI units throughout: K_over_M [s-2], V [m s-1], times [s].
@@ -70,9 +70,9 @@ class Scene:
     Parameters
     ----------
     protocol : "stop" | "driven"
-        "stop": the paper's experiment, steady sliding at V, drive frozen at t = 0 (PHYSICS.md 3a). "driven": the
+        "stop": the paper's experiment, steady sliding at V, drive frozen at t = 0 (docs/physics.md 3a). "driven": the
         drive keeps moving at V; steady sliding perturbed by ``perturbation`` is followed until its regime is
-        decided (PHYSICS.md 3b; quasi-static model, sweep/models/driven.py).
+        decided (docs/physics.md 3b; quasi-static model, sweep/models/driven.py).
     params : FrictionParams
         Friction law; see :data:`sweep.presets`.
     K_over_M : array [s-2]
@@ -112,7 +112,7 @@ class Scene:
         driven only: oscillation cycles per point before it is left ``undecided`` (>= 4).
     model : "auto" | "quasistatic" | "inertial"
         The paper's quasi-static model, the full Newton equation with the inertia number gamma = V^2/(g D0)
-        (PHYSICS.md 3a/3b), or (default) per point the quasi-static model where its estimated error is at most
+        (docs/physics.md 3a/3b), or (default) per point the quasi-static model where its estimated error is at most
         ``model_tol`` and the inertial one elsewhere (sweep/model_choice.py; the file records the choice per point
         in ``model`` and the estimate in ``model_error``). Stop scenes with the inertial model compute the relaxed
         slip only (observables = ("xi_inf",)); with "auto", a point that needs inertia while time-resolved

@@ -24,7 +24,7 @@ class Status(IntEnum):
     NONFINITE = 3
     """A state or exponent left the finite range (caught before the overflow happened)."""
     NO_FINITE_LIMIT = 4
-    """The model has no finite relaxed slip here (m2 < 0, or m2 = 0 with mu1 <= 0; PHYSICS.md 6):
+    """The model has no finite relaxed slip here (m2 < 0, or m2 = 0 with mu1 <= 0; docs/physics.md 6):
     xi_inf, slip_inf, stress_relaxation, t50 and t90 are NaN by definition; finite-time observables
     (slip_at, trajectory) are still computed."""
     ERROR_ABOVE_TOL = 5

@@ -1,11 +1,11 @@
-"""The one shared table of quasi-static stop reference cases (PHYSICS.md 3a), used by test_reference.py (the
+"""The one shared table of quasi-static stop reference cases (docs/physics.md 3a), used by test_reference.py (the
 reference against closed forms) and test_accuracy.py (the engine against the reference).
 
 A case is given in reduced form (chi, A, mu1 = mu1(V), m2); ``case_params(case)`` returns physical parameters
 (SI) that reproduce exactly that chi and mu1, for feeding the engine:
 
 * generic cases: D0 = 1e-6 m, V = V0 = 1e-6 m/s (so mu1(V) = m1: m1 is set to mu1), K/M = chi g/D0;
-* preset cases (sample1/sample2 of PHYSICS.md 5 at a given K/M, V): the preset's A, m1, m2, D0 with that K/M
+* preset cases (sample1/sample2 of docs/physics.md 5 at a given K/M, V): the preset's A, m1, m2, D0 with that K/M
   and V; chi = (K/M) D0/g and mu1 = m1 - 2 m2 ln(V/V0) are computed here with the same formulas.
 
 Naming: ``g_*`` generic, ``s1_*``/``s2_*`` presets; ``chiA`` = chi/A, ``mA`` = mu1/A, ``m2A`` = m2/A.
@@ -20,7 +20,7 @@ V0 = 1e-6  # m/s
 G = 9.81  # m/s^2
 D0_GENERIC = 1e-6  # m
 
-PRESETS = {  # PHYSICS.md 5 (paper Table I, our reading)
+PRESETS = {  # docs/physics.md 5 (paper Table I, our reading)
     "sample1": {"A": 0.012, "m1": 0.010, "m2": 0.0014, "D0": 1e-6},
     "sample2": {"A": 0.007, "m1": 0.0125, "m2": 0.0033, "D0": 0.7e-6},
 }
@@ -81,7 +81,7 @@ STOP_CASES = [
     generic("g_chiA0.1_mA-0.5_m2A0.2", 0.1, -0.5, 0.2, why="mu1 < 0, moderate: no Hopf line"),
     generic("g_chiA0.01_mA-3_m2A0.47_corner", 0.01, -3.0, 0.47, A=0.007,
             why="costly corner: small chi/A, strongly negative mu1, psi << tau for decades (xi_inf ~ 490)"),
-    # --- presets (PHYSICS.md 5) at a few (K/M, V) of the default grid K/M 1e3..1e6 s^-2, V 0.1..100 um/s
+    # --- presets (docs/physics.md 5) at a few (K/M, V) of the default grid K/M 1e3..1e6 s^-2, V 0.1..100 um/s
     from_preset("s1_KM7.4e4_V10um", "sample1", 7.4e4, 10e-6, why="paper Fig. 3b point, chi = 7.5e-3 > mu1(V)"),
     from_preset("s1_KM1e3_V0.1um", "sample1", 1e3, 0.1e-6, why="softest/slowest grid corner, stick-slip side"),
     from_preset("s1_KM1e6_V100um", "sample1", 1e6, 100e-6, why="stiffest/fastest grid corner, mu1(V) < 0"),

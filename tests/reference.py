@@ -1,4 +1,4 @@
-"""Independent high-accuracy reference for the quasi-static stop scene (PHYSICS.md 3a), scipy only.
+"""Independent high-accuracy reference for the quasi-static stop scene (docs/physics.md 3a), scipy only.
 
 This module must not import anything from the ``sweep`` package: it is what the engine is tested against.
 
@@ -44,7 +44,7 @@ correction; its own error is relative O(xi' psi, psi/tau - 1), i.e. utterly negl
 m1/A 0.1..10, in tests/test_extremes.py; DOP853 and Radau agree to 1e-13 on the case table. The engine's error
 estimates are checked down to rtol 1e-9 with an atol floor of 1e-12, so the reference must be well below both).
 
-No finite limit (PHYSICS.md 6: m2 < 0, or m2 = 0 with mu1 <= 0): ``finite`` is False, ``xi_inf`` is NaN and
+No finite limit (docs/physics.md 6: m2 < 0, or m2 = 0 with mu1 <= 0): ``finite`` is False, ``xi_inf`` is NaN and
 xi(tau), psi(tau) are available up to ``tau_horizon`` (1e12); asking beyond raises ValueError.
 """
 
@@ -71,7 +71,7 @@ __all__ = ["ReferenceSolution", "TwoPhaseSolution", "reference_stop", "reference
 
 
 def has_finite_limit(mu1: float, m2: float) -> bool:
-    """PHYSICS.md 6: xi_inf is finite iff m2 > 0, or m2 == 0 and mu1 > 0."""
+    """docs/physics.md 6: xi_inf is finite iff m2 > 0, or m2 == 0 and mu1 > 0."""
     return m2 > 0.0 or (m2 == 0.0 and mu1 > 0.0)
 
 

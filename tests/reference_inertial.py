@@ -1,4 +1,4 @@
-"""Independent high-accuracy reference for the INERTIAL stop scene (PHYSICS.md 3a, "With inertia"), scipy only.
+"""Independent high-accuracy reference for the INERTIAL stop scene (docs/physics.md 3a, "With inertia"), scipy only.
 
 This module must not import anything from the ``sweep`` package: it is what the engine is tested against. It uses
 the quasi-static reference (tests/reference.py) for the late part of the stop, after a hand-over that is shown
@@ -52,7 +52,7 @@ Range: gamma/A up to ~200 (checked). Beyond (gamma/A = 1e3, chi/A = 2) the end o
 falls from ~e^-5 to ~e^-(chi xi/A) in a time far below the spacing of doubles near S, cannot be resolved in S and
 Radau stops ("step size less than spacing"): that needs another independent variable.
 
-Only finite-limit cases (m2 > 0, or m2 = 0 with mu1 > 0; PHYSICS.md 6) are accepted.
+Only finite-limit cases (m2 > 0, or m2 = 0 with mu1 > 0; docs/physics.md 6) are accepted.
 """
 
 from __future__ import annotations

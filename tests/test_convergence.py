@@ -12,7 +12,7 @@ A, M1, D0, G = 0.007, 0.0125, 1e-6, 9.81
 
 
 def exact_m2zero(chi: float) -> float:
-    # independent of the package: separable form of the stop equation in s = int dtau/psi (PHYSICS.md 3a)
+    # independent of the package: separable form of the stop equation in s = int dtau/psi (docs/physics.md 3a)
     return A * math.log(chi / M1) / (chi - M1)
 
 

@@ -1,5 +1,5 @@
 """Driven scene, quasi-static model (sweep/models/driven.py) against the linear theory and the known behaviour of
-PHYSICS.md 3b: growth rate and period of small oscillations vs the roots of A s^2 + (chi - mu1) s + chi, the
+docs/physics.md 3b: growth rate and period of small oscillations vs the roots of A s^2 + (chi - mu1) s + chi, the
 square-root law of the supercritical (m2 > 0) Hopf bifurcation, neutral orbits and runaway for m2 = 0."""
 
 from __future__ import annotations
@@ -61,7 +61,7 @@ def test_a_slow_transient_is_undecided_not_guessed():
 
 def test_m2_zero_is_neutral_at_the_line_and_runs_away_below():
     amplitudes = []
-    for size in (0.02, 0.6):  # orbits of any amplitude persist (PHYSICS.md 3b)
+    for size in (0.02, 0.6):  # orbits of any amplitude persist (docs/physics.md 3b)
         out = simulate_driven(MU1, MU1, 0.0, A, perturbation=size, rtol=1e-11)
         assert out["regime"] == "neutral", (size, out)
         assert abs(out["growth_rate"]) < 1e-8

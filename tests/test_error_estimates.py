@@ -57,7 +57,7 @@ def check_estimate(value, estimate, exact, floor, what="", cancelled=0.0):
 
 
 def slip_rate(ref, case, tau):
-    """dxi/dtau of the reference at tau, from the stop equation (PHYSICS.md 3a) and its xi, psi."""
+    """dxi/dtau of the reference at tau, from the stop equation (docs/physics.md 3a) and its xi, psi."""
     u = math.log(float(ref.psi(tau)))
     return math.exp(-(case.chi * float(ref.xi(tau)) + case.mu1 * u + case.m2 * u * u) / case.A - u)
 

@@ -1,4 +1,4 @@
-"""A test matrix over the edges of the quasi-static stop model's parameter space (PHYSICS.md 3a, 4, 6).
+"""A test matrix over the edges of the quasi-static stop model's parameter space (docs/physics.md 3a, 4, 6).
 
 Edges: chi/A from 1e-5 to 1e4, m1/A (= mu1/A at m2 = 0) from 0.1 to 10, m2 of both signs (m2 < 0: no finite
 limit), mu1(V) of both signs, points just above (and below) the quasi-static Hopf line chi = mu1, and grids mixing
@@ -13,8 +13,8 @@ The acceptance rule, for every point:
 * never NaN or inf with status ok, never an exception that stops the sweep, and no floating-point exception in
   the Python layer (numpy errstate raise on overflow, divide by zero and invalid operations).
 
-References: the exact closed form for m2 = 0 (PHYSICS.md 4, computed here independently of sweep.physics) covers the
-whole chi/A x m1/A range cheaply; tests/reference.py (scipy) covers a smaller set with m2 > 0 and mu1 of both signs,
+References: the exact closed form for m2 = 0 (docs/physics.md 4, computed here independently of sweep.physics) covers
+the whole chi/A x m1/A range cheaply; tests/reference.py (scipy) covers a smaller set with m2 > 0 and mu1 of both signs,
 and is itself checked against the closed form over the whole range first. Property-based tests (hypothesis) over
 random valid parameters: finite, consistent output; xi_inf decreasing in K/M at fixed V; results independent of how
 the grid is split into chunks or subsets. pytest -s prints which statuses the matrix met.
@@ -58,7 +58,7 @@ STATUS_LOG: Counter = Counter()
 # --- helpers ---------------------------------------------------------------------------------------------------
 
 def xi_inf_closed_form(chi, A, m1):
-    """Exact quasi-static relaxed slip for m2 = 0, m1 > 0 (PHYSICS.md 4): A ln(chi/m1)/(chi - m1), A/m1 at
+    """Exact quasi-static relaxed slip for m2 = 0, m1 > 0 (docs/physics.md 4): A ln(chi/m1)/(chi - m1), A/m1 at
     chi = m1; written as (A/m1) ln(1 + x)/x, x = (chi - m1)/m1, accurate to a few ulps for every chi > 0."""
     x = (chi - m1) / m1
     if abs(x) < 1e-8:
@@ -81,7 +81,7 @@ def V_for(mu1_over_A, A, m1, m2):
 
 
 def reduced_axes(scene):
-    """(chi, mu1) per flat point in C order over (K_over_M, V), from the scene's physical axes (PHYSICS.md 2)."""
+    """(chi, mu1) per flat point in C order over (K_over_M, V), from the scene's physical axes (docs/physics.md 2)."""
     p = scene.params
     chi = scene.K_over_M * p.D0 / p.g
     mu1 = p.m1 - 2.0 * p.m2 * np.log(scene.V / p.V0)
@@ -436,7 +436,7 @@ def test_random_scenes_give_finite_consistent_output(scene):
        steps=st.lists(st.floats(0.01, 1.5), min_size=2, max_size=6),
        method=st.sampled_from(("auto",) + METHODS), rtol=log_uniform(1e-8, 1e-3))
 def test_xi_inf_decreases_with_K_over_M(A, m1_over_A, m2_over_A, lnV, start, steps, method, rtol):
-    """PHYSICS.md 4: at fixed V, xi_inf decreases with K/M (m2 >= 0 where finite). With s = int dtau/psi,
+    """docs/physics.md 4: at fixed V, xi_inf decreases with K/M (m2 >= 0 where finite). With s = int dtau/psi,
     dxi/ds = exp(-(chi xi + dmu(s - xi))/A) decreases with chi at xi > 0, so by comparison xi(s) does too.
     Stiffnesses at least 0.01 decade apart; tolerance: the two error estimates and atol."""
     params = sweep.FrictionParams(A=A, m1=m1_over_A * A, m2=m2_over_A * A, D0=D0)

@@ -1,5 +1,5 @@
-"""sweep.locate_hopf (quasi-static): the line located by simulation against the analytic one (PHYSICS.md 3b, eq. 3),
-the bifurcation type against the known behaviour (m2 > 0 supercritical, m2 = 0 degenerate), no line where
+"""sweep.locate_hopf (quasi-static): the line located by simulation against the analytic one (docs/physics.md 3b,
+eq. 3), the bifurcation type against the known behaviour (m2 > 0 supercritical, m2 = 0 degenerate), no line where
 mu1(V) <= 0, and the CLI."""
 
 from __future__ import annotations
@@ -72,7 +72,7 @@ def test_sweep_files_carry_the_simulated_line_next_to_the_analytic_one():
 
 
 def test_inertial_line_by_simulation_matches_the_analytic_line_for_gamma_over_A_1e3_to_10():
-    """chi_c = mu1 (1 + gamma/A) (PHYSICS.md 3b) from the full Newton equation, gamma/A = 1e-3 .. 10 (m2 = 0, so
+    """chi_c = mu1 (1 + gamma/A) (docs/physics.md 3b) from the full Newton equation, gamma/A = 1e-3 .. 10 (m2 = 0, so
     mu1 = m1 at every V and only gamma changes)."""
     params = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0, D0=0.7e-6)
     ratios = np.array([1e-3, 1e-2, 0.1, 1.0, 10.0])
@@ -100,7 +100,7 @@ def test_inertia_unfolds_the_degenerate_m2_zero_line_subcritical_then_supercriti
     """m2 = 0 (degenerate without inertia): with inertia the line is subcritical at gamma/A = 0.01 (a large
     stick-slip cycle right below the line, and kept by a large start above it while a small start decays) and
     supercritical at gamma/A = 1 (small cycles growing like the square root of the distance); found, not assumed
-    (PHYSICS.md 3b leaves the type to the sweep)."""
+    (docs/physics.md 3b leaves the type to the sweep)."""
     params = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0, D0=0.7e-6)
     ratios = np.array([1e-2, 1.0])
     v = np.sqrt(ratios * params.g * params.D0 * params.A)

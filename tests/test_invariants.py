@@ -1,4 +1,4 @@
-"""Analytic limits of PHYSICS.md section 4 checked on the engine's own outputs (trajectory and xi_inf)."""
+"""Analytic limits of docs/physics.md section 4 checked on the engine's own outputs (trajectory and xi_inf)."""
 
 import numpy as np
 import pytest
@@ -7,7 +7,7 @@ import sweep
 from sweep import physics
 
 A, M1, D0, G = 0.007, 0.0125, 1e-6, 9.81
-CHI = 0.02  # the worked example of PHYSICS.md 4
+CHI = 0.02  # the worked example of docs/physics.md 4
 
 
 def point(chi=CHI, m2=0.0, V=1e-6, rtol=1e-10, tau=(1e-8, 1e12, 801)):
@@ -17,7 +17,7 @@ def point(chi=CHI, m2=0.0, V=1e-6, rtol=1e-10, tau=(1e-8, 1e12, 801)):
 
 def test_m2zero_relaxed_slip_is_the_closed_form():
     pt = point()
-    assert float(pt["xi_inf"]) == pytest.approx(0.43865, abs=5e-5)  # PHYSICS.md 4: exact 0.4387
+    assert float(pt["xi_inf"]) == pytest.approx(0.43865, abs=5e-5)  # docs/physics.md 4: exact 0.4387
     assert float(pt["xi_inf"]) == pytest.approx(physics.xi_inf_m2zero(CHI, A, M1), rel=1e-9)
 
 
@@ -51,7 +51,7 @@ def test_eq13_late_stage_ratio():
     xi_inf = float(pt["xi_inf"])
     deficit = xi_inf - pt["xi"].values
     ratio = deficit / physics.xi_late_deficit(pt["tau"].values, CHI, A, M1, xi_inf)
-    assert ratio[0] == pytest.approx(0.94, abs=0.005)  # PHYSICS.md 4
+    assert ratio[0] == pytest.approx(0.94, abs=0.005)  # docs/physics.md 4
     assert ratio[-1] == pytest.approx(0.9994, abs=2e-4)
 
 

@@ -1,7 +1,7 @@
-"""Tests of sweep.physics against hand values (PHYSICS.md section 4) and independent numerical references.
+"""Tests of sweep.physics against hand values (docs/physics.md section 4) and independent numerical references.
 
 The references here (scipy integration of the stop equations, finite-difference Jacobians of the driven
-equations) are written from PHYSICS.md, not from sweep.physics.
+equations) are written from docs/physics.md, not from sweep.physics.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from sweep import physics as ph
 
 
 def solve_stop_m2zero(chi, A, m1, S_end=300.0, dense=False):
-    """Quasi-static stop (PHYSICS.md 3a), m2 = 0, in log time S = ln(1 + tau); state (xi, u, I).
+    """Quasi-static stop (docs/physics.md 3a), m2 = 0, in log time S = ln(1 + tau); state (xi, u, I).
 
     xi' = exp(-(chi xi + m1 u)/A - u), u' = exp(-u) - xi', I' = psi^-(1 + m1/A), and d/dS = e^S d/dtau.
     The factors e^S are folded into the exponents so nothing overflows at large S.
@@ -50,7 +50,7 @@ def jacobian_fd(f, y0, h=1e-6):
 
 
 def driven_rhs(chi, mu1, A, gamma, m2=0.0):
-    """Driven scene (PHYSICS.md 3b) in reduced variables around steady sliding at V.
+    """Driven scene (docs/physics.md 3b) in reduced variables around steady sliding at V.
 
     gamma == 0: state (z, u), xi' = exp((chi z - dmu(u))/A - u).
     gamma > 0: state (z, w = ln xi', u), w' = (chi z - dmu(u) - A (w + u))/(gamma e^w).
@@ -96,7 +96,7 @@ def match_roots(a, b):
 
 
 # ---------------------------------------------------------------------------------------------------------
-# hand-checked values (PHYSICS.md section 4)
+# hand-checked values (docs/physics.md section 4)
 
 
 def test_xi_inf_m2zero_hand_value():
@@ -157,7 +157,7 @@ def test_unit_conversions_round_trip():
 # relaxed slip vs independent integration of the stop equations
 
 STOP_POINTS = [  # (chi, A, m1): m1/A in 0.5..3, chi/A in 0.1..10
-    (0.02, 0.007, 0.0125),    # PHYSICS.md section 4 point: m1/A = 1.79, chi/A = 2.86
+    (0.02, 0.007, 0.0125),    # docs/physics.md section 4 point: m1/A = 1.79, chi/A = 2.86
     (0.001, 0.01, 0.005),     # m1/A = 0.5, chi/A = 0.1
     (0.1, 0.01, 0.03),        # m1/A = 3, chi/A = 10
     (0.012, 0.012, 0.012),    # chi = m1 exactly: the removable singularity
@@ -191,7 +191,7 @@ def test_early_and_late_asymptotics(stop_solutions):
     xi_inf = ph.xi_inf_m2zero(chi, A, m1)
     tau = 1e-6
     assert ph.xi_early(tau, chi, A) == pytest.approx(sol.sol(math.log1p(tau))[0], rel=1e-9)  # eq. 12
-    # eq. 13: (true deficit)/(eq. 13) ~0.94 at tau = 10 and ~0.9994 at tau = 1e3 (PHYSICS.md section 4)
+    # eq. 13: (true deficit)/(eq. 13) ~0.94 at tau = 10 and ~0.9994 at tau = 1e3 (docs/physics.md section 4)
     ratios = [(xi_inf - sol.sol(math.log1p(tau))[0]) / ph.xi_late_deficit(tau, chi, A, m1, xi_inf)
               for tau in (10.0, 1e3)]
     assert ratios[0] == pytest.approx(0.94, abs=0.01)
@@ -199,7 +199,7 @@ def test_early_and_late_asymptotics(stop_solutions):
 
 
 def test_crude_estimate_is_not_a_bound():
-    # PHYSICS.md 4: eq. 10 overestimates at the sample2-like point, underestimates at small mu1/A
+    # docs/physics.md 4: eq. 10 overestimates at the sample2-like point, underestimates at small mu1/A
     assert ph.xi_inf_crude(0.02, 0.007, 0.0125) > ph.xi_inf_m2zero(0.02, 0.007, 0.0125)
     A, m1 = 0.01, 0.001
     assert ph.xi_inf_crude(1.01 * m1, A, m1) / ph.xi_inf_m2zero(1.01 * m1, A, m1) == pytest.approx(0.74, abs=0.01)

@@ -22,7 +22,7 @@ from sweep.plot_style import caption, no_hopf_line_band  # noqa: E402
 
 SAMPLE2 = sweep.presets["sample2"]
 PAIR, MAP = (520, 1280), (560, 760)  # pixel sizes (rows, columns) of the two-panel and one-panel pictures
-V_STAR_UM = np.exp(SAMPLE2.m1 / (2 * SAMPLE2.m2))  # mu1(V) = 0 for sample2: 6.65 um/s (PHYSICS.md 5: 6.6)
+V_STAR_UM = np.exp(SAMPLE2.m1 / (2 * SAMPLE2.m2))  # mu1(V) = 0 for sample2: 6.65 um/s (docs/physics.md 5: 6.6)
 
 
 def png_shape(path) -> tuple[int, int]:

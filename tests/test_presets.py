@@ -1,4 +1,4 @@
-"""Tests of sweep.presets (PHYSICS.md section 5)."""
+"""Tests of sweep.presets (docs/physics.md section 5)."""
 
 from __future__ import annotations
 

@@ -6,7 +6,7 @@
   Written inline here on purpose (not imported from the package).
 * m2 != 0: the same s-time form, integrated here as a 1-D ODE (an independent formulation), and DOP853 vs
   Radau on the tau-form.
-* Early stage (PHYSICS.md eq. 12), late stage psi ~ tau, monotone xi, horizons and no-limit cases, and the
+* Early stage (docs/physics.md eq. 12), late stage psi ~ tau, monotone xi, horizons and no-limit cases, and the
   consistency of the shared case table (tests/cases.py).
 """
 
@@ -119,7 +119,7 @@ def test_budget_fallback_to_radau(monkeypatch):
 
 @pytest.mark.parametrize("case", ALL_CASES, ids=lambda c: c.name)
 def test_early_stage_log_law(case):
-    """PHYSICS.md eq. 12: xi -> (A/chi) ln(1 + chi tau/A) as tau -> 0 (psi ~ 1)."""
+    """docs/physics.md eq. 12: xi -> (A/chi) ln(1 + chi tau/A) as tau -> 0 (psi ~ 1)."""
     r = reference_stop(case.chi, case.A, case.mu1, case.m2)
     a = case.A / case.chi
     tau = 1e-6 * a
@@ -144,7 +144,7 @@ def test_late_stage_psi_like_tau(case):
 
 @pytest.mark.parametrize("case", [c for c in FINITE_M2ZERO if c.mu1 <= c.A], ids=lambda c: c.name)
 def test_late_stage_tail_eq13(case):
-    """PHYSICS.md eq. 13: xi_inf - xi(tau) ~ (A/m1) exp(-chi xi_inf/A) tau^(-m1/A), ratio -> 1."""
+    """docs/physics.md eq. 13: xi_inf - xi(tau) ~ (A/m1) exp(-chi xi_inf/A) tau^(-m1/A), ratio -> 1."""
     r = reference_stop(case.chi, case.A, case.mu1, case.m2)
     A, m1, chi = case.A, case.mu1, case.chi
     tau = max(1e6, 10.0 ** (6.0 / (m1 / A)))  # remaining slip ~ 1e-6; formula's own error <~ 1e-5 there

@@ -2,7 +2,7 @@
 
 * gamma -> 0: gap = xi_inf/xi_inf(quasi-static) - 1 is analytic in gamma with gap(0) = 0, so gap/(gamma/A) =
   a + b gamma/A + ...: its values at gamma/A = 1e-4, 1e-3, 1e-2 agree and their differences shrink 10x per decade;
-  a lies in PHYSICS.md 3a's range (0.5..1.5) where mu1 > 0, is tiny where mu1 < 0 (sample2 at 100 um/s), and the
+  a lies in docs/physics.md 3a's range (0.5..1.5) where mu1 > 0, is tiny where mu1 < 0 (sample2 at 100 um/s), and the
   quasi-static form underestimates xi_inf (gap > 0) on the whole case table.
 * Independent formulations: the original variables (xi, u, w = ln xi') in tau with DOP853, non-stiff at
   gamma/A = 1 and 10 up to tau = 5, against the Radau dense output of the reference; and the gap's slope at
@@ -11,7 +11,7 @@
   below the threshold after it (the claim the hand-over rests on), checked by integrating on past it.
 * Energy: gamma xi'^2/2 + chi xi^2/2 + int Phi dxi = gamma/2 exactly (Phi = dmu(u) + A ln(xi' psi), the friction
   change), by quadrature on the dense output up to the hand-over.
-* gamma -> inf: the pure-inertia stop, eq. 15 (PHYSICS.md 3c), xi_inf -> sqrt(gamma/chi).
+* gamma -> inf: the pure-inertia stop, eq. 15 (docs/physics.md 3c), xi_inf -> sqrt(gamma/chi).
 * The quasi-static continuation (reference.reference_stop_from) restarted on the quasi-static trajectory.
 """
 
@@ -84,7 +84,7 @@ def test_gap_linear_in_gamma(case):
     d_hi, d_lo = ratio[2] - ratio[1], ratio[1] - ratio[0]
     assert d_hi != 0.0 and 6.0 < d_hi / d_lo < 14.0, (ratio, d_hi / d_lo)
     assert ratio[0] > 0.0  # quasi-static underestimates xi_inf
-    if case in COMBOS:  # PHYSICS.md 3a: about 0.5-1.5 gamma/A where mu1 > 0 (its presets at mu1 = m1)
+    if case in COMBOS:  # docs/physics.md 3a: about 0.5-1.5 gamma/A where mu1 > 0 (its presets at mu1 = m1)
         assert 0.5 <= ratio[0] <= 1.5, ratio
     # but that range is not general: the slope grows with mu1/A (0.25 for S1_V10, mu1/A = 0.30; from 0.014 to 7.6
     # over chi/A 0.3..100, mu1/A 0.1..10, m2 = 0), so it is no test of a reference; the first-order model below is
@@ -125,7 +125,7 @@ def test_gap_slope_matches_first_order_model(case):
 
 
 def test_gap_tiny_where_mu1_negative():
-    """sample2 at 100 um/s (mu1/A = -2.56), at its physical gamma (gamma/A = 0.21): PHYSICS.md 3a says ~1e-4."""
+    """sample2 at 100 um/s (mu1/A = -2.56), at its physical gamma (gamma/A = 0.21): docs/physics.md 3a says ~1e-4."""
     gA = physical_gamma(S2_V100) / S2_V100.A
     r = run(S2_V100, gA)
     assert 0.0 < r.gap < 1e-3, r.gap
@@ -142,7 +142,7 @@ def test_quasistatic_underestimates(case, gA):
     assert r.gap == r.xi_inf / r.quasistatic_xi_inf - 1.0
     assert r.gap > 0.0
     # the gap per unit gamma/A falls as gamma/A grows (the slider is ever less limited by friction): it never
-    # exceeds its small-gamma slope, bounded above by 1.5 (PHYSICS.md 3a)
+    # exceeds its small-gamma slope, bounded above by 1.5 (docs/physics.md 3a)
     assert r.gap / gA < 1.5
 
 

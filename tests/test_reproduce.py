@@ -1,6 +1,6 @@
-"""``sweep reproduce``: the paper's figures regenerated from the presets (PHYSICS.md 5). The real command is run
+"""``sweep reproduce``: the paper's figures regenerated from the presets (docs/physics.md 5). The real command is run
 once with its default grids; its pictures have the expected pixel size, and the data behind them follow the paper's
-trends and analytic results (PHYSICS.md 4), checked here against formulas written out in this file."""
+trends and analytic results (docs/physics.md 4), checked here against formulas written out in this file."""
 
 from __future__ import annotations
 

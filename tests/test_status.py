@@ -13,7 +13,7 @@ P = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0033, D0=1e-6)
 
 
 @pytest.mark.parametrize("changes, V", [
-    ({"m2": -0.001}, 1e-6),              # m2 < 0: never converges (PHYSICS.md 6)
+    ({"m2": -0.001}, 1e-6),              # m2 < 0: never converges (docs/physics.md 6)
     ({"m2": -0.001, "m1": -0.004}, 1e-6),
     ({"m2": 0.0, "m1": 0.0}, 1e-6),      # m2 = 0 needs m1 > 0
     ({"m2": 0.0, "m1": -0.003}, 1e-5),

@@ -79,7 +79,7 @@ def test_auto_model_choice_bounds_the_true_model_error(name, model_tol):
     """model="auto": each quasi-static point's true model error (vs the inertial reference) is within model_tol
     and within 2x of its model_error estimate; each inertial point matches the inertial reference to rtol and its
     model_error (the measured gap) the reference gap; both kinds occur (sample2: mu1 < 0 above 6.6 um/s, where the
-    gap stays ~1e-4 even at gamma/A = 10, PHYSICS.md 3a)."""
+    gap stays ~1e-4 even at gamma/A = 10, docs/physics.md 3a)."""
     params, rtol = PARAM_SETS[name], 1e-6
     V = velocities_for(params, np.array([1e-3, 5e-3, 2e-2, 0.2]))
     K = np.array([1.2, 3.0, 10.0]) * params.m1 * params.g / params.D0

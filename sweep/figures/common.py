@@ -23,7 +23,7 @@ def run(scene: Scene, name: str, figure: str) -> xr.Dataset:
 
 def row(what: str, engine: str, paper: str = "", expected: str = "") -> str:
     """One line of a key-number text: what, the engine's value, what the paper shows (where it says) and what is
-    expected from PHYSICS.md (where the paper does not say)."""
+    expected from docs/physics.md (where the paper does not say)."""
     return (f"{what:<52} {engine:<20}" + (f" | paper: {paper}" if paper else "")
             + (f" | expected: {expected}" if expected else ""))
 

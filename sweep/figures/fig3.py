@@ -2,7 +2,7 @@
 V = 10 um/s, (b) against V at chi = 7.5e-3 (K/M = 7.4e4 s^-2), with the crude estimate eq. 10 as a broken line
 where it exists (mu1(V) > 0).
 
-With the presets (PHYSICS.md 5) steady sliding at chi = 7.5e-3 is unstable below ~2.4 um/s: those stops are drawn
+With the presets (docs/physics.md 5) steady sliding at chi = 7.5e-3 is unstable below ~2.4 um/s: those stops are drawn
 dashed over a hatched stick-slip band, not hidden; eq. 10 exists only below 35.7 um/s (mu1 > 0).
 """
 
@@ -80,7 +80,7 @@ def key_numbers_a(ds: xr.Dataset) -> list[str]:
         row("chi_c = mu1(10 um/s): stick-slip below", f"{chi_c:.4g}", expected="m1 - 2 m2 ln 10 = 0.003553"),
         row(f"xi_inf at the first stable chi = {chi[first]:.4g}", f"{xi[first]:.3f}"),
         row("eq. 10 / engine over the stable range", _ratio_range(crude[stable] / xi[stable]),
-            "a 'crude overestimation', good first approximation", "> 1 over the stable range (PHYSICS.md 4)"),
+            "a 'crude overestimation', good first approximation", "> 1 over the stable range (docs/physics.md 4)"),
         row("chi xi_inf there, eq. 11 A ln(2 + chi_c/A)",
             f"{chi[first] * xi[first]:.4f}, {float(physics.stress_relaxation_near_hopf(chi_c, PARAMS.A)):.4f}",
             "of order A near the line"),
@@ -104,11 +104,12 @@ def key_numbers_b(ds: xr.Dataset) -> list[str]:
         row(f"xi_inf at V = {v_um[0]:g}, {v_um[-1]:g} um/s", f"{xi[0]:.3f}, {xi[-1]:.3f}",
             f"V axis {V_B[0] * 1e6:g}..{V_B[1] * 1e6:g} um/s, xi_inf axis 0..{XI_AXIS:g}; increasing with V"),
         row("steady sliding stable from V [um/s]", f"{stable_from:.3g}" if stable_from else "nowhere",
-            "V axis from 1 um/s; the experiment needs steady sliding", "~2.4 um/s with these presets (PHYSICS.md 5)"),
+            "V axis from 1 um/s; the experiment needs steady sliding",
+            "~2.4 um/s with these presets (docs/physics.md 5)"),
         row("eq. 10 exists (mu1 > 0) below V [um/s]", f"{no_line[0][0]:.3g}" if no_line else "everywhere",
-            expected="35.7 um/s (PHYSICS.md 5)"),
+            expected="35.7 um/s (docs/physics.md 5)"),
         row("eq. 10 / engine, stable and mu1 > 0", _ratio_range(crude[both] / xi[both]),
-            "a 'crude overestimation', good first approximation", "> 1 over the stable range (PHYSICS.md 4)"),
+            "a 'crude overestimation', good first approximation", "> 1 over the stable range (docs/physics.md 4)"),
         row("model", model_summary(ds)),
     ]
 

@@ -1,4 +1,4 @@
-"""Quasi-static stop scene (PHYSICS.md 3a; paper eqs. 7-9), compiled with numba.
+"""Quasi-static stop scene (docs/physics.md 3a; paper eqs. 7-9), compiled with numba.
 
 The paper's equations in reduced time tau (' = d/dtau, u = ln psi),
 
@@ -10,7 +10,7 @@ are integrated in the *contact-age time* s = int_0^tau dtau'/psi. There they rea
 
 so that xi + u = s exactly: the state is the single number xi (u = s - xi), and tau = int e^u ds is a
 quadrature carried only when a time-resolved observable is asked for. In s the costly corner of the tau
-form (psi << tau, small chi/A with mu1 < 0; PHYSICS.md 6) is only mildly stiff: its rate is |mu1 + 2 m2 u|/A.
+form (psi << tau, small chi/A with mu1 < 0; docs/physics.md 6) is only mildly stiff: its rate is |mu1 + 2 m2 u|/A.
 
 Fixed-step RK4 runs in a scaled log time sigma, ds/dsigma = w = 1/(1/(s + s_c) + r(u)): logarithmic early
 (resolving the stiff start, rate (chi - mu1)/A, with s_c = 1/(1 + (chi + |mu1|)/A)) and with step h/r late, where

@@ -1,4 +1,4 @@
-"""Stop scene with inertia (PHYSICS.md 3a), and the first-order inertial correction of the quasi-static model.
+"""Stop scene with inertia (docs/physics.md 3a), and the first-order inertial correction of the quasi-static model.
 
 The Newton equation gamma xi'' = -chi xi - dmu(psi) - A ln(xi' psi) (' = d/dtau) is integrated in the
 contact-age time s = int dtau/psi of :mod:`sweep.models.stop`, where xi + u = s still holds exactly (u = ln psi),
