@@ -42,3 +42,13 @@ def driven_stepper_rtol(rtol: float) -> float:
     """Local tolerance of the driven stepper: the regime decisions compare amplitudes of successive cycles to
     STATIONARY_TOL (1e-7), so the integration must be far tighter than that whatever the scene's rtol."""
     return min(1e-2 * rtol, 1e-9)
+
+# ---------------------------------------------------------------------------------------------------------------
+# Adaptive per-point solutions whose error is estimated from a pair of tolerances (inertial stop, slip-law stop)
+# ---------------------------------------------------------------------------------------------------------------
+
+TIGHTER = 10.0
+"""Such a solution is run at local tolerances rtol/TIGHTER and rtol/TIGHTER^2; the tighter value is kept and the
+difference, ~the error of the looser run, is its error estimate. (The looser pair rtol, rtol/10 flagged 20 % of the
+default scene error_above_tol with the inertial model: the adaptive steps' global error reaches ~5x their local
+tolerance.)"""

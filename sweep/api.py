@@ -67,7 +67,7 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     # the Dataset holds what it needs; the plan's and the unused outputs' per-point arrays (~100 bytes per point)
     # go before the netCDF write, whose copies are the peak of a large run's memory
     del plan, flat
-    ds = with_simulated_line(ds, scene.params, scene.model, scene.model_tol)
+    ds = with_simulated_line(ds, scene.params, scene.model, scene.model_tol, scene.state_law)
     if journal is None:
         return ds
     save(ds, output, blocks=blocks)

@@ -19,6 +19,7 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from .integrate.stop_slip import slip_batch
 from .ladder import climb
 from .models.stop import NO_FINITE_LIMIT, OK
 from .models.stop_lanes import lane_kernels
@@ -149,9 +150,20 @@ def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
     return out
 
 
+def _relax_general(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
+    """Relaxed slip of the points g with a state law other than aging (sweep/integrate/stop_slip.py)."""
+    out = RawResult.empty(g.size, 0, 0)
+    slip_batch(plan.k[g], plan.a[g], plan.b[g], scene.rtol, scene.atol["xi_inf"], plan.max_steps, out.xi_inf,
+               out.xi_inf_err, out.status, out.steps)
+    out.work[:] = out.steps
+    return out
+
+
 def run_points(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
     """Run the plan's points ``g`` (one chunk: one call of a compiled batch) and return their flat outputs, in the
     order of ``g``. A point's numbers do not depend on the other points of the chunk."""
+    if plan.state_law != "aging":
+        return _relax_general(scene, plan, g)
     if plan.lanes:
         return _relax_in_lanes(scene, plan, g)
     obs_tau = _obs_tau(scene, plan.flat_index(g))

@@ -37,7 +37,7 @@ from .errors import InputError
 from .integrate.driven import DrivenParams, DrivenSettings, Regime, simulate_point
 from .model_choice import MODEL_FLAG, line_uses_inertia
 from .params import FrictionParams
-from .scene import MODEL_TOL_RANGE, MODELS
+from .scene import MODEL_TOL_RANGE, MODELS, STATE_LAWS
 
 __all__ = ["locate_hopf", "with_simulated_line"]
 
@@ -56,20 +56,21 @@ MAX_STEPS = 20_000_000
 BIFURCATIONS = ("none", "supercritical", "subcritical", "degenerate", "undetermined")
 
 
-def _growth(k: float, a: float, b: float, g: float) -> float:
+def _growth(k: float, a: float, b: float, g: float, law: str = "aging") -> float:
     """Measured growth rate of a small perturbation at reduced stiffness k = chi/A (a = mu1/A, b = m2/A,
     g = gamma/A)."""
     return simulate_point(DrivenParams(k, a, b, g), DrivenSettings(SIGN_PERTURBATION, STEPPER_RTOL, SIGN_CYCLES,
-                                                                   MAX_STEPS)).growth_rate
+                                                                   MAX_STEPS), law).growth_rate
 
 
-def _run(k: float, a: float, b: float, g: float, perturbation: float):
+def _run(k: float, a: float, b: float, g: float, perturbation: float, law: str = "aging"):
     """(regime, amplitude) of a point run to a decision."""
-    r = simulate_point(DrivenParams(k, a, b, g), DrivenSettings(perturbation, STEPPER_RTOL, TYPE_CYCLES, MAX_STEPS))
+    r = simulate_point(DrivenParams(k, a, b, g), DrivenSettings(perturbation, STEPPER_RTOL, TYPE_CYCLES, MAX_STEPS),
+                       law)
     return int(r.regime), r.amplitude
 
 
-def _locate(a: float, b: float, g: float, rtol: float) -> tuple[float, int]:
+def _locate(a: float, b: float, g: float, rtol: float, law: str = "aging") -> tuple[float, int]:
     """Reduced critical stiffness k_c = chi_c/A where the measured growth rate changes sign, bracketed around
     the linear value a (1 + g); (value, evaluations).
 
@@ -80,16 +81,16 @@ def _locate(a: float, b: float, g: float, rtol: float) -> tuple[float, int]:
         g = 0.0
     lo, hi = a * (1.0 + g) * (1.0 - BRACKET), a * (1.0 + g) * (1.0 + BRACKET)
     evaluations = 2
-    g_lo, g_hi = _growth(lo, a, b, g), _growth(hi, a, b, g)
+    g_lo, g_hi = _growth(lo, a, b, g, law), _growth(hi, a, b, g, law)
     while not (g_lo > 0.0 > g_hi) and evaluations < 40:
         lo, hi = lo * (1.0 - BRACKET), hi * (1.0 + BRACKET)
-        g_lo, g_hi = _growth(lo, a, b, g), _growth(hi, a, b, g)
+        g_lo, g_hi = _growth(lo, a, b, g, law), _growth(hi, a, b, g, law)
         evaluations += 2
     if not (g_lo > 0.0 > g_hi):
         return math.nan, evaluations
     while (hi - lo) > rtol * 0.5 * (hi + lo):
         mid = 0.5 * (lo + hi)
-        rate = _growth(mid, a, b, g)
+        rate = _growth(mid, a, b, g, law)
         evaluations += 1
         if rate > 0.0:
             lo = mid
@@ -100,11 +101,11 @@ def _locate(a: float, b: float, g: float, rtol: float) -> tuple[float, int]:
     return 0.5 * (lo + hi), evaluations
 
 
-def _bifurcation(k_c: float, a: float, b: float, g: float, rtol: float) -> tuple[str, float]:
+def _bifurcation(k_c: float, a: float, b: float, g: float, rtol: float, law: str = "aging") -> tuple[str, float]:
     """Type of the bifurcation at k_c (module docstring) and the limit-cycle amplitude at distance TYPE_DISTANCE
     below the line (NaN if none was decided there)."""
     distances = TYPE_DISTANCE * np.array([1.0, 2.0, 4.0])
-    below = [_run(k_c * (1.0 - d), a, b, g, 1e-4) for d in distances]
+    below = [_run(k_c * (1.0 - d), a, b, g, 1e-4, law) for d in distances]
     cycles = [(d, amp) for d, (regime, amp) in zip(distances, below) if regime == Regime.STICK_SLIP]
     amp_near = below[0][1] if below[0][0] == Regime.STICK_SLIP else math.nan
     if len(cycles) >= 2:
@@ -117,9 +118,9 @@ def _bifurcation(k_c: float, a: float, b: float, g: float, rtol: float) -> tuple
     large = max([LARGE_PERTURBATION] + [1.2 * amp for _, amp in cycles])
     first_large = None
     for d in (TYPE_DISTANCE, max(0.25 * TYPE_DISTANCE, rtol)):  # the bracket reaches rtol/2 above k_c
-        above_large = _run(k_c * (1.0 + d), a, b, g, large)[0]
+        above_large = _run(k_c * (1.0 + d), a, b, g, large, law)[0]
         first_large = above_large if first_large is None else first_large
-        if above_large == Regime.STICK_SLIP and _run(k_c * (1.0 + d), a, b, g, 1e-4)[0] == Regime.STEADY:
+        if above_large == Regime.STICK_SLIP and _run(k_c * (1.0 + d), a, b, g, 1e-4, law)[0] == Regime.STEADY:
             return "subcritical", amp_near
     if below[0][0] == Regime.RUNAWAY and first_large == Regime.STEADY:
         return "degenerate", math.nan
@@ -127,7 +128,7 @@ def _bifurcation(k_c: float, a: float, b: float, g: float, rtol: float) -> tuple
 
 
 def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto", rtol: float = 1e-3,
-                bifurcation: bool = True, model_tol: float = 1e-2) -> xr.Dataset:
+                bifurcation: bool = True, model_tol: float = 1e-2, state_law: str = "aging") -> xr.Dataset:
     """The Hopf line over the velocities ``V`` [m s-1] (Dataset over V).
 
     Variables: ``K_over_M_c`` [s-2] located by simulation (bisection on the sign of the measured growth rate to a
@@ -137,7 +138,7 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
     "none" where mu1(V) <= 0: steady sliding is then stable at every stiffness. ``model``: "quasistatic",
     "inertial" (the full Newton equation with gamma = V^2/(g D0); linear line chi_c = mu1 (1 + gamma/A)) or "auto"
     (default): per V, inertial where gamma/A > ``model_tol``, the relative shift of the line by inertia (flag
-    variable ``model``).
+    variable ``model``). ``state_law``: "aging" (the paper's) or "slip" (quasi-static only; docs/physics.md 7).
     """
     if model not in MODELS:
         raise InputError(f"model must be one of {list(MODELS)}, got {model!r}")
@@ -145,6 +146,9 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
         raise InputError(f"model_tol must be in [{MODEL_TOL_RANGE[0]:g}, {MODEL_TOL_RANGE[1]:g}], got {model_tol!r}")
     if not isinstance(params, FrictionParams):
         raise InputError(f"params must be a sweep.FrictionParams, got {type(params).__name__}")
+    if state_law not in STATE_LAWS or (state_law != "aging" and model != "quasistatic"):
+        raise InputError(f"state_law must be one of {list(STATE_LAWS)} (other than 'aging' with model 'quasistatic' "
+                         f"only), got state_law={state_law!r}, model={model!r}")
     v = np.asarray(V, dtype=float).reshape(-1)
     if v.size == 0 or not np.all(np.isfinite(v)) or np.any(v <= 0):
         raise InputError(f"V must be a non-empty sequence of finite velocities > 0 [m s-1], got {V!r}")
@@ -159,10 +163,10 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
     for i, m in enumerate(mu1):
         if m <= 0.0:
             continue
-        k_c, evals[i] = _locate(m / p.A, p.m2 / p.A, gamma[i] / p.A, rtol)
+        k_c, evals[i] = _locate(m / p.A, p.m2 / p.A, gamma[i] / p.A, rtol, state_law)
         chi_c[i] = k_c * p.A
         if bifurcation and math.isfinite(k_c):
-            kind, amps[i] = _bifurcation(k_c, m / p.A, p.m2 / p.A, gamma[i] / p.A, rtol)
+            kind, amps[i] = _bifurcation(k_c, m / p.A, p.m2 / p.A, gamma[i] / p.A, rtol, state_law)
             kinds[i] = BIFURCATIONS.index(kind)
         elif math.isfinite(k_c):
             kinds[i] = BIFURCATIONS.index("undetermined")
@@ -189,6 +193,7 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
         coords={"V": var(v, "m s-1", "driving velocity")},
         attrs={"Conventions": "CF-1.11", "title": "Hopf line of the Baumberger-Gauthier spring-block model",
                "source": versions(), "references": REFERENCES, "rtol": rtol,
+               "state_law": state_law,
                "model": model + (f" (model_tol {model_tol:g}: inertial where gamma/A > model_tol)"
                                  if model == "auto" else ""),
                "method": (f"bisection on the sign of the growth rate measured over {SIGN_CYCLES} cycles of a "
@@ -200,10 +205,11 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
 
 
 def with_simulated_line(ds: xr.Dataset, params: FrictionParams, model: str = "auto",
-                        model_tol: float = 1e-2) -> xr.Dataset:
+                        model_tol: float = 1e-2, state_law: str = "aging") -> xr.Dataset:
     """``ds`` (a sweep over V) with the coordinate ``K_over_M_c_simulated`` [s-2]: the Hopf line of ``model``
     located by simulation at each V (:func:`locate_hopf` without the type; ~2 ms per velocity), next to the
     analytic chi_c."""
-    line = locate_hopf(params, ds["V"].values, model=model, bifurcation=False, model_tol=model_tol)
+    line = locate_hopf(params, ds["V"].values, model=model, bifurcation=False, model_tol=model_tol,
+                       state_law=state_law)
     attrs = {**line["K_over_M_c"].attrs, "comment": line.attrs["method"]}
     return ds.assign_coords(K_over_M_c_simulated=("V", line["K_over_M_c"].values, attrs))

@@ -187,6 +187,7 @@ class Plan:
     finite: np.ndarray
     tau_samples: np.ndarray
     needs_tau: bool
+    state_law: str = "aging"
     index: np.ndarray | None = None
     """Flat indices in the scene's grid (i_K n_V + i_V) of the points of a plan restricted by :meth:`take`; None:
     every point of the scene, in order."""
@@ -229,9 +230,11 @@ class Plan:
         """Human-readable summary, also stored in the Dataset attrs."""
         step = (f"{self.step.min():.6g}..{self.step.max():.6g}" if self.step.min() < self.step.max()
                 else f"{self.step[0]:.6g}")
-        return {
+        text = {
             "model": self.model,
-            "state": "xi (u = s - xi)" + (" + tau quadrature" if self.needs_tau else ""),
+            "state_law": self.state_law,
+            "state": ("xi (u = s - xi)" + (" + tau quadrature" if self.needs_tau else "") if self.state_law == "aging"
+                      else "(xi, u) in the phase plane, then xi in t = 1/u (docs/physics.md 7.3)"),
             "method": f"{self.method} ({self.method_reason})" + "".join(
                 f"; {m} at {self.points_of(m).size} stiff points (chi/A <= {STIFF_K_MAX:g}, mu1 < 0, m2 > 0, "
                 f"|mu1/A|^3/(4 m2 chi/A^2) >= {STIFF_WORK_MIN:g})" for m in self.point_methods[1:]),
@@ -252,6 +255,11 @@ class Plan:
             "points": str(self.n_points),
             "points_without_finite_limit": str(int(np.count_nonzero(~self.finite))),
         }
+        if self.state_law != "aging":  # the general path (its rule says the rest)
+            text.update(step=f"adaptive, local tolerance {self.ctrl_tol:.3g}",
+                        error_estimate="difference of the solutions at two local tolerances: <name>_error variables",
+                        horizon="exact: xi at t = 1/u = 0")
+        return text
 
     def points_of(self, method: str) -> np.ndarray:
         """Flat indices of the points integrated with ``method``."""
@@ -269,6 +277,30 @@ class Plan:
         return h.hexdigest()[:16]
 
 
+def finite_relaxed_slip(a: np.ndarray, b: np.ndarray, state_law: str = "aging") -> np.ndarray:
+    """Where the relaxed slip is finite, from a = mu1/A and b = m2/A: aging, iff m2 > 0, or m2 = 0 and mu1 > 0
+    (docs/physics.md 6); slip, iff m2 > 0 (docs/physics.md 7.3)."""
+    if state_law == "aging":
+        return (b > 0) | ((b == 0) & (a > 0))
+    return b > 0
+
+
+def _general_plan(scene: Scene, chi, mu1, k, a, b, finite) -> Plan:
+    """The plan of a state law without the aging identity: the general two-state path of sweep/integrate/stop_slip.py
+    (dp5, PI controller, a pair of tolerances per point)."""
+    from .accuracy import TIGHTER
+
+    return Plan(model="quasistatic", method="dp5", method_reason=f"general two-state path of the {scene.state_law} law",
+                point_methods=("dp5",), point_method=np.zeros(k.size, np.int8), adaptive=True, lanes=False,
+                dtype=np.dtype(np.float64), step=np.full(k.size, np.nan), step_source="controller",
+                ctrl_tol=scene.rtol / TIGHTER,
+                rule=(f"dp5 (adaptive, PI controller) on du/dxi = (chi xi + mu1 u + m2 u^2)/A from (0, 0), then on "
+                      f"dxi/dt = -1/(b + a t + k xi t^2) in t = 1/u to t = 0; local tolerances rtol/{TIGHTER:g} and "
+                      f"rtol/{TIGHTER**2:g}, the tighter returned, their difference its error estimate"),
+                max_steps=int(scene.max_steps), chi=chi, mu1=mu1, k=k, a=a, b=b, s_c=time_scale(k, a), finite=finite,
+                tau_samples=scene.tau_samples, needs_tau=False, state_law=scene.state_law)
+
+
 def make_plan(scene: Scene) -> Plan:
     """Decide model, state, method, float type and per-point step parameters for ``scene``."""
     p = scene.params
@@ -276,8 +308,9 @@ def make_plan(scene: Scene) -> Plan:
     mu1_axis = physics.mu1(scene.V, p.m1, p.m2, p.V0)
     chi, mu1 = (x.ravel() for x in np.meshgrid(chi_axis, mu1_axis, indexing="ij"))
     k, a, b = chi / p.A, mu1 / p.A, np.full(chi.size, p.m2 / p.A)
-    # docs/physics.md 6: finite relaxed slip iff m2 > 0, or m2 = 0 and mu1 > 0
-    finite = (b > 0) | ((b == 0) & (a > 0))
+    finite = finite_relaxed_slip(a, b, scene.state_law)
+    if scene.state_law != "aging":
+        return _general_plan(scene, chi, mu1, k, a, b, finite)
     method, reason = choose_method(scene)
     tab = METHODS[method]
     ctrl_tol = scene.rtol * CTRL_TOL_FACTOR.get(method, 1.0)
@@ -323,4 +356,5 @@ def make_plan(scene: Scene) -> Plan:
         finite=finite,
         tau_samples=scene.tau_samples,
         needs_tau=scene.time_resolved,
+        state_law=scene.state_law,
     )

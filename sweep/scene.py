@@ -30,6 +30,8 @@ DRIVEN_OBSERVABLES = ("regime", "growth_rate", "period", "amplitude")
 """Observables of the driven protocol (regime, with status, is always stored)."""
 DRIVEN_METHODS = ("auto", "dp5")
 MODELS = ("auto", "quasistatic", "inertial")
+STATE_LAWS = ("aging", "slip")
+"""The state laws (sweep/models/state_laws.py; docs/physics.md 7)."""
 MODEL_TOL_RANGE = (1e-6, 0.5)
 """Allowed bound on the relative error of the model choice (Scene.model_tol)."""
 PERTURBATION_RANGE = (1e-8, 1.0)
@@ -120,6 +122,11 @@ class Scene:
     model_tol : float
         Bound on the relative error of the model choice, 1e-6 <= model_tol <= 0.5 (default 1e-2); ``rtol`` bounds
         the numerical error of the model used.
+    state_law : "aging" | "slip"
+        How the contact age evolves (docs/physics.md 7): the paper's aging law (default), or Ruina's slip law
+        psi' = -xi' psi ln(xi' psi). The slip law runs with model="quasistatic"; its stop scene computes the
+        relaxed slip only (observables = ("xi_inf",), finite only for m2 > 0), through the general two-state
+        formulation (the fast paths of the aging law rest on its identity xi + ln psi = s).
     """
 
     protocol: str
@@ -139,6 +146,7 @@ class Scene:
     max_cycles: int = 2000
     model: str = "auto"
     model_tol: float = 1e-2
+    state_law: str = "aging"
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen dataclass)
@@ -234,6 +242,7 @@ class Scene:
             raise InputError(f"model_tol must be in [{MODEL_TOL_RANGE[0]:g}, {MODEL_TOL_RANGE[1]:g}] (relative "
                              f"error of the model choice), got {tol!r}")
         object.__setattr__(self, "model_tol", tol)
+        self._check_state_law()
         if self.protocol == "stop" and self.model == "inertial":
             if self.observables != ("xi_inf",):
                 raise InputError(f"model 'inertial' computes the relaxed slip only (observables = ['xi_inf']), got "
@@ -243,6 +252,25 @@ class Scene:
                 if value != default:
                     raise InputError(f"{name} is not used by model 'inertial' (its stepper is the adaptive "
                                      f"Rosenbrock rodas3; leave {name} at {default!r}), got {value!r}")
+
+    def _check_state_law(self) -> None:
+        if self.state_law not in STATE_LAWS:
+            raise InputError(f"state_law must be one of {list(STATE_LAWS)}, got {self.state_law!r}")
+        if self.state_law == "aging":
+            return
+        if self.model != "quasistatic":
+            raise InputError(f"state_law {self.state_law!r} runs with model 'quasistatic' only (inertia is implemented "
+                             f"for the aging law), got model={self.model!r}")
+        if self.protocol == "stop":
+            if self.observables != ("xi_inf",):
+                raise InputError(f"state_law {self.state_law!r} computes the relaxed slip only (observables = "
+                                 f"['xi_inf']), got observables={list(self.observables)}")
+            for name, value, default in (("method", self.method, "auto"), ("step", self.step, None),
+                                         ("precision", self.precision, "float64")):
+                if value != default:
+                    raise InputError(f"{name} is not used with state_law {self.state_law!r} (its stepper is the "
+                                     f"adaptive dp5 of the general two-state path; leave {name} at {default!r}), "
+                                     f"got {value!r}")
 
     def _check_trajectory_tau(self) -> None:
         try:
@@ -294,6 +322,7 @@ class Scene:
             lines.append(f"max_cycles = {int(self.max_cycles)}")
         lines.append(f'model = "{self.model}"')
         lines.append(f"model_tol = {self.model_tol!r}")
+        lines.append(f'state_law = "{self.state_law}"')
         lines.append("[atol]")
         lines += [f"{k} = {v!r}" for k, v in sorted(self.atol.items())]
         lines.append("[params]")
