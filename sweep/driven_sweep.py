@@ -52,8 +52,8 @@ def driven_chunk(scene: Scene):
 
     def simulate(g: np.ndarray, inertial: np.ndarray) -> dict[str, np.ndarray]:
         out = DrivenOutputs.empty(g.size)
-        driven_batch(scene.state_law)(k_k[g // n_v], a_v[g % n_v], np.full(g.size, p.m2 / p.A), G_v[g % n_v] * inertial, settings,
-                       out)
+        driven_batch(scene.state_law)(k_k[g // n_v], a_v[g % n_v], np.full(g.size, p.m2 / p.A),
+                                      G_v[g % n_v] * inertial, settings, out)
         return out._asdict()
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
