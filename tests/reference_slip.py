@@ -454,7 +454,7 @@ class DrivenSolution:
     amplitude: np.ndarray
     period: np.ndarray
     growth: np.ndarray
-    regime: str  # "steady", "stick_slip", "runaway" or "undecided" (see driven())
+    regime: str  # "steady", "stick_slip", "neutral", "runaway" or "undecided" (see driven())
     peak_w: float
     nfev: int
 
@@ -464,9 +464,10 @@ def driven(chi: float, A: float, mu1: float, m2: float, perturbation: float = 1e
            stationary_tol: float = 1e-7, decayed: float = 1e-3) -> DrivenSolution:
     """Driven scene from z(0) = perturbation, u(0) = 0 (module docstring, section 4), for ``cycles`` cycles
     (engine numbering) or until decided earlier. Regime: runaway if w = ln xi' passes ``w_runaway``; steady if
-    the amplitude falls below ``decayed`` x perturbation; stick_slip if three successive amplitudes are
-    stationary (|a_n/a_(n-1) - 1| <= stationary_tol) at more than 2 x perturbation; else undecided (the
-    per-cycle growth rates still say which way it goes)."""
+    the amplitude (or the state) falls below ``decayed`` x perturbation; if three successive amplitudes are
+    stationary (|a_n/a_(n-1) - 1| <= stationary_tol): neutral where the amplitude is still the first cycle's
+    (within 1 %), else stick_slip (a limit cycle reached by growing); else undecided (the per-cycle growth rates
+    still say which way it goes)."""
     k, a, b = chi / A, mu1 / A, m2 / A
     count = [0]
 
@@ -511,36 +512,35 @@ def driven(chi: float, A: float, mu1: float, m2: float, perturbation: float = 1e
     maxima, minima = [], []  # (time, z)
     regime, peak_w = "undecided", w_of(*y)
     amps = [math.nan]
+    def cycle_amplitudes():
+        out = [math.nan]
+        for i in range(1, len(maxima)):
+            t_prev, (t_max, z_max) = maxima[i - 1][0], maxima[i]
+            z_min = [v for s, v in minima if t_prev < s < t_max]
+            out.append(0.5 * (z_max - z_min[-1]) if z_min else math.nan)
+        return out
+
     while True:
         res = solve_ivp(f, (t, t + 4.0 * span), y, method=method, rtol=rtol, atol=1e-14 * perturbation,
                         events=(maximum, minimum, runaway), dense_output=True, **opts)
         if not res.success:
             raise RuntimeError(res.message)
-        ws = [w_of(*res.sol(s)) for s in np.linspace(t, res.t[-1], 200)]
-        peak_w = max(peak_w, max(ws))
+        peak_w = max(peak_w, max(w_of(*res.sol(s)) for s in np.linspace(t, res.t[-1], 200)))
         maxima += [(float(s), float(v[0])) for s, v in zip(res.t_events[0], res.y_events[0])]
         minima += [(float(s), float(v[0])) for s, v in zip(res.t_events[1], res.y_events[1])]
+        amps = cycle_amplitudes()
         if res.status == 1:
             regime = "runaway"
             break
         t, y = float(res.t[-1]), res.y[:, -1]
-        amps = [math.nan]
-        for i in range(1, len(maxima)):
-            t_prev, (t_max, z_max) = maxima[i - 1][0], maxima[i]
-            z_min = [v for s, v in minima if t_prev < s < t_max]
-            amps.append(0.5 * (z_max - z_min[-1]) if z_min else math.nan)
         n = len(amps) - 1
-        if n >= 1 and amps[-1] < decayed * perturbation:
+        if (n >= 1 and amps[-1] < decayed * perturbation) or max(abs(y[0]), abs(y[1])) < decayed * perturbation:
             regime = "steady"
             break
-        if n >= 4 and all(abs(amps[j] / amps[j - 1] - 1.0) <= stationary_tol for j in range(n - 2, n + 1)) \
-                and amps[-1] > 2.0 * perturbation:
-            regime = "stick_slip"
+        if n >= 4 and all(abs(amps[j] / amps[j - 1] - 1.0) <= stationary_tol for j in range(n - 2, n + 1)):
+            regime = "neutral" if abs(amps[-1] / amps[1] - 1.0) <= 1e-2 else "stick_slip"
             break
         if n >= cycles:
-            break
-        if max(abs(y[0]), abs(y[1])) < decayed * perturbation:  # overdamped return
-            regime = "steady"
             break
     n = len(amps)
     amplitude = np.array(amps)
