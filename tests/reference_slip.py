@@ -461,13 +461,14 @@ class DrivenSolution:
 
 def driven(chi: float, A: float, mu1: float, m2: float, perturbation: float = 1e-3, aging: bool = False,
            cycles: int = 12, method: str = "DOP853", rtol: float = 1e-12, w_runaway: float = math.log(1e8),
-           stationary_tol: float = 1e-7, decayed: float = 1e-3) -> DrivenSolution:
+           stationary_tol: float = 1e-7, decayed: float = 1e-3, stop_when_decided: bool = True) -> DrivenSolution:
     """Driven scene from z(0) = perturbation, u(0) = 0 (module docstring, section 4), for ``cycles`` cycles
     (engine numbering) or until decided earlier. Regime: runaway if w = ln xi' passes ``w_runaway``; steady if
     the amplitude (or the state) falls below ``decayed`` x perturbation; if three successive amplitudes are
     stationary (|a_n/a_(n-1) - 1| <= stationary_tol): neutral where the amplitude is still the first cycle's
     (within 1 %), else stick_slip (a limit cycle reached by growing); else undecided (the per-cycle growth rates
-    still say which way it goes)."""
+    still say which way it goes). ``stop_when_decided=False`` runs all ``cycles`` cycles (unless runaway) and
+    decides at the end."""
     k, a, b = chi / A, mu1 / A, m2 / A
     count = [0]
 
@@ -534,6 +535,8 @@ def driven(chi: float, A: float, mu1: float, m2: float, perturbation: float = 1e
             break
         t, y = float(res.t[-1]), res.y[:, -1]
         n = len(amps) - 1
+        if not stop_when_decided and n < cycles and max(abs(y[0]), abs(y[1])) >= 1e-9 * perturbation:
+            continue
         if (n >= 1 and amps[-1] < decayed * perturbation) or max(abs(y[0]), abs(y[1])) < decayed * perturbation:
             regime = "steady"
             break
