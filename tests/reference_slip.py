@@ -359,6 +359,23 @@ class StopSolution:
         t = brentq(lambda t: float(p2.sol(t)[1]) - S, t0, t1, xtol=1e-15, rtol=1e-15, maxiter=300)
         return float(p2.sol(t)[0]), math.exp(t)
 
+    def tau_at_fraction(self, f: float) -> float:
+        """tau at which xi = f xi_inf (0 < f < 1); inf where that lies beyond tau ~ e^S_CAP (the slip law's late
+        fractions: xi_inf - xi ~ 1/(b u), ln tau ~ b u^2, so f = 0.99 is typically far beyond 1e308)."""
+        if not self.finite:
+            raise ValueError("no finite limit: no fraction of xi_inf")
+        if not 0.0 < f < 1.0:
+            raise ValueError("f must lie in (0, 1)")
+        target = f * self.xi_inf
+        p1, p2 = self.p1, self.p2
+        if target <= float(p1.t[-1]):
+            return float(np.expm1(p1.sol(target)[1]))
+        if target > float(p2.y[0, -1]):
+            return math.inf
+        t = brentq(lambda t: float(p2.sol(t)[0]) - target, float(p2.t[0]), float(p2.t[-1]), xtol=1e-15,
+                   rtol=1e-15, maxiter=300)
+        return float(np.expm1(p2.sol(t)[1]))
+
     def xi(self, tau):
         out = np.array([self._state(float(t))[0] for t in np.atleast_1d(tau)])
         return out[0] if np.ndim(tau) == 0 else out

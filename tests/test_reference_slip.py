@@ -64,6 +64,23 @@ def test_aging_switch_trajectory(name):
     np.testing.assert_allclose(r.psi(taus), ref.psi(taus), rtol=1e-11)
 
 
+@pytest.mark.parametrize("name", ["g_chiA1_mA0.3_m2A0.05", "s2_KM1e3_V100um_corner", "g_chiA1000_mA3_m2A0.3_stiff"])
+def test_fraction_times(name):
+    """t50/t90: the aging switch matches tests/reference.py; for the slip law xi(t_f) = f xi_inf, and t90 may lie
+    beyond any float time (reported as inf), e.g. t50 = 1.8e93 and t90 = inf for chi/A = 1000."""
+    case = next(c for c in STOP_CASES if c.name == name)
+    g, ref = aging(name), reference_stop(case.chi, case.A, case.mu1, case.m2)
+    s = slip(name)
+    for f in (0.5, 0.9):
+        assert g.tau_at_fraction(f) == pytest.approx(ref.tau_at_fraction(f), rel=1e-9)
+        t = s.tau_at_fraction(f)
+        assert t > g.tau_at_fraction(f)
+        if math.isfinite(t):
+            assert float(s.xi(t)) == pytest.approx(f * s.xi_inf, rel=1e-10)
+    if name == "g_chiA1000_mA3_m2A0.3_stiff":
+        assert s.tau_at_fraction(0.5) == pytest.approx(1.82e93, rel=0.01) and s.tau_at_fraction(0.9) == math.inf
+
+
 @pytest.mark.parametrize("case", NO_LIMIT_CASES, ids=lambda c: c.name)
 def test_aging_switch_no_limit_trajectories(case):
     r, ref = aging(case.name), reference_stop(case.chi, case.A, case.mu1, case.m2)
