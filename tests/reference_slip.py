@@ -26,6 +26,14 @@ L = k xi + a u + b u^2 (stop) and E = xi' psi = exp(-L).
    * b > 0: du/dxi >= k xi - a^2/(4b) > 0 eventually and then >= b u^2/2: blow-up at a finite xi. FINITE.
    => slip law: xi_inf finite  <=>  m2 > 0 (the sign of mu1(V) does not matter; compare the aging law: m2 > 0,
    or m2 = 0 and mu1 > 0).
+   2b. Closed form (b > 0, :func:`slip_xi_inf_airy`): v = u + a/(2b) gives v' = b v^2 + k (xi - xi0) with
+   xi0 = a^2/(4 b k), and v = -y'/(b y) the Airy equation y'' = -b k (xi - xi0) y. With c = (b k)^(1/3),
+   X = c (xi0 - xi): y = Ai(X) + r Bi(X), r fixed by y'(0)/y(0) = -a/2, and xi_inf = xi0 - X*/c at the first
+   zero X* of y below X0 = c xi0. Special cases: mu1 = 0: xi_inf = 1.98635270743/(b k)^(1/3) (first zero of
+   Ai(-x) + Bi(-x)/sqrt 3); mu1 < 0 with X0 >~ 10 (soft springs, the costly corners): r ~ exp(-4/3 X0^1.5), so
+   xi_inf = a^2/(4 b k) + 2.33811/(b k)^(1/3) to rounding: the slider creeps along L ~ 0 up to the fold xi0 of
+   that manifold and leaves it through an Airy layer. The closed form agrees with the integration to < 3e-13 on
+   every m2 > 0 case of tests/cases.py; only xi_inf has one (not xi(tau)).
    Comparison: expm1(L) >= L, so u_aging(xi) >= u_slip(xi) and the aging solution blows up first:
    xi_inf(aging) <= xi_inf(slip), strictly. Physically the slip law heals only by slipping (no healing at
    rest), so the slider must slip further before its contacts have strengthened enough to arrest it.
@@ -47,11 +55,17 @@ L = k xi + a u + b u^2 (stop) and E = xi' psi = exp(-L).
        arctan(sqrt -x)/sqrt -x (x < 0), 1 (x = 0)   [series sum x^n/(2n+1) for |x| < 1e-3].
    xi_inf = xi_U + (R_lo + R_hi)/2, bound (R_hi - R_lo)/2 ~ k/(6 b^3 U^4): < 1e-18 in every case of the table.
    The slip-law tail is ALGEBRAIC in u (R ~ 1/(b u)) where the aging tail is Gaussian (~ e^(-b u^2)): late on
-   ln tau ~ L ~ b u^2, so xi_inf - xi(tau) ~ 1/sqrt(b ln tau): still ~15 % of xi_inf at tau = 1e200 for
-   m2/A = 0.1. No integration in tau or s can reach xi_inf; the remainder (in u) is mandatory.
+   ln tau ~ u + L - ln(L (1 + dL/du)) ~ b u^2, so xi_inf - xi(tau) ~ 1/sqrt(b ln tau): at tau = 1e200 still
+   3.5 % of xi_inf (sample1, Fig. 3b point: u = 58) or 5 % (m2/A = 0.05). No integration in tau or s can reach
+   xi_inf to rtol; the remainder (in u) is mandatory. In s: du/ds = E L ~ b u^2 e^(-b u^2), so u ~ sqrt(ln s/b)
+   and xi_inf - xi ~ 1/sqrt(b ln s): a tolerance of 1e-9 would need ln s ~ 1e18.
 
    Both phases run with solve_ivp at rtol RTOL = 1e-13 (DOP853, with a budget of evaluations, then Radau with an
    analytic Jacobian; method="DOP853"/"Radau" forces one, for cross-checks).
+
+   Cost: ~35 000 evaluations, 0.3-0.8 s per slip case (the S equation relaxes at the rate dS/dt ~ 2 b u^2 in
+   t = ln u, stiff for DOP853 while S is carried: up to S_CAP); corners ~70 000; the two extreme cases of
+   tests/cases.py run Radau for 3-9 s.
 
 4. Driven scene (:func:`driven`): z = tau - xi, w = ln xi' = k z - a u - b u^2 - u,
        z' = 1 - e^w,   u' = e^-u - e^w (aging),   u' = -e^w (w + u) (slip).
@@ -59,7 +73,25 @@ L = k xi + a u + b u^2 (stop) and E = xi' psi = exp(-L).
    u' = -k z + a u, z' = -k z + (a + 1) u, so s^2 + (k - a) s + k = 0, i.e. A s^2 + (chi - mu1) s + chi = 0 for
    both laws: same Hopf line chi_c = mu1, same growth rate and period near it (the laws differ at second order
    in the amplitude only). Cycles are measured as the engine does (sweep/models/driven.py): the maxima of z are
-   the upward zero crossings of w (z' = 1 - e^w), located by solve_ivp's event root finding.
+   the upward zero crossings of w (z' = 1 - e^w), located by solve_ivp's event root finding. Found here
+   (sample2's A, m1, m2 at V0): m2 > 0 supercritical for the slip law too (a limit cycle below the line, amplitude
+   1.02 at chi = 0.9 chi_c against 1.55 for aging; 0.69 vs 1.09 at 0.95 chi_c); m2 = 0 degenerate as for aging:
+   neutral orbits of any amplitude at chi = chi_c (|growth| < 3e-12 per unit tau over 50 cycles), runaway below.
+
+5. For an engine implementing the slip law (numbers from the table of tests/cases.py):
+   * finite limit iff m2 > 0: the m2 = 0, mu1 > 0 points, finite for aging, are no_finite_limit for slip;
+   * xi_inf(slip)/xi_inf(aging) ranges from 1.004 (costly corners: both creep to the same fold) to 47 (chi/A =
+     1000, mu1/A = 3, m2/A = 0.3: 0.271 vs 0.00577); 1.6-5.4 on the preset points outside the corners;
+   * the aging stop kernel's trick xi + u = s does not hold (du/ds = E L): the state is (xi, u) in s, or better
+     u(xi) (phase 1) and xi(u) (phase 2) as here; the s-time right-hand side -E ln E has the same stiffness
+     structure as aging's early (rate ~ k) and in the corners (rate |a + 2 b u|);
+   * u at the end of the transient is modest (u ~ 5e-4 to 4.6 at the hand-over h(L) = 1; u ~ 25-60 at tau = 1e50
+     to 1e200), but no finite horizon gives xi_inf: use the remainder R(U) = F(k xi_U) (bound ~ k R/(3 b^2 U^3))
+     or the Airy closed form for xi_inf itself;
+   * t50 is often modest (1.3 to 1.7e5 tau on the preset points) but t90 is astronomically late (8e27 for the
+     sample1 Fig. 3b point, 1e151 for sample2 at K/M = 1e6, V = 0.1 um/s) and beyond any float for chi/A = 1000
+     (t50 = 1.8e93 there): such times must come back as NaN/inf with a status, not as a converged-looking number;
+   * driven: same linear theory, so locate_hopf and growth_rate_linear need no change; only u' differs.
 """
 
 from __future__ import annotations
