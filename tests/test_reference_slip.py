@@ -303,3 +303,14 @@ def test_regimes_on_both_sides_of_the_hopf_line():
         assert d.regime == "neutral" and np.all(np.abs(d.growth[2:]) < 1e-10), (p, d.growth)
     run = rs.driven(0.9 * MU1, A, MU1, 0.0, 1e-2, cycles=200)
     assert run.regime == "runaway" and run.peak_w >= math.log(1e8)
+
+
+@pytest.mark.parametrize("case", NO_LIMIT_CASES, ids=lambda c: c.name)
+def test_no_limit_trajectories_do_not_depend_on_the_hand_over(case):
+    """Without a finite limit (m2 <= 0) the hand-over to the u-phase is optional: xi(tau), psi(tau) up to 1e12 are
+    the same with the xi-phase alone (h_switch = 1e30)."""
+    r, alone = slip(case.name), slip(case.name, h_switch=1e30)
+    assert alone.p2 is None
+    taus = np.logspace(-2, 12, 8)
+    np.testing.assert_allclose(r.xi(taus), alone.xi(taus), rtol=1e-11)
+    np.testing.assert_allclose(r.psi(taus), alone.psi(taus), rtol=1e-11)
