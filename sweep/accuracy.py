@@ -52,3 +52,8 @@ TIGHTER = 10.0
 difference, ~the error of the looser run, is its error estimate. (The looser pair rtol, rtol/10 flagged 20 % of the
 default scene error_above_tol with the inertial model: the adaptive steps' global error reaches ~5x their local
 tolerance.)"""
+GENERAL_ESTIMATE_GAIN = 2.0
+"""Estimate of the general (slip-law) stop path = GENERAL_ESTIMATE_GAIN x max(|x1 - x2|, |x2 - x3|) of its runs at
+rtol/TIGHTER^(1, 2, 3), x2 returned (sweep/integrate/stop_slip.py): as the step ladder's non-asymptotic estimate
+(sweep/ladder.py CONSERVATIVE_GAIN). On tests/test_slip_law.py's cases at rtol 1e-6 and 1e-9 it bounds the true
+error and stays within 100x of it."""

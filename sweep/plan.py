@@ -257,7 +257,8 @@ class Plan:
         }
         if self.state_law != "aging":  # the general path (its rule says the rest)
             text.update(step=f"adaptive, local tolerance {self.ctrl_tol:.3g}",
-                        error_estimate="difference of the solutions at two local tolerances: <name>_error variables",
+                        error_estimate="from the solutions at three local tolerances (step_rule): <name>_error "
+                                       "variables",
                         horizon="exact: xi at t = 1/u = 0")
         return text
 
@@ -288,15 +289,16 @@ def finite_relaxed_slip(a: np.ndarray, b: np.ndarray, state_law: str = "aging") 
 def _general_plan(scene: Scene, chi, mu1, k, a, b, finite) -> Plan:
     """The plan of a state law without the aging identity: the general two-state path of sweep/integrate/stop_slip.py
     (dp5, PI controller, a pair of tolerances per point)."""
-    from .accuracy import TIGHTER
+    from .accuracy import GENERAL_ESTIMATE_GAIN, TIGHTER
 
     return Plan(model="quasistatic", method="dp5", method_reason=f"general two-state path of the {scene.state_law} law",
                 point_methods=("dp5",), point_method=np.zeros(k.size, np.int8), adaptive=True, lanes=False,
                 dtype=np.dtype(np.float64), step=np.full(k.size, np.nan), step_source="controller",
-                ctrl_tol=scene.rtol / TIGHTER,
+                ctrl_tol=scene.rtol / TIGHTER**2,
                 rule=(f"dp5 (adaptive, PI controller) on du/dxi = (chi xi + mu1 u + m2 u^2)/A from (0, 0), then on "
-                      f"dxi/dt = -1/(b + a t + k xi t^2) in t = 1/u to t = 0; local tolerances rtol/{TIGHTER:g} and "
-                      f"rtol/{TIGHTER**2:g}, the tighter returned, their difference its error estimate"),
+                      f"dxi/dt = -1/(b + a t + k xi t^2) in t = 1/u to t = 0; local tolerances rtol/{TIGHTER:g}, "
+                      f"rtol/{TIGHTER**2:g}, rtol/{TIGHTER**3:g}, the middle one returned, {GENERAL_ESTIMATE_GAIN:g} x "
+                      f"the larger difference to its neighbours its error estimate"),
                 max_steps=int(scene.max_steps), chi=chi, mu1=mu1, k=k, a=a, b=b, s_c=time_scale(k, a), finite=finite,
                 tau_samples=scene.tau_samples, needs_tau=False, state_law=scene.state_law)
 
