@@ -1,9 +1,9 @@
 """Engine: run a plan's points through the compiled kernel in chunks, in parallel, with progress.
 
-The numba layer (``stop_batch``) knows nothing of xarray: it fills preallocated flat arrays, one point
-written once by one thread. The costly points cluster in one corner of the grid (small K/M with mu1 < 0) and
-numba's prange splits a batch into equal contiguous shares, so the points of a chunk are visited in a fixed
-pseudo-random order: every thread's share of it then mixes cheap and costly points
+The numba layer (``stop_batch`` of integrate/stop_point.py and the lanes) knows nothing of xarray: it fills
+preallocated flat arrays, one point written once by one thread. The costly points cluster in one corner of the grid
+(small K/M with mu1 < 0) and numba's prange splits a batch into equal contiguous shares, so the points of a chunk
+are visited in a fixed pseudo-random order: every thread's share of it then mixes cheap and costly points
 (2 threads: 1.2x -> 1.96x speed-up on the default scene). Results do not depend on the order. Sweeps of the
 relaxed slip alone go through the lane kernels instead (16 runs in flight per thread, models/stop_lanes.py), each
 point down its own step ladder (ladder.py).
@@ -17,13 +17,12 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from numba import njit, prange
 
+from .integrate.stop_point import Method, StopPoints, Tolerances, stop_batch
 from .integrate.stop_slip import slip_batch
 from .ladder import climb
 from .models.stop import NO_FINITE_LIMIT, OK
 from .models.stop_lanes import lane_kernels
-from .models.stop_march import solve_stop_point
 from .physics import perturbation_growth
 from .plan import Plan, make_plan
 from .progress import Progress
@@ -42,32 +41,6 @@ CHUNK_POINTS = 4096
 ERROR_ABOVE_TOL = int(Status.ERROR_ABOVE_TOL)
 SAMPLED = ("xi_at", "u_at", "xi_at_err", "u_at_err")
 """The RawResult arrays sampled in time (n points x n samples): the large ones, written per chunk by a journaled run."""
-
-
-@njit(parallel=True, cache=True)
-def stop_batch(method, order, adaptive, k, a, b, s_c, finite, h, max_steps, rtol, atol, ctrl_tol, tau_samples, obs_tau,
-               want_fractions, xi_inf, xi_inf_err, status, steps, xi_at, u_at, xi_at_err, u_at_err, tau_at_fraction,
-               tau_at_fraction_err):
-    """Solve a flat batch of stop points one by one (Richardson pairs, models/stop_march.py). obs_tau[i, :] are
-    point i's extra reduced times (slip_at)."""
-    fractions = FRACTIONS if want_fractions else np.empty(0)
-    for i in prange(k.size):
-        if not finite[i] and xi_at.shape[1] == 0:
-            xi_inf[i], xi_inf_err[i], status[i], steps[i] = math.nan, math.nan, NO_FINITE_LIMIT, 0
-            tau_at_fraction[i, :] = math.nan
-            tau_at_fraction_err[i, :] = math.nan
-            continue
-        targets = np.concatenate((tau_samples, obs_tau[i]))
-        order_t = np.argsort(targets, kind="mergesort")
-        n_t = targets.size
-        xs, us, xe, ue = np.full(n_t, math.nan), np.full(n_t, math.nan), np.full(n_t, math.nan), np.full(n_t, math.nan)
-        st, x, xe_inf, n = solve_stop_point(method, order, adaptive, h[i], k[i], a[i], b[i], s_c[i], max_steps,
-                                            finite[i], rtol, atol, ctrl_tol, targets[order_t], xs, us, xe, ue,
-                                            fractions, tau_at_fraction[i], tau_at_fraction_err[i])
-        xi_inf[i], xi_inf_err[i], status[i], steps[i] = x, xe_inf, st, n
-        for j in range(n_t):
-            xi_at[i, order_t[j]], u_at[i, order_t[j]] = xs[j], us[j]
-            xi_at_err[i, order_t[j]], u_at_err[i, order_t[j]] = xe[j], ue[j]
 
 
 @dataclass
@@ -168,11 +141,12 @@ def run_points(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
         return _relax_in_lanes(scene, plan, g)
     obs_tau = _obs_tau(scene, plan.flat_index(g))
     part = RawResult.empty(g.size, n_samples(scene, plan))
-    stop_batch(plan.method_arrays, plan.order, plan.adaptive, plan.k[g], plan.a[g], plan.b[g], plan.s_c[g],
-               plan.finite[g], plan.step[g], plan.max_steps, scene.rtol, scene.atol["xi_inf"], plan.ctrl_tol,
-               plan.tau_samples, obs_tau, bool({"t50", "t90"} & set(scene.observables)),
-               part.xi_inf, part.xi_inf_err, part.status, part.steps, part.xi_at, part.u_at, part.xi_at_err,
-               part.u_at_err, part.tau_at_fraction, part.tau_at_fraction_err)
+    fractions = FRACTIONS if {"t50", "t90"} & set(scene.observables) else np.empty(0)
+    stop_batch(Method.of(plan.tableau), StopPoints(plan.k[g], plan.a[g], plan.b[g], plan.s_c[g], plan.step[g]),
+               plan.finite[g], Tolerances(scene.rtol, scene.atol["xi_inf"], plan.ctrl_tol), plan.max_steps,
+               plan.tau_samples, obs_tau, fractions, part.xi_inf, part.xi_inf_err,
+               part.status, part.steps, part.xi_at, part.u_at, part.xi_at_err, part.u_at_err, part.tau_at_fraction,
+               part.tau_at_fraction_err)
     part.work[:] = 3 * part.steps.astype(np.int64) // 2
     return part
 

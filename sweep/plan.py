@@ -30,8 +30,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from . import ladder, physics
+from .integrate.stop_point import ERROR_GAIN
 from .models.stop import RATE_FLOOR, TAIL_SAFETY
-from .models.stop_march import ERROR_GAIN
 from .models.stop_stiff import STIFF_RATE_FLOOR
 from .scene import Scene
 from .solvers import METHODS
@@ -217,12 +217,6 @@ class Plan:
         return self.tableau.order
 
     @property
-    def method_arrays(self) -> tuple:
-        """(c, a, b, e, fsal, error order) for the per-point kernel (models/stop_march.py)."""
-        c, a, b, e = self.tableau.arrays()
-        return c, a, b, e, self.tableau.fsal, self.tableau.error_order
-
-    @property
     def roundoff(self) -> float:
         return float(ROUNDOFF[np.dtype(self.dtype)])
 
@@ -247,7 +241,7 @@ class Plan:
                                 f"runs where |q - p| <= {ladder.ORDER_WINDOW:g}, else {ladder.CONSERVATIVE_GAIN:g} "
                                 "max(|x_b - x_a|, |x_c - x_b|); + 2 x tail bound + roundoff" if self.lanes else
                                 "Richardson pair per point (coarse mesh, same mesh halved): coarse run returned, "
-                                "2 |coarse - fine| + bound on cancelled contributions (models/stop_march.py)")
+                                "2 |coarse - fine| + bound on cancelled contributions (integrate/stop_point.py)")
                                + ": <name>_error variables"),
             "step_rule": self.rule,
             "max_steps": str(self.max_steps),

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep.models.stop_march import REPLAY, march
+from sweep.integrate.stop_point import REPLAY, Mesh, Method, Samples, Tolerances, march
+from sweep.models.stop import StopParams
 from sweep.solvers import RK4
 
 P = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0033, D0=1e-6)
@@ -42,9 +43,9 @@ def test_blow_up_is_caught_before_overflow():
     """A deliberately bad step (h = 2 on a time map 50x too coarse, m2 < 0 so E grows like exp(|m2| u^2/A))
     drives the exponent of E past EXP_MAX; the kernel flags the point nonfinite instead of returning inf/NaN."""
     none = np.empty(0)
-    method = (*RK4.arrays(), RK4.fsal, RK4.error_order)
-    status, xi_inf, n, *_ = march(method, REPLAY, 2.0, np.full(1, 2.0), 1, 1, 29.5, 1.2, -84.3, 16.7, 1000,
-                                       False, 1e-6, 0.0, 1e-6, none, none, none, none, none, none)
+    run = march(Method.of(RK4), Mesh(REPLAY, 2.0, np.full(1, 2.0), 1, 1), StopParams(29.5, 1.2, -84.3, 16.7, False),
+                Tolerances(1e-6, 0.0, 1e-6), 1000, False, Samples(none, none, none, none, none, none))
+    status, xi_inf, n = run.status, run.xi_inf, run.steps
     assert status == sweep.Status.NONFINITE and math.isnan(xi_inf) and n < 1000
 
 

@@ -32,6 +32,7 @@ Every function here is written for one point; the batch loop lives in :mod:`swee
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -134,14 +135,37 @@ rate_f64 = make_rate(np.float64)
 rate_f32 = make_rate(np.float32)
 
 
+class StopParams(NamedTuple):
+    """Reduced parameters of one quasi-static stop point, for the right-hand side in sigma."""
+
+    k: float
+    """chi/A."""
+    a: float
+    """mu1(V)/A."""
+    b: float
+    """m2/A."""
+    s_c: float
+    """Scale of the early log time (sweep/plan.py time_scale)."""
+    with_tau: bool
+    """Whether the quadrature tau = int e^u ds is carried (time-resolved observables)."""
+
+
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def derivatives(xi, s, k, a, b, s_c, with_tau):
+def derivatives(xi, s, p):
     """d(xi, s, tau)/dsigma and E at one state (float64); NaN derivatives flag an exponent beyond EXP_MAX."""
-    dxi, w, E, expo = rate_f64(xi, s, k, a, b, s_c)
+    dxi, w, E, expo = rate_f64(xi, s, p.k, p.a, p.b, p.s_c)
     u = s - xi
-    if expo > EXP_MAX or (with_tau and u > EXP_MAX):
+    if expo > EXP_MAX or (p.with_tau and u > EXP_MAX):
         return math.nan, w, math.nan, math.nan
-    return dxi, w, w * exp_f64(u) if with_tau else 0.0, E
+    return dxi, w, w * exp_f64(u) if p.with_tau else 0.0, E
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def stop_rhs(y, p, dy):
+    """The right-hand side d(xi, s, tau)/dsigma at y = (xi, s, tau) in the form of sweep/solvers/explicit.py;
+    returns E."""
+    dy[0], dy[1], dy[2], E = derivatives(y[0], y[1], p)
+    return E
 
 
 @njit(cache=True, fastmath=FAST)

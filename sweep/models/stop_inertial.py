@@ -40,7 +40,9 @@ import numpy as np
 from numba import njit, prange
 
 from ..jitcache import pin_module
-from ..solvers.rosenbrock_step import ERROR_EXPONENT, make_rodas3_step, scratch
+from ..solvers import RODAS3
+from ..solvers.controllers import I_CONTROLLER, MIN_FACTOR, accepted_factor, rejected_factor
+from ..solvers.rosenbrock_step import make_rodas3_step, scratch
 from ..status import Status
 from .stop import EXP_MAX, FAST, tail_integral, tail_is_accurate, tail_slip
 
@@ -60,8 +62,10 @@ H_FLOOR = 8.0 * 2.220446049250313e-16
 """Smallest step in s, relative to s, before a point is flagged step_underflow (a few ulps: below it s + h
 stops moving). Relative, not absolute: where a fast rebound (k/G large) drops xi' towards 0, ln(xi' psi) has a
 log singularity that the steps resolve down to ~1e-16 near s ~ 0.05, and then grow again."""
-SAFETY, GROW_MAX, SHRINK_MIN = 0.9, 5.0, 0.2
-"""Step controller h_new = h min(GROW_MAX, max(SHRINK_MIN, SAFETY err^(-1/3))) (the embedded order is 2)."""
+CONTROLLER = I_CONTROLLER._replace(nonfinite_factor=MIN_FACTOR)
+"""The elementary controller of sweep/solvers/controllers.py (a stage that overflowed: the step is divided by 5)."""
+ORDER = RODAS3.order_hat
+"""Order of RODAS3's embedded error estimate (the controller's exponent is 1/(ORDER + 1))."""
 LN_R_MAX = 600.0
 """Cap of ln R in the right-hand side (comment there)."""
 
@@ -154,7 +158,7 @@ def relax(k, a, b, G, inertial, rtol, atol, max_steps):
     h = H_START * min(1.0, G, 1.0 / k)
     eps = HANDOVER_FRACTION * rtol
     s_handover = 0.0
-    steps = 0
+    steps, err_prev, rejected = 0, 1.0, False
     while steps < max_steps:
         steps += 1
         if phase_inertial:
@@ -165,19 +169,22 @@ def relax(k, a, b, G, inertial, rtol, atol, max_steps):
             err2 = abs(err_v[1]) / (rtol * max(abs(y[1]), abs(y_new[1])) + atol * G)
         err = max(abs(err_v[0]) / (rtol * max(abs(y[0]), abs(y_new[0])) + atol), err2)
         if not (done and math.isfinite(err) and math.isfinite(y_new[0]) and math.isfinite(y_new[1])):
-            h *= SHRINK_MIN  # an overflow in a stage: retry smaller, flag once the step underflows
+            h *= rejected_factor(CONTROLLER, math.nan, ORDER)  # an overflow in a stage: retry smaller
+            rejected = True
             if h < H_FLOOR * s:
                 return math.nan, math.nan, NONFINITE, steps, s_handover
             continue
-        factor = min(GROW_MAX, max(SHRINK_MIN, SAFETY * err ** ERROR_EXPONENT)) if err > 0.0 else GROW_MAX
         if err > 1.0:
-            h *= factor
+            h *= rejected_factor(CONTROLLER, err, ORDER)
+            rejected = True
             if h < H_FLOOR * s:
                 return math.nan, math.nan, STEP_UNDERFLOW, steps, s_handover
             continue
         s += h
         y[0], y[1] = y_new[0], y_new[1]
+        factor, err_prev = accepted_factor(CONTROLLER, err, err_prev, ORDER, rejected)
         h *= factor
+        rejected = False
         xi = y[0]
         if phase_inertial:
             if _inertia_negligible(s, xi, y[1], k, a, b, G, eps):

@@ -18,7 +18,7 @@ from numba import njit
 from ..jitcache import pin, pin_module
 from .rosenbrock import RODAS3
 
-__all__ = ["ERROR_EXPONENT", "make_rodas3_step", "scratch"]
+__all__ = ["make_rodas3_step", "scratch"]
 
 _GAM = RODAS3.gamma
 (_, _, _, _), (_A21, _, _, _), (_A31, _A32, _, _), (_A41, _A42, _A43, _) = RODAS3.a
@@ -28,8 +28,6 @@ _G1, _G2, _G3, _G4 = RODAS3.gamma_x
 _M1, _M2, _M3, _M4 = RODAS3.m
 _E1, _E2, _E3, _E4 = RODAS3.e
 _SAME_F2 = _A21 == 0.0 and _AL2 == 0.0
-ERROR_EXPONENT = -1.0 / (RODAS3.order_hat + 1)
-"""Exponent of the error in the step-size controller (the embedded solution has order 2)."""
 
 
 @njit(cache=True)

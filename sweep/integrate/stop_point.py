@@ -6,7 +6,7 @@ with its FSAL flag and error order q. One step fills the stage derivatives K[i] 
 
 Step sequences (a *mesh* of step sizes in sigma):
 
-* ``ADAPTIVE``: a PI controller (Gustafsson; exponents 0.7/(q+1) and 0.4/(q+1)) keeps the embedded local error
+* ``ADAPTIVE``: the PI controller of :mod:`sweep.solvers.controllers` (Gustafsson) keeps the embedded local error
   estimate below ``ctrl_tol`` (:func:`error_norm`: xi relative with the atol floor, u = ln psi, and tau when
   time-resolved observables are asked for), and records the accepted steps;
 * ``REPLAY``: steps mesh[i]/split, each mesh step taken as ``split`` equal substeps (the last size repeated if the
@@ -36,24 +36,29 @@ used for time-resolved observables, has its rule's TIME_RESOLVED_FACTOR).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
-from ..status import Status
-from .stop import (
+from ..models.stop import (
     FAST,
     MAX_STEPS,
     NO_FINITE_LIMIT,
     NONFINITE,
     OK,
     TAIL_SAFETY,
+    StopParams,
     continuation_error,
     continue_in_closed_form,
     derivatives,
+    stop_rhs,
     tail_error,
     tail_slip,
 )
+from ..solvers.controllers import PI_CONTROLLER, accepted_factor, rejected_factor
+from ..solvers.explicit import make_erk_step
+from ..status import Status
 
 STEP_UNDERFLOW = int(Status.STEP_UNDERFLOW)
 ADAPTIVE, REPLAY = 0, 1
@@ -76,30 +81,93 @@ U_ROUNDING = 8.0 * 2.0**-52
 """Resolution of u = s - xi relative to s (a few roundings of s): the floor of u's weight in :func:`error_norm`."""
 
 
-@njit(cache=True, fastmath=FAST, error_model="numpy")
-def erk_step(c, A, b, e, K, xi, s, tau, h, k, a, bb, s_c, with_tau):
-    """One explicit RK step of size h from (xi, s, tau), with K[0] the derivative there; fills K[1:].
+class Method(NamedTuple):
+    """An explicit tableau for the per-point kernel: (c, A, b, e) of :meth:`ButcherTableau.arrays`, its FSAL flag,
+    the order q of its error estimate (0: a fixed-step method) and its order p."""
 
-    Returns (xi1, s1, tau1, err_xi, err_s, err_tau): the new state and the embedded error estimate h sum_j e_j K[j]
-    (zero for a method without an embedded pair). For an FSAL method K[-1] is the derivative at the new state.
-    """
-    stages = b.size
-    for i in range(1, stages):
-        dx, ds, dt = 0.0, 0.0, 0.0
-        for j in range(i):
-            dx += A[i, j] * K[j, 0]
-            ds += A[i, j] * K[j, 1]
-            dt += A[i, j] * K[j, 2]
-        K[i, 0], K[i, 1], K[i, 2], _ = derivatives(xi + h * dx, s + h * ds, k, a, bb, s_c, with_tau)
-    dx, ds, dt, ex, es, et = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    for j in range(stages):
-        dx += b[j] * K[j, 0]
-        ds += b[j] * K[j, 1]
-        dt += b[j] * K[j, 2]
-        ex += e[j] * K[j, 0]
-        es += e[j] * K[j, 1]
-        et += e[j] * K[j, 2]
-    return xi + h * dx, s + h * ds, tau + h * dt, h * ex, h * es, h * et
+    c: np.ndarray
+    A: np.ndarray
+    b: np.ndarray
+    e: np.ndarray
+    fsal: bool
+    q: int
+    order: int
+
+    @classmethod
+    def of(cls, tableau) -> Method:
+        c, A, b, e = tableau.arrays()
+        return cls(c, A, b, e, tableau.fsal, tableau.error_order, tableau.order)
+
+
+class Mesh(NamedTuple):
+    """The step sequence of a run: ``mode`` ADAPTIVE (trial step h0, building the mesh) or REPLAY (``steps[:n]``,
+    each taken as ``split`` substeps)."""
+
+    mode: int
+    h0: float
+    steps: np.ndarray
+    n: int
+    split: int
+
+
+class Tolerances(NamedTuple):
+    rtol: float
+    """Of the continuation in closed form (E < TAIL_SAFETY rtol)."""
+    atol: float
+    """Absolute floor of xi (error norm and tail test)."""
+    ctrl: float
+    """Local tolerance of the adaptive controller."""
+
+
+class Samples(NamedTuple):
+    """Where a run records: xi and u = ln psi at the increasing reduced times ``tau`` (into xi_at, u_at), tau and
+    dxi/dtau where xi crosses the increasing ``xi`` (into tau_at, rate_at)."""
+
+    tau: np.ndarray
+    xi_at: np.ndarray
+    u_at: np.ndarray
+    xi: np.ndarray
+    tau_at: np.ndarray
+    rate_at: np.ndarray
+
+
+class Continuation(NamedTuple):
+    """Where the closed-form continuation of the samples starts: first continued sample, E, g = (mu1 + 2 m2 u)/A
+    and u there."""
+
+    first: int
+    E: float
+    g: float
+    u: float
+
+
+class Run(NamedTuple):
+    """A :func:`march` result (its docstring)."""
+
+    status: int
+    xi_inf: float
+    steps: int
+    tail_err: float
+    mesh: np.ndarray
+    n_mesh: int
+    cont: Continuation
+    track: np.ndarray
+    n_track: int
+    at_mesh: np.ndarray
+
+
+_stage_loop = make_erk_step(stop_rhs, 3)
+
+
+@njit(inline="always", fastmath=FAST, error_model="numpy")
+def erk_step(method, K, work, xi, s, tau, h, p):
+    """One explicit RK step of size h from (xi, s, tau) through the shared stage loop, K[0] the derivative there;
+    ``work`` (4 x 3) is scratch. Returns (xi1, s1, tau1, err_xi, err_s, err_tau). For an FSAL method K[-1] is the
+    derivative at the new state."""
+    ys, y, y_new, err = work[0], work[1], work[2], work[3]
+    y[0], y[1], y[2] = xi, s, tau
+    _stage_loop(method.c, method.A, method.b, method.e, K, ys, y, h, p, y_new, err)
+    return y_new[0], y_new[1], y_new[2], err[0], err[1], err[2]
 
 
 @njit(cache=True, fastmath=FAST)
@@ -133,7 +201,7 @@ def hermite_crossing(y0, y1, m0, m1, target):
 
 
 @njit(cache=True, fastmath=FAST)
-def state_where(method, K, component, target, theta, xi, s, tau, d0x, d0s, d0t, h, split, k, a, bb, s_c):
+def state_where(method, K, work, component, target, theta, xi, s, tau, d0x, d0s, d0t, h, split, p):
     """State (xi, s, tau) and slip rate dxi/dtau inside a mesh step h where ``component`` (0: xi, 2: tau) equals
     ``target``: Newton on theta in [0, 1] with exact partial steps of size theta*h from the mesh step's start (the
     method's own local order), started from the estimate ``theta``. The partial step is taken as ``split`` equal
@@ -141,14 +209,13 @@ def state_where(method, K, component, target, theta, xi, s, tau, d0x, d0s, d0t, 
     step halved, as for the values at mesh points, and the pair keeps its h^p ratio there too. (Located from the
     fine run's own last substep instead, a sample just past the middle of a coarse step came out of a partial
     step barely longer than the fine run's full one: as accurate, and estimates 0.14x the true error.)"""
-    c, A, b, e, _, _ = method
     x1, s1, t1, dx1, dt1 = xi, s, tau, d0x, d0t
     for _ in range(8):
         x1, s1, t1 = xi, s, tau
         K[0, 0], K[0, 1], K[0, 2] = d0x, d0s, d0t
         for _ in range(split):
-            x1, s1, t1, _, _, _ = erk_step(c, A, b, e, K, x1, s1, t1, theta * h / split, k, a, bb, s_c, True)
-            dx1, ds1, dt1, _ = derivatives(x1, s1, k, a, bb, s_c, True)
+            x1, s1, t1, _, _, _ = erk_step(method, K, work, x1, s1, t1, theta * h / split, p)
+            dx1, ds1, dt1, _ = derivatives(x1, s1, p)
             K[0, 0], K[0, 1], K[0, 2] = dx1, ds1, dt1
         value = x1 if component == 0 else t1
         slope = h * (dx1 if component == 0 else dt1)
@@ -186,29 +253,37 @@ def error_norm(ex, es, et, xi, xi1, s1, tau1, ctrl_tol, atol, with_tau):
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_limit, rtol, atol, ctrl_tol,
-          tau_targets, xi_at, u_at, xi_targets, tau_at, rate_at):
+def march(method, plan_mesh, p, tol, max_steps, want_limit, samples):
     """Integrate one stop point along a mesh (module docstring).
 
-    Records xi and u = ln psi where tau crosses each increasing ``tau_targets`` (into xi_at, u_at) and tau and
-    the slip rate dxi/dtau where xi crosses each increasing ``xi_targets`` (into tau_at, rate_at); tau targets
+    ``method``: :class:`Method`; ``plan_mesh``: :class:`Mesh`; ``p``: :class:`sweep.models.stop.StopParams` (its
+    with_tau is set here from the samples); ``tol``: :class:`Tolerances`. Records into ``samples``
+    (:class:`Samples`) xi and u = ln psi where tau crosses each of its increasing times and tau and the slip rate
+    dxi/dtau where xi crosses each of its increasing slips; tau targets
     beyond the transient (E < TAIL_SAFETY rtol, relaxed slip known) come from the closed form. The closed-form
     tail is taken once its error bound is below TAIL_SAFETY (atol + TAIL_RTOL |xi|); stops when the tail is taken
     (if ``want_limit``) and all targets are recorded.
 
-    Returns (status, xi_inf, steps, tail error bound, mesh, n_mesh, continuation, track, n_track, at_mesh):
+    Returns a :class:`Run` (status, xi_inf, steps, tail error bound, mesh, n_mesh, continuation, track, n_track,
+    at_mesh):
     xi_inf is NaN unless the tail was reached; in ADAPTIVE mode the returned mesh holds the n_mesh accepted steps;
     continuation = (first continued target, E, g = (mu1 + 2 m2 u)/A, u where it starts): targets from the first
     continued one on carry the closed form's own error in u = ln psi (:func:`sweep.models.stop.continuation_error`);
     track[:n_track] is (xi, s, E) at the end of each mesh step, at_mesh the mesh step in which each tau target was
     located (-1: continued).
     """
-    c, A, b, e, fsal, q = method
-    stages = b.size
-    K = np.empty((stages, 3))
+    fsal, q = method.fsal, method.q
+    mode, h0, mesh, n_mesh, split = plan_mesh
+    rtol, atol, ctrl_tol = tol
+    tau_targets, xi_at, u_at, xi_targets, tau_at, rate_at = samples
+    k, a, bb = p.k, p.a, p.b
+    stages = method.b.size
+    K, work = np.empty((stages, 3)), np.empty((4, 3))
     with_tau = tau_targets.size > 0 or xi_targets.size > 0
+    p = StopParams(p.k, p.a, p.b, p.s_c, with_tau)
+    p_tau = StopParams(p.k, p.a, p.b, p.s_c, True)  # located samples always carry tau
     xi, s, tau = 0.0, 0.0, 0.0
-    dxi, ds, dtau, E = derivatives(xi, s, k, a, bb, s_c, with_tau)
+    dxi, ds, dtau, E = derivatives(xi, s, p)
     it, ix, at_mesh = 0, 0, np.full(tau_targets.size, -1)
     while it < tau_targets.size and tau_targets[it] <= 0.0:
         xi_at[it], u_at[it], at_mesh[it] = 0.0, 0.0, 0
@@ -218,8 +293,8 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
     if mode == ADAPTIVE:
         mesh = np.empty(256)
         n_mesh = 0
-    h, sigma, err_prev, rejected_nonfinite = h0, 0.0, 1e-4, False
-    cont = (tau_targets.size, 0.0, 1.0, 0.0)
+    h, sigma, err_prev, rejected_nonfinite, rejected = h0, 0.0, 1e-4, False, False
+    cont = Continuation(tau_targets.size, 0.0, 1.0, 0.0)
     track, n_track = np.empty((256, 3)), 0
     n, sub = 0, 0
     xm, sm, tm, dxm, dsm, dtm = xi, s, tau, dxi, ds, dtau  # state at the start of the current mesh step
@@ -232,21 +307,22 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
         else:
             xm, sm, tm, dxm, dsm, dtm = xi, s, tau, dxi, ds, dtau
         K[0, 0], K[0, 1], K[0, 2] = dxi, ds, dtau
-        xi1, s1, tau1, ex, es, et = erk_step(c, A, b, e, K, xi, s, tau, h, k, a, bb, s_c, with_tau)
+        xi1, s1, tau1, ex, es, et = erk_step(method, K, work, xi, s, tau, h, p)
         if fsal:
             dxi1, ds1, dtau1 = K[stages - 1, 0], K[stages - 1, 1], K[stages - 1, 2]
             E = dxi1 / ds1
         else:
-            dxi1, ds1, dtau1, E = derivatives(xi1, s1, k, a, bb, s_c, with_tau)
+            dxi1, ds1, dtau1, E = derivatives(xi1, s1, p)
         finite = math.isfinite(xi1) and math.isfinite(dxi1) and math.isfinite(tau1) and math.isfinite(dtau1)
         if mode == ADAPTIVE:
             err = error_norm(ex, es, et, xi, xi1, s1, tau1, ctrl_tol, atol, with_tau) if finite else math.inf
             if not err <= 1.0:  # rejected (also when a stage left the finite range)
                 rejected_nonfinite = not finite
-                h *= max(0.2, 0.9 * err ** (-1.0 / (q + 1))) if finite else 0.25
+                h *= rejected_factor(PI_CONTROLLER, err, q)
+                rejected = True
                 if h < H_FLOOR * max(1.0, sigma):
-                    return (NONFINITE if rejected_nonfinite else STEP_UNDERFLOW), math.nan, n, tail_err, mesh, n_mesh, \
-                        cont, track, n_track, at_mesh
+                    return Run(NONFINITE if rejected_nonfinite else STEP_UNDERFLOW, math.nan, n, tail_err, mesh,
+                               n_mesh, cont, track, n_track, at_mesh)
                 continue
             if n_mesh == mesh.size:
                 mesh = np.concatenate((mesh, np.empty(mesh.size)))
@@ -254,7 +330,7 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
             n_mesh += 1
         n += 1
         if not finite:
-            return NONFINITE, math.nan, n, tail_err, mesh, n_mesh, cont, track, n_track, at_mesh
+            return Run(NONFINITE, math.nan, n, tail_err, mesh, n_mesh, cont, track, n_track, at_mesh)
         if (n - 1) % split == split - 1:  # the end of a mesh step
             if n_track == track.shape[0]:
                 track = np.concatenate((track, np.empty(track.shape)))
@@ -263,21 +339,21 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
         # targets crossed in this substep, located from the mesh step's start (theta relative to the mesh step)
         while it < tau_targets.size and tau_targets[it] <= tau1:
             th = (sub + hermite_crossing(tau, tau1, h * dtau, h * dtau1, tau_targets[it])) / split
-            xt, st, _, _ = state_where(method, K, 2, tau_targets[it], th, xm, sm, tm, dxm, dsm, dtm, h * split, split,
-                                       k, a, bb, s_c)
+            xt, st, _, _ = state_where(method, K, work, 2, tau_targets[it], th, xm, sm, tm, dxm, dsm, dtm, h * split,
+                                       split, p_tau)
             xi_at[it], u_at[it], at_mesh[it] = xt, st - xt, (n - 1) // split
             it += 1
         while ix < xi_targets.size and xi_targets[ix] <= xi1:
             th = (sub + hermite_crossing(xi, xi1, h * dxi, h * dxi1, xi_targets[ix])) / split
-            _, _, tau_at[ix], rate_at[ix] = state_where(method, K, 0, xi_targets[ix], th, xm, sm, tm, dxm, dsm, dtm,
-                                                        h * split, split, k, a, bb, s_c)
+            _, _, tau_at[ix], rate_at[ix] = state_where(method, K, work, 0, xi_targets[ix], th, xm, sm, tm, dxm, dsm,
+                                                        dtm, h * split, split, p_tau)
             ix += 1
         xi, s, tau, dxi, ds, dtau = xi1, s1, tau1, dxi1, ds1, dtau1
         sigma += h
-        if mode == ADAPTIVE:  # PI step-size controller
-            err = max(err, 1e-10)
-            h *= min(5.0, max(0.2, 0.9 * err ** (-0.7 / (q + 1)) * err_prev ** (0.4 / (q + 1))))
-            err_prev = err
+        if mode == ADAPTIVE:
+            factor, err_prev = accepted_factor(PI_CONTROLLER, err, err_prev, q, rejected)
+            h *= factor
+            rejected = False
         u = s - xi
         if not tail_done:
             bound = tail_error(k, a, bb, u, E)
@@ -285,44 +361,42 @@ def march(method, mode, h0, mesh, n_mesh, split, k, a, bb, s_c, max_steps, want_
                 xi_inf, tail_err, tail_done = xi + tail_slip(k, a, bb, u, E), bound, True
         if it < tau_targets.size and E < TAIL_SAFETY * rtol and math.isfinite(xi_inf):
             continue_in_closed_form(k, a, bb, xi_inf, u, tau, tau_targets[it:], xi_at[it:], u_at[it:])
-            cont = (it, E, a + 2.0 * bb * u, u)
+            cont = Continuation(it, E, a + 2.0 * bb * u, u)
             it = tau_targets.size
         if tail_done and it == tau_targets.size and ix == xi_targets.size:
-            return OK, xi_inf, n, tail_err, mesh, n_mesh, cont, track, n_track, at_mesh
-    return MAX_STEPS, xi_inf, n, tail_err, mesh, n_mesh, cont, track, n_track, at_mesh
+            return Run(OK, xi_inf, n, tail_err, mesh, n_mesh, cont, track, n_track, at_mesh)
+    return Run(MAX_STEPS, xi_inf, n, tail_err, mesh, n_mesh, cont, track, n_track, at_mesh)
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def richardson_pair(method, adaptive, h, k, a, bb, s_c, max_steps, want_limit, cont_rtol, atol, ctrl_tol, tau_targets,
-                    xc_at, uc_at, xf_at, uf_at):
-    """(coarse, fine) results of :func:`march`: the coarse run (adaptive from the first trial step h, building the
-    mesh; fixed: step 2h) and the fine run on the same mesh halved, recording the samples into (xc_at, uc_at) and
-    (xf_at, uf_at). Where the adaptive run fails on its first step there is no mesh, and the coarse result stands
+def richardson_pair(method, adaptive, h, p, tol, max_steps, want_limit, coarse_samples, fine_samples):
+    """(coarse, fine) :class:`Run` of :func:`march`: the coarse run (adaptive from the first trial step h, building
+    the mesh; fixed: step 2h) and the fine run on the same mesh halved, recording into ``coarse_samples`` and
+    ``fine_samples``. Where the adaptive run fails on its first step there is no mesh, and the coarse result stands
     for both."""
-    none = np.empty(0)
-    coarse = march(method, ADAPTIVE if adaptive else REPLAY, h, np.full(1, 2.0 * h), 1, 1, k, a, bb, s_c, max_steps,
-                   want_limit, cont_rtol, atol, ctrl_tol, tau_targets, xc_at, uc_at, none, none, none)
-    if coarse[5] == 0:
+    coarse = march(method, Mesh(ADAPTIVE if adaptive else REPLAY, h, np.full(1, 2.0 * h), 1, 1), p, tol, max_steps,
+                   want_limit, coarse_samples)
+    if coarse.n_mesh == 0:
         return coarse, coarse
-    fine = march(method, REPLAY, h, coarse[4], coarse[5], 2, k, a, bb, s_c, max_steps, want_limit, cont_rtol, atol,
-                 ctrl_tol, tau_targets, xf_at, uf_at, none, none, none)
+    fine = march(method, Mesh(REPLAY, h, coarse.mesh, coarse.n_mesh, 2), p, tol, max_steps, want_limit,
+                 fine_samples)
     return coarse, fine
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def crossings(method, h, mesh, n_mesh, split, k, a, bb, s_c, max_steps, targets, tau_at, rate_at):
+def crossings(method, h, mesh, n_mesh, split, p, max_steps, targets, tau_at, rate_at):
     """Status of a replay of ``mesh`` (``split`` substeps per step) recording tau and dxi/dtau where xi crosses the
     increasing ``targets``."""
     none = np.empty(0)
-    return march(method, REPLAY, h, mesh, n_mesh, split, k, a, bb, s_c, max_steps, False, 0.0, 0.0, 0.0, none, none,
-                 none, targets, tau_at, rate_at)[0]
+    return march(method, Mesh(REPLAY, h, mesh, n_mesh, split), p, Tolerances(0.0, 0.0, 0.0), max_steps, False,
+                 Samples(none, none, none, targets, tau_at, rate_at)).status
 
 
 @njit(cache=True, fastmath=FAST)
 def continued_error(run, j, u):
-    """Bound on the closed-form continuation's error in u at sample j of a :func:`march` result (0 before it)."""
-    first, E_e, g_e, u_e = run[6]
-    return continuation_error(E_e, g_e, u - u_e) if j >= first else 0.0
+    """Bound on the closed-form continuation's error in u at sample j of a :class:`Run` (0 before it)."""
+    cont = run.cont
+    return continuation_error(cont.E, cont.g, u - cont.u) if j >= cont.first else 0.0
 
 
 @njit(cache=True, fastmath=FAST)
@@ -344,8 +418,8 @@ def contributions(coarse, fine, k, a, bb):
     start on the stick-slip side). The runs are compared at equal contact-age time s, d = dxi - E ds at equal sigma
     (first order): at equal sigma they differ by a shift along the trajectory that is no error of the slip.
     """
-    n = min(coarse[8], fine[8])
-    tc, tf = coarse[7], fine[7]
+    n = min(coarse.n_track, fine.n_track)
+    tc, tf = coarse.track, fine.track
     d, c, log_g = np.empty(n), np.empty(n), np.empty(n)
     d_prev, s_prev = 0.0, 0.0
     for t in range(n):
@@ -396,11 +470,36 @@ def crossing_error(d_tau, d_target, order):
     return COARSE_GAIN * (abs(d_tau) + hedge)
 
 
+class TimeSamples(NamedTuple):
+    """A point's samples at the increasing reduced times ``tau``: xi and u = ln psi with their error estimates."""
+
+    tau: np.ndarray
+    xi_at: np.ndarray
+    u_at: np.ndarray
+    xi_at_err: np.ndarray
+    u_at_err: np.ndarray
+
+
+class FractionTimes(NamedTuple):
+    """A point's reduced times tau where xi = f xi_inf for each f of ``fractions`` (t50, t90), with estimates."""
+
+    fractions: np.ndarray
+    tau_at: np.ndarray
+    tau_at_err: np.ndarray
+
+
+class PointResult(NamedTuple):
+    status: int
+    xi_inf: float
+    xi_inf_err: float
+    steps: int
+    """Steps of the fine run of pass 1."""
+
+
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def solve_stop_point(method, order, adaptive, h, k, a, bb, s_c, max_steps, finite, rtol, atol, ctrl_tol, tau_targets,
-                     xi_at, u_at, xi_at_err, u_at_err, fractions, tau_at_fraction, tau_at_fraction_err):
+def solve_stop_point(method, h, p, tol, max_steps, finite, samples, times):
     """One stop point as a Richardson pair (module docstring): pass 1 gives xi_inf and the time-resolved
-    samples with their error estimates; if ``fractions`` is not empty a second pass (same meshes) finds tau
+    samples with their error estimates; if ``times.fractions`` is not empty a second pass (same meshes) finds tau
     where xi = fraction * xi_inf (t50, t90).
 
     t_f is ill-conditioned where the slip creeps: an error d in xi_inf, or in xi near t_f, moves it by
@@ -408,52 +507,105 @@ def solve_stop_point(method, order, adaptive, h, k, a, bb, s_c, max_steps, finit
     m1/A = 0.3). Where G > 1 the pair is run again with tolerances / G (fixed steps: h G^(-1/p)) and the crossings
     are located on its meshes. Each run crosses the fraction of its own xi_inf (:func:`crossing_error`).
 
-    ``method`` = (c, a, b, e, fsal, error order q) of the tableau, ``order`` its order p; ``h``: the fine step
-    (fixed-step methods) or the first trial step of the coarse run (adaptive).
-    Returns (status, xi_inf, xi_inf error estimate, steps of the fine run of pass 1).
+    ``method``: :class:`Method` (adaptive where it has an error estimate); ``h``: the fine step (fixed-step methods)
+    or the first trial step of the coarse run (adaptive); ``p``: :class:`sweep.models.stop.StopParams`; ``tol``:
+    :class:`Tolerances` (rtol of the scene, atol, the controller's local tolerance); ``samples``:
+    :class:`TimeSamples`, ``times``: :class:`FractionTimes` (filled here). Returns a :class:`PointResult`.
     """
     none = np.empty(0)
-    cont_rtol = TAIL_TIGHTENING * rtol
+    order, adaptive = method.order, method.q > 0
+    k, a, bb = p.k, p.a, p.b
+    fractions, tau_at_fraction, tau_at_fraction_err = times
+    tau_targets, xi_at, u_at, xi_at_err, u_at_err = samples
+    run_tol = Tolerances(TAIL_TIGHTENING * tol.rtol, tol.atol, tol.ctrl)
     tau_at_fraction[:] = math.nan
     tau_at_fraction_err[:] = math.nan
     # pass 1: the coarse run is returned, the fine one's samples go to (xf_at, uf_at)
     xf_at, uf_at = np.full(tau_targets.size, math.nan), np.full(tau_targets.size, math.nan)
-    ret, partner = richardson_pair(method, adaptive, h, k, a, bb, s_c, max_steps, finite, cont_rtol, atol, ctrl_tol,
-                                   tau_targets, xi_at, u_at, xf_at, uf_at)
-    mesh, n_mesh = ret[4], ret[5]
+    ret, partner = richardson_pair(method, adaptive, h, p, run_tol, max_steps, finite,
+                                   Samples(tau_targets, xi_at, u_at, none, none, none),
+                                   Samples(tau_targets, xf_at, uf_at, none, none, none))
+    mesh, n_mesh = ret.mesh, ret.n_mesh
     if n_mesh == 0:
-        return ret[0], math.nan, math.nan, 0
-    x_r, x_p = ret[1], partner[1]
+        return PointResult(ret.status, math.nan, math.nan, 0)
+    x_r, x_p = ret.xi_inf, partner.xi_inf
     pair_slip = contributions(ret, partner, k, a, bb)
     share = fine_share(order)
     for j in range(tau_targets.size):
         d = xi_at[j] - xf_at[j]
-        xi_at_err[j] = COARSE_GAIN * (abs(d) + share * cancelled(pair_slip, ret[9][j], d))
+        xi_at_err[j] = COARSE_GAIN * (abs(d) + share * cancelled(pair_slip, ret.at_mesh[j], d))
         u_at_err[j] = COARSE_GAIN * abs(u_at[j] - uf_at[j]) + continued_error(ret, j, u_at[j]) + continued_error(
             partner, j, uf_at[j])
-    st, n = (ret[0] if ret[0] != OK else partner[0]), partner[2]
+    st, n = (ret.status if ret.status != OK else partner.status), partner.steps
     if not finite:
-        return (NO_FINITE_LIMIT if st == OK else st), math.nan, math.nan, n
-    xi_err = COARSE_GAIN * (abs(x_r - x_p) + share * cancelled(pair_slip, -1, x_r - x_p)) + ret[3] + partner[3]
+        return PointResult(NO_FINITE_LIMIT if st == OK else st, math.nan, math.nan, n)
+    xi_err = (COARSE_GAIN * (abs(x_r - x_p) + share * cancelled(pair_slip, -1, x_r - x_p)) + ret.tail_err
+              + partner.tail_err)
     if fractions.size == 0 or st != OK:
-        return st, ret[1], xi_err, n
+        return PointResult(st, ret.xi_inf, xi_err, n)
     # pass 2: the crossings, on the same meshes, each run of the fractions of its own xi_inf
     rate_r, rate_p, tau_p = np.empty(fractions.size), np.empty(fractions.size), np.empty(fractions.size)
-    st2 = crossings(method, h, mesh, n_mesh, 1, k, a, bb, s_c, max_steps, fractions * x_r, tau_at_fraction, rate_r)
+    st2 = crossings(method, h, mesh, n_mesh, 1, p, max_steps, fractions * x_r, tau_at_fraction, rate_r)
     cond = np.max(fractions * x_r / (tau_at_fraction * rate_r)) if st2 == OK else 0.0
     if cond > 1.0:  # ill-conditioned crossings: the whole pair again with tolerances / cond
         h = h * cond ** (-1.0 / order)
-        c3, f3 = richardson_pair(method, adaptive, h, k, a, bb, s_c, max_steps, True, cont_rtol, atol / cond,
-                                 ctrl_tol / cond, none, none, none, none, none)
-        if c3[0] != OK or f3[0] != OK:
-            return (c3[0] if c3[0] != OK else f3[0]), x_r, xi_err, n
-        mesh, n_mesh, x_r, x_p = c3[4], c3[5], c3[1], f3[1]
-        st2 = crossings(method, h, mesh, n_mesh, 1, k, a, bb, s_c, max_steps, fractions * x_r, tau_at_fraction,
-                        rate_r)
-    st2p = crossings(method, h, mesh, n_mesh, 2, k, a, bb, s_c, max_steps, fractions * x_p, tau_p, rate_p)
+        nothing = Samples(none, none, none, none, none, none)
+        c3, f3 = richardson_pair(method, adaptive, h, p, Tolerances(run_tol.rtol, tol.atol / cond, tol.ctrl / cond),
+                                 max_steps, True, nothing, nothing)
+        if c3.status != OK or f3.status != OK:
+            return PointResult(c3.status if c3.status != OK else f3.status, x_r, xi_err, n)
+        mesh, n_mesh, x_r, x_p = c3.mesh, c3.n_mesh, c3.xi_inf, f3.xi_inf
+        st2 = crossings(method, h, mesh, n_mesh, 1, p, max_steps, fractions * x_r, tau_at_fraction, rate_r)
+    st2p = crossings(method, h, mesh, n_mesh, 2, p, max_steps, fractions * x_p, tau_p, rate_p)
     if st2 != OK or st2p != OK:
-        return (st2 if st2 != OK else st2p), ret[1], xi_err, n
+        return PointResult(st2 if st2 != OK else st2p, ret.xi_inf, xi_err, n)
     for j in range(fractions.size):
         tau_at_fraction_err[j] = crossing_error(tau_at_fraction[j] - tau_p[j], fractions[j] * (x_r - x_p) / rate_r[j],
                                                 order)
-    return st, ret[1], xi_err, n
+    return PointResult(st, ret.xi_inf, xi_err, n)
+
+
+class StopPoints(NamedTuple):
+    """Per-point arrays of a batch of stop points (reduced k = chi/A, a = mu1/A, b = m2/A, s_c, step h)."""
+
+    k: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    s_c: np.ndarray
+    h: np.ndarray
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def _solve_into(i, method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, xi_inf, xi_inf_err, status,
+                steps, xi_at, u_at, xi_at_err, u_at_err, tau_at_fraction, tau_at_fraction_err):
+    """Point i of :func:`stop_batch` (a function of its own: numba's parfor lowering cannot build named tuples inside
+    a parallel loop)."""
+    if not finite[i] and xi_at.shape[1] == 0:
+        xi_inf[i], xi_inf_err[i], status[i], steps[i] = math.nan, math.nan, NO_FINITE_LIMIT, 0
+        tau_at_fraction[i, :] = math.nan
+        tau_at_fraction_err[i, :] = math.nan
+        return
+    targets = np.concatenate((tau_samples, obs_tau[i]))
+    order_t = np.argsort(targets, kind="mergesort")
+    n_t = targets.size
+    xs, us, xe, ue = np.full(n_t, math.nan), np.full(n_t, math.nan), np.full(n_t, math.nan), np.full(n_t, math.nan)
+    r = solve_stop_point(method, points.h[i], StopParams(points.k[i], points.a[i], points.b[i], points.s_c[i], False),
+                         tol, max_steps, finite[i], TimeSamples(targets[order_t], xs, us, xe, ue),
+                         FractionTimes(fractions, tau_at_fraction[i], tau_at_fraction_err[i]))
+    xi_inf[i], xi_inf_err[i], status[i], steps[i] = r.xi_inf, r.xi_inf_err, r.status, r.steps
+    for j in range(n_t):
+        xi_at[i, order_t[j]], u_at[i, order_t[j]] = xs[j], us[j]
+        xi_at_err[i, order_t[j]], u_at_err[i, order_t[j]] = xe[j], ue[j]
+
+
+@njit(parallel=True, cache=True)
+def stop_batch(method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, xi_inf, xi_inf_err, status,
+               steps, xi_at, u_at, xi_at_err, u_at_err, tau_at_fraction, tau_at_fraction_err):
+    """Solve a flat batch of stop points one by one (:func:`solve_stop_point`): ``method`` a :class:`Method`,
+    ``points`` a :class:`StopPoints` record of per-point arrays, ``finite`` whether each has a finite relaxed slip,
+    ``tol`` the scene's :class:`Tolerances`, ``tau_samples`` the trajectory's reduced times, obs_tau[i, :] point
+    i's extra reduced times (slip_at), ``fractions`` those of t50/t90 (empty: not asked for). The outputs come one
+    by one (explicit out; numba's parfors lose writes into the arrays of a heterogeneous record)."""
+    for i in prange(finite.size):
+        _solve_into(i, method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, xi_inf, xi_inf_err,
+                    status, steps, xi_at, u_at, xi_at_err, u_at_err, tau_at_fraction, tau_at_fraction_err)
