@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sweep.models.stop_lanes import lane_kernels
+from sweep.integrate.lanes import lane_kernels
 from sweep.plan import time_scale
 
 HERE = Path(__file__).resolve().parent

@@ -5,7 +5,7 @@
 
 Every engine number goes through the public path (sweep.make_plan + sweep.engine.execute, what run_sweep runs,
 or run_sweep itself), so the script does not depend on the kernels' internals. Every point is solved as the
-engine always solves it: down its step ladder (sweep/ladder.py: a pilot pair at 2 h0, h0, then up to three
+engine always solves it: down its step ladder (sweep/integrate/ladder.py: a pilot pair at 2 h0, h0, then up to three
 finer runs at steps chosen from the point's own error; with a step given by the user, Scene(step=h), the fixed
 runs 4h, 2h, h), the finest run's result returned with its error estimate, and the timings include every run.
 execute's RawResult.steps are the returned run's steps (the per-point distribution below), RawResult.work the
@@ -426,7 +426,7 @@ def numpy_lockstep(plan, method, run_point, run_h, rtol, atol):
 
 
 LADDER_FIXED = np.array([4.0, 2.0, 1.0])
-"""The runs of a fixed ladder (Scene(step=h), sweep/ladder.py) in units of h; the last one is returned."""
+"""The runs of a fixed ladder (Scene(step=h), sweep/integrate/ladder.py) in units of h; the last one is returned."""
 
 
 def bench_numpy(scene, plan, repeats, method="rk4"):
@@ -450,8 +450,8 @@ def bench_numpy(scene, plan, repeats, method="rk4"):
     best, times, (xi, status, steps, _, n_lock, phases) = best_of(
         lambda: numpy_lockstep(fplan, method, run_point, run_h, fixed.rtol, fixed.atol["xi_inf"]), repeats)
     xi, status, steps = (x.reshape(idx.size, n_runs) for x in (xi, status, steps))
-    # the engine's rule (sweep/ladder.py): the returned run's status, else nonfinite where a coarser run left no
-    # value to estimate the error from
+    # the engine's rule (sweep/integrate/ladder.py): the returned run's status, else nonfinite where a coarser run left
+    # no value to estimate the error from
     ladder_status = np.where(status[:, -1] != OK, status[:, -1],
                              np.where(np.all(status == OK, axis=1), OK, int(sweep.Status.NONFINITE)))
     e_status = np.where(np.isin(eng.status, OK_LIKE), OK, eng.status)  # numpy makes no error estimate

@@ -191,7 +191,7 @@ def run_engine_config(pbs, refs, label, family, kw_for, threads2, target_s, repe
         est = float(ds["xi_inf_error"].values.item())
         status = int(ds["status"].values.item())
         steps = int(ds["steps"].values.item())
-        # "step": the plan's step (lanes on auto: the pilot step h0 of the ladder, sweep/ladder.py)
+        # "step": the plan's step (lanes on auto: the pilot step h0 of the ladder, sweep/integrate/ladder.py)
         row = {"problem": pb["name"], "scene_rtol": scene.rtol, "method": plan.method,
                "step": float(plan.step[0]) if not plan.adaptive else None, "xi_inf": x,
                "rel_err": abs(x / ref["xi_inf"] - 1), "rel_err_estimate": est / abs(x) if x else math.nan,

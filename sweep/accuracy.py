@@ -44,6 +44,16 @@ def driven_stepper_rtol(rtol: float) -> float:
     return min(1e-2 * rtol, 1e-9)
 
 # ---------------------------------------------------------------------------------------------------------------
+# Inertial stop (sweep/integrate/stop_inertial.py)
+# ---------------------------------------------------------------------------------------------------------------
+
+HANDOVER_FRACTION = 0.1
+"""The inertial term is handed over to the quasi-static form once below this fraction of rtol, now and (by the
+slaved bound) later (docs/physics.md 3a): the neglected term then shifts xi_inf by <= HANDOVER_FRACTION rtol times
+the slip still to come. Moving the threshold x100 either way moves xi_inf by < 6e-15 on the reference's cases
+(tests/test_reference_inertial.py)."""
+
+# ---------------------------------------------------------------------------------------------------------------
 # Adaptive per-point solutions whose error is estimated from a pair of tolerances (inertial stop, slip-law stop)
 # ---------------------------------------------------------------------------------------------------------------
 
@@ -55,5 +65,150 @@ tolerance.)"""
 GENERAL_ESTIMATE_GAIN = 2.0
 """Estimate of the general (slip-law) stop path = GENERAL_ESTIMATE_GAIN x max(|x1 - x2|, |x2 - x3|) of its runs at
 rtol/TIGHTER^(1, 2, 3), x2 returned (sweep/integrate/stop_slip.py): as the step ladder's non-asymptotic estimate
-(sweep/ladder.py CONSERVATIVE_GAIN). On tests/test_slip_law.py's cases at rtol 1e-6 and 1e-9 it bounds the true
-error and stays within 100x of it."""
+(CONSERVATIVE_GAIN below). On tests/test_slip_law.py's cases at rtol 1e-6 and 1e-9 it bounds the true error and
+stays within 100x of it."""
+
+# ---------------------------------------------------------------------------------------------------------------
+# Quasi-static stop: the closed-form tail and the time map (sweep/models/stop.py)
+# ---------------------------------------------------------------------------------------------------------------
+
+E_TAIL_MAX = 0.05
+"""The closed-form tail is used only once E = xi' psi has fallen below this."""
+TAIL_SAFETY = 1e-3
+"""Fraction of the tolerance allowed for the truncation of the tail series."""
+RATE_FLOOR = 0.1
+"""Floor of the late rate r(u) of the time map (bounds the step in s by h/RATE_FLOOR)."""
+
+# ---------------------------------------------------------------------------------------------------------------
+# Stiff points: the Rosenbrock step rule (sweep/models/stop_stiff.py)
+# ---------------------------------------------------------------------------------------------------------------
+
+STIFF_RATE_FLOOR = 0.03
+"""Floor of the late rate r of the Rosenbrock step rule (bounds the step in s by h/STIFF_RATE_FLOOR; 0.03 costs
+a third fewer steps than 0.1 in the costly corner at equal error: benchmarks/work_precision.py)."""
+
+# ---------------------------------------------------------------------------------------------------------------
+# Step rules of the stop scene (sweep/plan.py)
+# ---------------------------------------------------------------------------------------------------------------
+
+C_STABLE = 6.0e-4
+"""Bound on the RK4 error constant |err/xi_inf| / h^4 where steady sliding is stable (chi > mu1)."""
+C_UNSTABLE = 2.0e-3
+"""Bound on the RK4 error constant where steady sliding is unstable (chi <= mu1)."""
+TIME_RESOLVED_FACTOR = 30.0
+"""Time-resolved observables (values inside the transient, not only its limit) have error constants up to
+~6x those of xi_inf (tests/test_accuracy.py); when they are asked for, C is multiplied by this factor."""
+H_MAX = 0.7
+"""Upper bound on the (coarse) step in sigma (keeps RK4 stable along the slow creep manifold)."""
+CTRL_TOL_FACTOR = {"dp5": 0.05, "dop853": 0.5}
+"""Local tolerance of the adaptive controller per unit rtol, such that the error estimate of the returned (coarse)
+solution stays below rtol: at most 0.4 rtol on tests/test_error_estimates.py's table at rtol 1e-3..1e-9, relaxed slip
+and time-resolved observables (dp5 was 0.2 while the fine solution was returned; dop853's embedded fifth-order
+estimate overstates its eighth-order error increasingly as rtol falls: 0.4 rtol at 1e-3, 0.003 rtol at 1e-9)."""
+AUTO_METHOD = (("rk4", 0.0),)
+"""(method, smallest rtol it is chosen for), by decreasing rtol: the cheapest method measured by
+benchmarks/work_precision.py that meets each rtol."""
+STEP_SAFETY = 2.0
+"""Margin of the fixed-step rule: the error estimate (~ERROR_GAIN times the error) stays below rtol / STEP_SAFETY on
+the calibration set."""
+PILOT_FACTOR = 2.5
+"""Pilot step of the lanes / the step meeting rtol at the largest error constant (see :func:`pilot_step_for`)."""
+H_PILOT = 1.0
+"""Largest pilot step h0 (its coarse run has 2 h0, inside RK4's stability interval along the decay; a coarser
+pilot that goes non-finite only sends the point down the ladder)."""
+STIFF_K_MAX = 0.03
+"""Stiff points (Rosenbrock ros4 in the lanes, models/stop_stiff.py): chi/A <= STIFF_K_MAX, mu1 < 0, m2 > 0 and a
+slow creep manifold of length x attraction rate |mu1/A|^3 / (4 (m2/A)(chi/A)) >= STIFF_WORK_MIN. There, on the
+calibration set of benchmarks/calibrate_stiff.py, ros4 needs ~40x fewer steps than RK4 (which is
+stability-limited along the manifold) at equal error; elsewhere RK4 is cheaper (up to 2x)."""
+STIFF_WORK_MIN = 300.0
+"""See STIFF_K_MAX: the least length x attraction rate of the creep manifold for a point to count as stiff."""
+C_STIFF = 0.01
+"""Bound on the ros4 error constant |err/xi_inf| / h^4 over the stiff region (measured max 6.0e-3)."""
+STIFF_PILOT_FACTOR = 6.0
+"""PILOT_FACTOR of the ros4 lanes: larger than RK4's because C_STIFF bounds constants spread over ~60x (median
+1.1e-4, benchmarks/results/calibrate_stiff.json), so the rule's step is ~2.8x finer than a typical stiff point
+needs (measured on the costly corner of benchmarks/work_precision.py: 2.5 -> 6 takes 25-30 % off its ladder at
+rtol 1e-7..1e-10, next rung 1.5x -> 2.5x below the pilot)."""
+STIFF_H_PILOT = 0.6
+"""Cap of the ros4 lanes' STIFF_PILOT_FACTOR rule (:func:`stiff_pilot_step_for`): coarser pilot pairs are not yet
+asymptotic there (on the corner at rtol 1e-4, h0 = 0.97 takes 396 steps in all against 168 from h0 = 0.6)."""
+
+# ---------------------------------------------------------------------------------------------------------------
+# The step ladder of the lanes (sweep/integrate/ladder.py)
+# ---------------------------------------------------------------------------------------------------------------
+
+ORDER_WINDOW = 1.0
+"""Largest distance of the observed order from the method's order for the ladder to count as asymptotic."""
+SHARP_GAIN = 2.0
+"""Estimate / Richardson error of an asymptotic ladder (covers the o(h^q) terms)."""
+CONSERVATIVE_GAIN = 2.0
+"""Estimate / max(|x_b - x_a|, |x_c - x_b|) where the ladder is not asymptotic. Not |x_c - x_b| alone: errors
+that stagnate over two rungs before falling (measured: -2.2e-9, -2.6e-9 after 3.1e-7 at chi/A = 10, mu1/A = -3,
+m2/A = 0.05) make it 0.3x the error."""
+TARGET = 0.7
+"""The next rung aims at an estimate of TARGET x tolerance."""
+MIN_RATIO, MAX_RATIO = 1.5, 8.0
+"""Bounds on the ratio of successive steps below the pilot pair."""
+MAX_RUNS = 5
+"""Runs per point at most (pilot pair + three rungs); then the point keeps its estimate (error_above_tol if over)."""
+
+# ---------------------------------------------------------------------------------------------------------------
+# The per-point stop path: Richardson pairs (sweep/integrate/stop_point.py)
+# ---------------------------------------------------------------------------------------------------------------
+
+ERROR_GAIN = 15.0
+"""Nominal ratio of the Richardson estimate of a fine solution, ERROR_GAIN/(2^p - 1) |fine - coarse|, to its true
+error: the estimate of the relaxed-slip lanes (sweep.engine), whose step rules (sweep.plan) are calibrated on it."""
+COARSE_GAIN = 2.0
+"""Estimate of the returned coarse solution = COARSE_GAIN |coarse - fine| (+ the hedges): it bounds the coarse error
+whenever the fine one is at most half of it (or of the other sign), and exceeds it by at most 3x then
+(asymptotically the fine error is 2^-p of the coarse one: 1/16 for rk4, 1/32 for dp5, 1/256 for dop853)."""
+TAIL_RTOL = 2.0**-52
+"""The per-point path integrates until the closed-form tail's error bound is below TAIL_SAFETY (atol + TAIL_RTOL
+|xi|): a few steps more (E decays exponentially there), and the bound, not sharp where the two neglected terms of
+the tail series cancel (up to 1e3x the true tail error), stays negligible next to any integration error."""
+TAIL_TIGHTENING = 0.01
+"""Samples beyond the transient come from the closed-form continuation once E < TAIL_SAFETY TAIL_TIGHTENING rtol."""
+
+# ---------------------------------------------------------------------------------------------------------------
+# The choice of model per point (sweep/model_choice.py)
+# ---------------------------------------------------------------------------------------------------------------
+
+ESTIMATE_RTOL = 1e-3
+"""Tolerance of the first-order correction's integration (the estimate is needed to a few %, not to rtol): over
+117 points where it is trusted, estimate/true gap spans the same 0.946..1.106 at 1e-3 as at 1e-4, in half the steps
+(37 vs 74)."""
+ESTIMATE_MARGIN = 1.5
+"""A point keeps the quasi-static model only where ESTIMATE_MARGIN x its estimate is within model_tol: where the
+estimate is trusted the true gap is at most 1.33x it (below)."""
+FIRST_ORDER_TRUST = 2.0
+"""The first-order estimate is trusted where gamma/A (1 + (chi + |mu1|)/A) <= FIRST_ORDER_TRUST: the inertial time
+gamma/A short against the fastest time of the quasi-static stop, its stiff start A/(chi + |mu1|). Measured against
+the inertial model over chi/A 0.1..1e3, mu1/A -4..10, m2/A 0..2 (230 points per value): true gap / estimate spans
+0.80..1.17 at 1, 0.70..1.33 at 2, 0.63..1.49 at 3, 0.58..1.66 at 4, and the expansion fails outright beyond (down
+to 1e-6 at chi/A = 1e3, gamma/A = 1, where the slider rebounds inertially); there the gap is measured by solving
+the point with inertia."""
+
+# ---------------------------------------------------------------------------------------------------------------
+# The Hopf line located by simulation (sweep/hopf.py)
+# ---------------------------------------------------------------------------------------------------------------
+
+SIGN_PERTURBATION = 1e-5
+"""Initial stretch of the runs whose growth rate decides the side of the line: small enough to stay linear."""
+SIGN_CYCLES = 4
+"""Cycles over which that growth rate is measured."""
+STEPPER_RTOL = 1e-10
+"""Local tolerance of the driven stepper while locating the line (the growth rate vanishes there)."""
+BRACKET = 0.1
+"""Initial bracket chi_c_linear x (1 -+ BRACKET), widened by the same factors until the measured signs differ."""
+INERTIA_NEGLIGIBLE = 1e-2
+"""Inertia is left out of the line's location where gamma/A < INERTIA_NEGLIGIBLE x rtol (:func:`_locate`)."""
+TYPE_DISTANCE = 0.004
+"""Relative distance d from the line of the runs that decide the bifurcation type (d, 2d, 4d below; d, d/4 above)."""
+SQRT_LAW_SPREAD = 0.15
+"""Tolerance of the square-root law of the limit-cycle amplitudes below a supercritical line."""
+LARGE_PERTURBATION = 0.5
+"""Large start above the line that finds a stick-slip attractor of a subcritical line."""
+TYPE_CYCLES = 10_000
+"""Cycle budget of the runs that decide the type."""

@@ -5,8 +5,8 @@ preallocated flat arrays, one point written once by one thread. The costly point
 (small K/M with mu1 < 0) and numba's prange splits a batch into equal contiguous shares, so the points of a chunk
 are visited in a fixed pseudo-random order: every thread's share of it then mixes cheap and costly points
 (2 threads: 1.2x -> 1.96x speed-up on the default scene). Results do not depend on the order. Sweeps of the
-relaxed slip alone go through the lane kernels instead (16 runs in flight per thread, models/stop_lanes.py), each
-point down its own step ladder (ladder.py).
+relaxed slip alone go through the lane kernels instead (16 runs in flight per thread, integrate/lanes.py), each
+point down its own step ladder (integrate/ladder.py).
 """
 
 from __future__ import annotations
@@ -18,11 +18,11 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from .integrate.ladder import climb
+from .integrate.lanes import lane_kernels
 from .integrate.stop_point import Method, StopPoints, Tolerances, stop_batch
 from .integrate.stop_slip import slip_batch
-from .ladder import climb
 from .models.stop import NO_FINITE_LIMIT, OK
-from .models.stop_lanes import lane_kernels
 from .physics import perturbation_growth
 from .plan import Plan, make_plan
 from .progress import Progress
@@ -106,7 +106,7 @@ def _lane_runner(scene: Scene, plan: Plan, method: str):
 
 def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
     """Relaxed slip of the points g through the lane kernels (one per method of the plan), each point down its own
-    step ladder (sweep/ladder.py: a pilot pair, then rungs until a checked estimate meets the tolerance)."""
+    step ladder (sweep/integrate/ladder.py: a pilot pair, then rungs until a checked estimate meets the tolerance)."""
     out = RawResult.empty(g.size, 0, 0)
     out.status[~plan.finite[g]] = NO_FINITE_LIMIT
     out.steps[~plan.finite[g]] = 0

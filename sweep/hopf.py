@@ -32,6 +32,17 @@ import numpy as np
 import xarray as xr
 
 from . import physics
+from .accuracy import (
+    BRACKET,
+    INERTIA_NEGLIGIBLE,
+    LARGE_PERTURBATION,
+    SIGN_CYCLES,
+    SIGN_PERTURBATION,
+    SQRT_LAW_SPREAD,
+    STEPPER_RTOL,
+    TYPE_CYCLES,
+    TYPE_DISTANCE,
+)
 from .dataset import REFERENCES, versions
 from .errors import InputError
 from .integrate.driven import DrivenParams, DrivenSettings, Regime, simulate_point
@@ -41,17 +52,6 @@ from .scene import MODEL_TOL_RANGE, MODELS, STATE_LAWS
 
 __all__ = ["locate_hopf", "with_simulated_line"]
 
-SIGN_PERTURBATION = 1e-5
-SIGN_CYCLES = 4
-STEPPER_RTOL = 1e-10
-BRACKET = 0.1
-"""Initial bracket chi_c_linear x (1 -+ BRACKET), widened by the same factors until the measured signs differ."""
-INERTIA_NEGLIGIBLE = 1e-2
-"""Inertia is left out of the line's location where gamma/A < INERTIA_NEGLIGIBLE x rtol (:func:`_locate`)."""
-TYPE_DISTANCE = 0.004
-SQRT_LAW_SPREAD = 0.15
-LARGE_PERTURBATION = 0.5
-TYPE_CYCLES = 10_000
 MAX_STEPS = 20_000_000
 BIFURCATIONS = ("none", "supercritical", "subcritical", "degenerate", "undetermined")
 

@@ -2,7 +2,7 @@
 
 numba keys a cached closure by a pickle of its closure cells; a cell holding another dispatcher pickles that
 dispatcher's instance UUID, a fresh random one in every process. Kernels built by factories (one per float type
-and tableau: models/stop_lanes.py, models/stop.py, models/stop_stiff.py) therefore missed the cache in every new
+and tableau: integrate/lanes.py, models/stop.py, models/stop_stiff.py) therefore missed the cache in every new
 process and recompiled (~8 s per process, and the cache index grew by one entry each time). :func:`pin` gives a
 dispatcher (or intrinsic) a UUID derived from its module, qualified name and variant instead, so the pickle, and
 the cache key, are the same in every process (the fastmath options are dicts, not sets, for the same reason:

@@ -23,8 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import physics
+from .accuracy import ESTIMATE_MARGIN, ESTIMATE_RTOL, FIRST_ORDER_TRUST, TIGHTER
 from .engine import ORDER_SEED, RawResult
-from .models.stop_inertial import RELAX_KEYS, relax_points
+from .integrate.stop_inertial import RELAX_KEYS, relax_points
 from .plan import Plan
 from .progress import Progress
 from .scene import Scene
@@ -33,24 +34,6 @@ from .status import Status
 __all__ = ["ModelChoice", "MODEL_FLAG", "choose_stop_models", "line_uses_inertia", "solve_inertial",
            "warm_up_models"]
 
-ESTIMATE_RTOL = 1e-3
-"""Tolerance of the first-order correction's integration (the estimate is needed to a few %, not to rtol): over
-117 points where it is trusted, estimate/true gap spans the same 0.946..1.106 at 1e-3 as at 1e-4, in half the steps
-(37 vs 74)."""
-ESTIMATE_MARGIN = 1.5
-"""A point keeps the quasi-static model only where ESTIMATE_MARGIN x its estimate is within model_tol: where the
-estimate is trusted the true gap is at most 1.33x it (below)."""
-FIRST_ORDER_TRUST = 2.0
-"""The first-order estimate is trusted where gamma/A (1 + (chi + |mu1|)/A) <= FIRST_ORDER_TRUST: the inertial time
-gamma/A short against the fastest time of the quasi-static stop, its stiff start A/(chi + |mu1|). Measured against
-the inertial model over chi/A 0.1..1e3, mu1/A -4..10, m2/A 0..2 (230 points per value): true gap / estimate spans
-0.80..1.17 at 1, 0.70..1.33 at 2, 0.63..1.49 at 3, 0.58..1.66 at 4, and the expansion fails outright beyond (down
-to 1e-6 at chi/A = 1e3, gamma/A = 1, where the slider rebounds inertially); there the gap is measured by solving
-the point with inertia."""
-TIGHTER = 10.0
-"""The inertial solution is run at local tolerances rtol/TIGHTER and rtol/TIGHTER^2; the tighter value is kept and
-the difference, ~the error of the looser run, is its error estimate. (The looser pair rtol, rtol/10 flagged 20 %
-of the default scene error_above_tol: the adaptive steps' global error reaches ~5x their local tolerance.)"""
 CHUNK = 4096
 """Points per call of the compiled batch (one progress update each)."""
 MODEL_FLAG = {"flag_values": np.array([0, 1], np.int8), "flag_meanings": "quasistatic inertial"}

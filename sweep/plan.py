@@ -7,8 +7,8 @@ scaled log time sigma of :mod:`sweep.models.stop`, and the step count is chosen 
 * the time map is scaled to the point: s_c = 1/(1 + (chi + |mu1|)/A) (stiff start) and the late step follows
   the local rate (mu1 + 2 m2 u)/A (:mod:`sweep.models.stop`), so that the RK4 error constant is nearly the
   same at every point;
-* relaxed-slip sweeps (lanes) choose each point's step at run time, down a step ladder (sweep/ladder.py) from the
-  pilot step h0 = min(H_PILOT, PILOT_FACTOR (TARGET rtol / (SHARP_GAIN C))^(1/4)) given here;
+* relaxed-slip sweeps (lanes) choose each point's step at run time, down a step ladder (sweep/integrate/ladder.py)
+  from the pilot step h0 = min(H_PILOT, PILOT_FACTOR (TARGET rtol / (SHARP_GAIN C))^(1/4)) given here;
 * otherwise (per-point path) the step h in sigma meets ``rtol`` at each point:
   h = min(H_MAX, (rtol / (SAFETY * C))^(1/4)); in both rules C is the largest error constant err/h^4 measured
   on a calibration set spanning chi/A 1e-2..1e3, mu1/A -3..3,
@@ -29,8 +29,31 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import ladder, physics
-from .integrate.stop_point import ERROR_GAIN
+from . import physics
+from .accuracy import (
+    AUTO_METHOD,
+    C_STABLE,
+    C_STIFF,
+    C_UNSTABLE,
+    CONSERVATIVE_GAIN,
+    CTRL_TOL_FACTOR,
+    ERROR_GAIN,
+    H_MAX,
+    H_PILOT,
+    MAX_RATIO,
+    MAX_RUNS,
+    MIN_RATIO,
+    ORDER_WINDOW,
+    PILOT_FACTOR,
+    SHARP_GAIN,
+    STEP_SAFETY,
+    STIFF_H_PILOT,
+    STIFF_K_MAX,
+    STIFF_PILOT_FACTOR,
+    STIFF_WORK_MIN,
+    TARGET,
+    TIME_RESOLVED_FACTOR,
+)
 from .models.stop import RATE_FLOOR, TAIL_SAFETY
 from .models.stop_stiff import STIFF_RATE_FLOOR
 from .scene import Scene
@@ -38,47 +61,6 @@ from .solvers import METHODS
 
 __all__ = ["Plan", "make_plan", "choose_method"]
 
-C_STABLE = 6.0e-4
-"""Bound on the RK4 error constant |err/xi_inf| / h^4 where steady sliding is stable (chi > mu1)."""
-C_UNSTABLE = 2.0e-3
-"""Bound on the RK4 error constant where steady sliding is unstable (chi <= mu1)."""
-TIME_RESOLVED_FACTOR = 30.0
-"""Time-resolved observables (values inside the transient, not only its limit) have error constants up to
-~6x those of xi_inf (tests/test_accuracy.py); when they are asked for, C is multiplied by this factor."""
-H_MAX = 0.7
-"""Upper bound on the (coarse) step in sigma (keeps RK4 stable along the slow creep manifold)."""
-CTRL_TOL_FACTOR = {"dp5": 0.05, "dop853": 0.5}
-"""Local tolerance of the adaptive controller per unit rtol, such that the error estimate of the returned (coarse)
-solution stays below rtol: at most 0.4 rtol on tests/test_error_estimates.py's table at rtol 1e-3..1e-9, relaxed slip
-and time-resolved observables (dp5 was 0.2 while the fine solution was returned; dop853's embedded fifth-order
-estimate overstates its eighth-order error increasingly as rtol falls: 0.4 rtol at 1e-3, 0.003 rtol at 1e-9)."""
-AUTO_METHOD = (("rk4", 0.0),)
-"""(method, smallest rtol it is chosen for), by decreasing rtol: the cheapest method measured by
-benchmarks/work_precision.py that meets each rtol."""
-STEP_SAFETY = 2.0
-"""Margin of the fixed-step rule: the error estimate (~ERROR_GAIN times the error) stays below rtol / STEP_SAFETY on
-the calibration set."""
-PILOT_FACTOR = 2.5
-"""Pilot step of the lanes / the step meeting rtol at the largest error constant (see :func:`pilot_step_for`)."""
-H_PILOT = 1.0
-"""Largest pilot step h0 (its coarse run has 2 h0, inside RK4's stability interval along the decay; a coarser
-pilot that goes non-finite only sends the point down the ladder)."""
-STIFF_K_MAX = 0.03
-"""Stiff points (Rosenbrock ros4 in the lanes, models/stop_stiff.py): chi/A <= STIFF_K_MAX, mu1 < 0, m2 > 0 and a
-slow creep manifold of length x attraction rate |mu1/A|^3 / (4 (m2/A)(chi/A)) >= STIFF_WORK_MIN. There, on the
-calibration set of benchmarks/calibrate_stiff.py, ros4 needs ~40x fewer steps than RK4 (which is
-stability-limited along the manifold) at equal error; elsewhere RK4 is cheaper (up to 2x)."""
-STIFF_WORK_MIN = 300.0
-C_STIFF = 0.01
-"""Bound on the ros4 error constant |err/xi_inf| / h^4 over the stiff region (measured max 6.0e-3)."""
-STIFF_PILOT_FACTOR = 6.0
-"""PILOT_FACTOR of the ros4 lanes: larger than RK4's because C_STIFF bounds constants spread over ~60x (median
-1.1e-4, benchmarks/results/calibrate_stiff.json), so the rule's step is ~2.8x finer than a typical stiff point
-needs (measured on the costly corner of benchmarks/work_precision.py: 2.5 -> 6 takes 25-30 % off its ladder at
-rtol 1e-7..1e-10, next rung 1.5x -> 2.5x below the pilot)."""
-STIFF_H_PILOT = 0.6
-"""Cap of the ros4 lanes' STIFF_PILOT_FACTOR rule (:func:`stiff_pilot_step_for`): coarser pilot pairs are not yet
-asymptotic there (on the corner at rtol 1e-4, h0 = 0.97 takes 396 steps in all against 168 from h0 = 0.6)."""
 ROUNDOFF = {np.dtype(np.float64): 2.0 * np.finfo(np.float64).eps, np.dtype(np.float32): 2.0 * np.finfo(np.float32).eps}
 """Rounding error per step, relative (added to the estimate as steps * ROUNDOFF * |xi_inf|)."""
 
@@ -92,13 +74,13 @@ def _step_rule(method: str, lanes: bool) -> str:
         return (f"{method}: adaptive steps in sigma, PI controller on the embedded order-{tab.order_hat} estimate, "
                 f"local tolerance {CTRL_TOL_FACTOR[method]:g} rtol; " + common)
     if lanes:
-        rule = f"({ladder.TARGET:g} rtol/({ladder.SHARP_GAIN:g} C))**0.25"
+        rule = f"({TARGET:g} rtol/({SHARP_GAIN:g} C))**0.25"
         h0 = f"min({H_PILOT:g}, {PILOT_FACTOR:g} {rule})"
         if tab.implicit:
             h0 = f"max({h0}, min({STIFF_H_PILOT:g}, {STIFF_PILOT_FACTOR:g} {rule}))"
-        step = (f"step ladder per point (sweep/ladder.py): pilot pair 2 h0, h0, h0 = {h0}, then rungs "
-                f"{ladder.MIN_RATIO:g}..{ladder.MAX_RATIO:g}x finer aimed at {ladder.TARGET:g} x tolerance from the "
-                f"point's measured error, at most {ladder.MAX_RUNS} runs")
+        step = (f"step ladder per point (sweep/integrate/ladder.py): pilot pair 2 h0, h0, h0 = {h0}, then rungs "
+                f"{MIN_RATIO:g}..{MAX_RATIO:g}x finer aimed at {TARGET:g} x tolerance from the "
+                f"point's measured error, at most {MAX_RUNS} runs")
     else:
         step = (f"fixed step h = min({H_MAX / 2}, (rtol/({STEP_SAFETY * ERROR_GAIN:g} C))**0.25), coarse step 2h, "
                 f"C times {TIME_RESOLVED_FACTOR:g} when trajectory, slip_at, t50 or t90 are asked for")
@@ -123,10 +105,10 @@ def stiff_points(k, a, b) -> np.ndarray:
 
 
 def pilot_step_for(rtol: float, error_constant, factor: float = PILOT_FACTOR, cap: float = H_PILOT):
-    """Fine step h0 of the pilot pair (2 h0, h0) of the lanes' step ladder (sweep/ladder.py): PILOT_FACTOR times
-    the step whose checked estimate (SHARP_GAIN x the error) meets TARGET x rtol at the error constant
+    """Fine step h0 of the pilot pair (2 h0, h0) of the lanes' step ladder (sweep/integrate/ladder.py): PILOT_FACTOR
+    times the step whose checked estimate (SHARP_GAIN x the error) meets TARGET x rtol at the error constant
     ``error_constant`` (the largest measured), so that the point's own next rung is 2..8x finer."""
-    sharp = (ladder.TARGET * rtol / (ladder.SHARP_GAIN * np.asarray(error_constant))) ** 0.25
+    sharp = (TARGET * rtol / (SHARP_GAIN * np.asarray(error_constant))) ** 0.25
     return np.minimum(cap, factor * sharp)
 
 
@@ -236,9 +218,9 @@ class Plan:
                         + (f", {self.dtype.name} lanes" if self.lanes else ", one point per thread")),
             "step": (f"first trial {step} in sigma, local tolerance {self.ctrl_tol:.3g}" if self.adaptive
                      else f"{step} in sigma ({self.step_source})"),
-            "error_estimate": (("step ladder per point (sweep/ladder.py): finest run returned, "
-                                f"{ladder.SHARP_GAIN:g} x Richardson at the order q observed on the last three "
-                                f"runs where |q - p| <= {ladder.ORDER_WINDOW:g}, else {ladder.CONSERVATIVE_GAIN:g} "
+            "error_estimate": (("step ladder per point (sweep/integrate/ladder.py): finest run returned, "
+                                f"{SHARP_GAIN:g} x Richardson at the order q observed on the last three "
+                                f"runs where |q - p| <= {ORDER_WINDOW:g}, else {CONSERVATIVE_GAIN:g} "
                                 "max(|x_b - x_a|, |x_c - x_b|); + 2 x tail bound + roundoff" if self.lanes else
                                 "Richardson pair per point (coarse mesh, same mesh halved): coarse run returned, "
                                 "2 |coarse - fine| + bound on cancelled contributions (integrate/stop_point.py)")

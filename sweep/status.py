@@ -20,7 +20,7 @@ class Status(IntEnum):
     MAX_STEPS = 1
     """The step budget ran out before the stopping criterion (or the requested times) was reached."""
     STEP_UNDERFLOW = 2
-    """An adaptive stepper's step fell below its floor (H_FLOOR of models/stop_march.py)."""
+    """An adaptive stepper's step fell below its floor (H_FLOOR of integrate/stop_point.py)."""
     NONFINITE = 3
     """A state or exponent left the finite range (caught before the overflow happened)."""
     NO_FINITE_LIMIT = 4

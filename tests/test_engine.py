@@ -16,8 +16,8 @@ def scene(**kw):
 
 
 def test_lanes_path_matches_the_per_point_path():
-    """xi_inf-only sweeps run in vectorised lanes (models/stop_lanes.py, fine run of the pair returned); asking for
-    slip_at at t = 0 forces the per-point path (models/stop_march.py, coarse run returned with 2|coarse - fine|).
+    """xi_inf-only sweeps run in vectorised lanes (integrate/lanes.py, fine run of the pair returned); asking for
+    slip_at at t = 0 forces the per-point path (integrate/stop_point.py, coarse run returned with 2|coarse - fine|).
     The values agree within both error estimates, and each path's status follows its own estimate."""
     lanes = sweep.run_sweep(scene(max_steps=3000, method="rk4"))
     per_point = sweep.run_sweep(scene(max_steps=3000, method="rk4", observables=("xi_inf", "slip_at"), t_obs=(0.0,)))

@@ -127,8 +127,8 @@ def test_rounding_bound_covers_the_amplified_scatter(chi_over_A, mu1_over_A):
     """A weakening stop amplifies rounding made early by mu1/chi (sweep.physics.perturbation_growth): runs at
     steps 1e-7 apart (truncation errors equal to ~1e-7 relative of each other) scatter by the amplified rounding.
     The ladder's rounding term must cover that scatter, and not by more than 100x."""
-    from sweep.ladder import rounding_error
-    from sweep.models.stop_lanes import lane_kernels
+    from sweep.integrate.ladder import rounding_error
+    from sweep.integrate.lanes import lane_kernels
     from sweep.plan import ROUNDOFF
 
     relax_runs = lane_kernels(np.dtype(np.float64), "rk4")[0]

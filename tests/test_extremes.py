@@ -285,7 +285,7 @@ def test_matrix_within_rtol_of_reference(matrix, method, rtol):
 def test_matrix_error_estimates_bound_the_error(matrix, method, rtol):
     """m2pos includes chi/A = 1e4, mu1/A = -3, m2/A = 0.5, where the rk4 pair (0.173, 0.086) is pre-asymptotic
     (errors -1.6e-12 and -5.3e-12: |fine - coarse| is 0.7x the fine error): the lanes' step ladder
-    (sweep/ladder.py) sees the ratio of successive differences off the asymptotic one and goes on down."""
+    (sweep/integrate/ladder.py) sees the ratio of successive differences off the asymptotic one and goes on down."""
     pts = MATRICES[matrix](method, rtol)
     assert_no_violations(check_estimates(pts), f"{matrix} estimates, {method}, rtol {rtol:g}")
 

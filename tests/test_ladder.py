@@ -1,4 +1,4 @@
-"""The step ladder of the relaxed-slip lanes (sweep/ladder.py) on synthetic runs with a known error e(h).
+"""The step ladder of the relaxed-slip lanes (sweep/integrate/ladder.py) on synthetic runs with a known error e(h).
 
 The runner stands in for the lane kernel: run at step h returns X + e(h) (and a status), so the true error of
 every returned value is known exactly, independently of the ladder's own arithmetic.
@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sweep import ladder
+from sweep.integrate import ladder
 from sweep.status import Status
 
 OK, NONFINITE, MAX_STEPS = int(Status.OK), int(Status.NONFINITE), int(Status.MAX_STEPS)

@@ -143,8 +143,8 @@ def test_first_order_estimate_where_trusted_is_within_the_routing_margin_of_the_
     of the estimate, so routing on ESTIMATE_MARGIN x estimate <= model_tol keeps the true error within model_tol,
     over chi/A 0.1..1e3, mu1/A -4..10 and m2/A 0..2; and well beyond the trusted range it is not (the expansion
     fails where the slider rebounds inertially), which is why such points are measured instead."""
+    from sweep.integrate.stop_inertial import relax
     from sweep.model_choice import ESTIMATE_MARGIN, ESTIMATE_RTOL, FIRST_ORDER_TRUST
-    from sweep.models.stop_inertial import relax
 
     def ratio(k, a, b, G):
         inertial = relax(k, a, b, G, True, 1e-9, 1e-15, 10**7)

@@ -41,6 +41,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
+from ..accuracy import COARSE_GAIN, TAIL_RTOL, TAIL_TIGHTENING
 from ..models.stop import (
     FAST,
     MAX_STEPS,
@@ -62,19 +63,6 @@ from ..status import Status
 
 STEP_UNDERFLOW = int(Status.STEP_UNDERFLOW)
 ADAPTIVE, REPLAY = 0, 1
-ERROR_GAIN = 15.0
-"""Nominal ratio of the Richardson estimate of a fine solution, ERROR_GAIN/(2^p - 1) |fine - coarse|, to its true
-error: the estimate of the relaxed-slip lanes (sweep.engine), whose step rules (sweep.plan) are calibrated on it."""
-COARSE_GAIN = 2.0
-"""Estimate of the returned coarse solution = COARSE_GAIN |coarse - fine| (+ the hedges): it bounds the coarse error
-whenever the fine one is at most half of it (or of the other sign), and exceeds it by at most 3x then
-(asymptotically the fine error is 2^-p of the coarse one: 1/16 for rk4, 1/32 for dp5, 1/256 for dop853)."""
-TAIL_RTOL = 2.0**-52
-"""The per-point path integrates until the closed-form tail's error bound is below TAIL_SAFETY (atol + TAIL_RTOL
-|xi|): a few steps more (E decays exponentially there), and the bound, not sharp where the two neglected terms of
-the tail series cancel (up to 1e3x the true tail error), stays negligible next to any integration error."""
-TAIL_TIGHTENING = 0.01
-"""Samples beyond the transient come from the closed-form continuation once E < TAIL_SAFETY TAIL_TIGHTENING rtol."""
 H_FLOOR = 1e-12
 """Smallest adaptive step in sigma, relative to max(1, sigma): below it the point gets status step_underflow."""
 U_ROUNDING = 8.0 * 2.0**-52

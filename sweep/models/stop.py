@@ -37,8 +37,10 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from ..accuracy import E_TAIL_MAX, RATE_FLOOR, TAIL_SAFETY
 from ..jitcache import pin, pin_module
-from ..solvers.vmath import exp_f32, exp_f64
+from ..solvers.fastmath import FAST
+from ..solvers.vmath import EXP_MAX, exp_f32, exp_f64
 from ..status import Status
 
 OK = int(Status.OK)
@@ -46,20 +48,7 @@ MAX_STEPS = int(Status.MAX_STEPS)
 NONFINITE = int(Status.NONFINITE)
 NO_FINITE_LIMIT = int(Status.NO_FINITE_LIMIT)
 
-EXP_MAX = 700.0
-"""Largest exponent passed to exp (exp(709.8) overflows float64); beyond it the point is flagged nonfinite."""
-E_TAIL_MAX = 0.05
-"""The closed-form tail is used only once E = xi' psi has fallen below this."""
-TAIL_SAFETY = 1e-3
-"""Fraction of the tolerance allowed for the truncation of the tail series."""
-RATE_FLOOR = 0.1
-"""Floor of the late rate r(u) of the time map (bounds the step in s by h/RATE_FLOOR)."""
 SQRT_PI = math.sqrt(math.pi)
-FAST = {"nsz": True, "arcp": True, "contract": True, "afn": True}
-"""fastmath flags of every kernel here (~9 % faster): FMA contraction and reciprocal division, but no "nnan" or
-"ninf" (the status codes rely on isfinite) and no "reassoc" (results stay reproducible on one instruction set).
-A dict, not a set: numba pickles the options into the cache key of closures, and a set of strings pickles in a
-per-process order (string hashing is randomised), which made those kernels miss the disk cache."""
 
 
 @njit(cache=True, fastmath=FAST)

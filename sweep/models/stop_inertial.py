@@ -36,36 +36,15 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from ..jitcache import pin_module
-from ..solvers import RODAS3
-from ..solvers.controllers import I_CONTROLLER, MIN_FACTOR, accepted_factor, rejected_factor
-from ..solvers.rosenbrock_step import make_rodas3_step, scratch
-from ..status import Status
-from .stop import EXP_MAX, FAST, tail_integral, tail_is_accurate, tail_slip
+from ..solvers.fastmath import FAST
+from ..solvers.vmath import EXP_MAX
+from .stop import tail_integral
 
-__all__ = ["relax", "relax_batch", "relax_points", "HANDOVER_FRACTION", "RELAX_KEYS"]
+__all__ = ["LN_R_MAX", "inertia_negligible", "inertial_system", "quasistatic_system", "tail_correction"]
 
-RELAX_KEYS = ("xi_inf", "correction", "status", "steps", "s_handover")
-"""The outputs of :func:`relax_points`."""
-
-OK, MAX_STEPS, NONFINITE = int(Status.OK), int(Status.MAX_STEPS), int(Status.NONFINITE)
-STEP_UNDERFLOW = int(Status.STEP_UNDERFLOW)
-
-HANDOVER_FRACTION = 0.1
-"""The inertial term is handed over once below this fraction of rtol (module docstring)."""
-H_START = 1e-3
-"""First step in s, times min(1, G, 1/k): the initial layer lasts s ~ G, the stiff start 1/k."""
-H_FLOOR = 8.0 * 2.220446049250313e-16
-"""Smallest step in s, relative to s, before a point is flagged step_underflow (a few ulps: below it s + h
-stops moving). Relative, not absolute: where a fast rebound (k/G large) drops xi' towards 0, ln(xi' psi) has a
-log singularity that the steps resolve down to ~1e-16 near s ~ 0.05, and then grow again."""
-CONTROLLER = I_CONTROLLER._replace(nonfinite_factor=MIN_FACTOR)
-"""The elementary controller of sweep/solvers/controllers.py (a stage that overflowed: the step is divided by 5)."""
-ORDER = RODAS3.order_hat
-"""Order of RODAS3's embedded error estimate (the controller's exponent is 1/(ORDER + 1))."""
 LN_R_MAX = 600.0
 """Cap of ln R in the right-hand side (comment there)."""
 
@@ -113,13 +92,9 @@ def quasistatic_system(s, y, p, f, J, ft, jacobian):
         ft[0], ft[1] = -g * E, corr * (-g * dE + 2.0 * b * E) - 2.0 * (g + 1.0) * S + w * dQ_ds
 
 
-inertial_step = make_rodas3_step(inertial_system)
-quasistatic_step = make_rodas3_step(quasistatic_system)
-
-
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def _inertia_negligible(s, xi, q, k, a, b, G, eps):
-    """The hand-over test of the module docstring at an accepted state."""
+def inertia_negligible(s, xi, q, k, a, b, G, eps):
+    """The hand-over test of the module docstring at an accepted state: eps = HANDOVER_FRACTION rtol."""
     u = s - xi
     g = a + 2.0 * b * u
     P = k * xi + u * (a + b * u) + q
@@ -131,7 +106,7 @@ def _inertia_negligible(s, xi, q, k, a, b, G, eps):
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def _tail_correction(k, a, b, G, u, E, y):
+def tail_correction(k, a, b, G, u, E, y):
     """First-order correction at infinity from y at the end of the integration: y times d xi_inf/d xi_e of the
     closed-form tail (1 + E (1 - k T1)/(1 + k T), T1 = tail_integral) plus the source still to come (S decays at
     the rate 2 (g + 1))."""
@@ -140,81 +115,6 @@ def _tail_correction(k, a, b, G, u, E, y):
     T = E * t1
     S = G * E * E * math.exp(-2.0 * u) * (k * E + (g + 1.0) * (1.0 - E))
     return y * (1.0 + E * (1.0 - k * t1) / (1.0 + k * T)) + S / (2.0 * (g + 1.0))
-
-
-@njit(cache=True, fastmath=FAST, error_model="numpy")
-def relax(k, a, b, G, inertial, rtol, atol, max_steps):
-    """Relaxed slip of one stop point with the inertial model (``inertial``) or the quasi-static one with its
-    first-order inertial correction; k = chi/A, a = mu1/A, b = m2/A, G = gamma/A > 0.
-
-    Returns (xi_inf, y_inf, status, steps, s_handover): y_inf the first-order correction (0 for the inertial model),
-    s_handover the contact-age time at which inertia was dropped (0 for the quasi-static model).
-    """
-    y, y_new, err_v = np.zeros(2), np.empty(2), np.empty(2)  # (xi, q) inertial, (xi, y) quasi-static
-    K, M, piv, f, ft, ys = scratch(2)
-    s = 0.0
-    phase_inertial = inertial
-    p_inertial, p_quasi = (k, a, b, G), (k, a, b, 0.0 if inertial else G)
-    h = H_START * min(1.0, G, 1.0 / k)
-    eps = HANDOVER_FRACTION * rtol
-    s_handover = 0.0
-    steps, err_prev, rejected = 0, 1.0, False
-    while steps < max_steps:
-        steps += 1
-        if phase_inertial:
-            done = inertial_step(s, y, h, p_inertial, y_new, err_v, K, M, piv, f, ft, ys)
-            err2 = abs(err_v[1]) / rtol
-        else:
-            done = quasistatic_step(s, y, h, p_quasi, y_new, err_v, K, M, piv, f, ft, ys)
-            err2 = abs(err_v[1]) / (rtol * max(abs(y[1]), abs(y_new[1])) + atol * G)
-        err = max(abs(err_v[0]) / (rtol * max(abs(y[0]), abs(y_new[0])) + atol), err2)
-        if not (done and math.isfinite(err) and math.isfinite(y_new[0]) and math.isfinite(y_new[1])):
-            h *= rejected_factor(CONTROLLER, math.nan, ORDER)  # an overflow in a stage: retry smaller
-            rejected = True
-            if h < H_FLOOR * s:
-                return math.nan, math.nan, NONFINITE, steps, s_handover
-            continue
-        if err > 1.0:
-            h *= rejected_factor(CONTROLLER, err, ORDER)
-            rejected = True
-            if h < H_FLOOR * s:
-                return math.nan, math.nan, STEP_UNDERFLOW, steps, s_handover
-            continue
-        s += h
-        y[0], y[1] = y_new[0], y_new[1]
-        factor, err_prev = accepted_factor(CONTROLLER, err, err_prev, ORDER, rejected)
-        h *= factor
-        rejected = False
-        xi = y[0]
-        if phase_inertial:
-            if _inertia_negligible(s, xi, y[1], k, a, b, G, eps):
-                phase_inertial, y[1], s_handover = False, 0.0, s
-            continue
-        u = s - xi
-        E = math.exp(-(k * xi + u * (a + b * u)))
-        if tail_is_accurate(k, a, b, u, E, rtol * xi + atol):
-            return (xi + tail_slip(k, a, b, u, E), _tail_correction(k, a, b, p_quasi[3], u, E, y[1]), OK, steps,
-                    s_handover)
-    return math.nan, math.nan, MAX_STEPS, steps, s_handover
-
-
-@njit(parallel=True, cache=True)
-def relax_batch(k, a, b, G, inertial, rtol, atol, max_steps, xi_inf, correction, status, steps, s_handover):
-    """:func:`relax` over flat arrays of points (in parallel); results written into the output arrays."""
-    for i in prange(k.size):
-        xi_inf[i], correction[i], status[i], steps[i], s_handover[i] = relax(k[i], a[i], b[i], G[i], inertial,
-                                                                             rtol, atol, max_steps)
-
-
-def relax_points(k: np.ndarray, a: np.ndarray, b: np.ndarray, G: np.ndarray, inertial: bool, rtol: float,
-                 atol: float, max_steps: int) -> dict[str, np.ndarray]:
-    """:func:`relax_batch` with its output arrays: keys xi_inf, correction, status, steps, s_handover."""
-    n = np.size(k)
-    out = dict(zip(RELAX_KEYS, (np.full(n, np.nan), np.full(n, np.nan), np.zeros(n, np.int8), np.zeros(n, np.int64),
-                                np.zeros(n))))
-    relax_batch(*(np.ascontiguousarray(x, dtype=float) for x in (k, a, b, G)), inertial, rtol, atol, max_steps,
-                *out.values())
-    return out
 
 
 pin_module(__name__)

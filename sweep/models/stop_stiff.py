@@ -28,13 +28,10 @@ import math
 import numpy as np
 from numba import njit
 
+from ..accuracy import STIFF_RATE_FLOOR
 from ..jitcache import pin, pin_module
 from ..solvers.vmath import exp_f32, exp_f64
 from .stop import FAST
-
-STIFF_RATE_FLOOR = 0.03
-"""Floor of the late rate r of the Rosenbrock step rule (bounds the step in s by h/STIFF_RATE_FLOOR; 0.03 costs
-a third fewer steps than 0.1 in the costly corner at equal error: benchmarks/work_precision.py)."""
 
 
 def make_stiff_rate(dtype):

@@ -7,7 +7,7 @@ Sec. IV.7, eq. 7.25'), which needs no matrix-vector product with the Jacobian J 
     (I/(h gamma) - J) u_i = f(t0 + alpha_i h, y0 + sum_j a_ij u_j) + sum_j (c_ij/h) u_j + gamma_i h df/dt,
     y1 = y0 + sum_i m_i u_i,        error estimate sum_i e_i u_i.
 
-For a scalar equation (the stop model in contact-age time, :mod:`sweep.models.stop_lanes`) the "system" is one
+For a scalar equation (the stop model in contact-age time, :mod:`sweep.integrate.lanes`) the "system" is one
 division per step, so a stage costs the same as an explicit stage while the method stays stable at any step
 (A-stable; Shampine's parameters have |R(inf)| = 1/3: not L-stable, but stiff modes are damped by 3x per step).
 

@@ -35,23 +35,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .models.stop import MAX_STEPS, NONFINITE, OK
+from ..accuracy import CONSERVATIVE_GAIN, MAX_RATIO, MAX_RUNS, MIN_RATIO, ORDER_WINDOW, SHARP_GAIN, TARGET
+from ..models.stop import MAX_STEPS, NONFINITE, OK
 
-ORDER_WINDOW = 1.0
-"""Largest distance of the observed order from the method's order for the ladder to count as asymptotic."""
 NEWTON_ITERATIONS = 6
-SHARP_GAIN = 2.0
-"""Estimate / Richardson error of an asymptotic ladder (covers the o(h^q) terms)."""
-CONSERVATIVE_GAIN = 2.0
-"""Estimate / max(|x_b - x_a|, |x_c - x_b|) where the ladder is not asymptotic. Not |x_c - x_b| alone: errors
-that stagnate over two rungs before falling (measured: -2.2e-9, -2.6e-9 after 3.1e-7 at chi/A = 10, mu1/A = -3,
-m2/A = 0.05) make it 0.3x the error."""
-TARGET = 0.7
-"""The next rung aims at an estimate of TARGET x tolerance."""
-MIN_RATIO, MAX_RATIO = 1.5, 8.0
-"""Bounds on the ratio of successive steps below the pilot pair."""
-MAX_RUNS = 5
-"""Runs per point at most (pilot pair + three rungs); then the point keeps its estimate (error_above_tol if over)."""
 
 Runner = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
 """run(points, steps) -> (xi_inf, tail bound, status, steps taken), one run per entry."""

@@ -22,9 +22,9 @@ import numpy as np
 from numba import njit, prange
 
 from ..jitcache import pin, pin_module
+from ..models.stop import EXP_MAX, FAST, MAX_STEPS, NONFINITE, OK, TAIL_SAFETY, make_rate, tail_error, tail_slip
+from ..models.stop_stiff import make_stiff_rate
 from ..solvers import METHODS, RosenbrockTableau
-from .stop import EXP_MAX, FAST, MAX_STEPS, NONFINITE, OK, TAIL_SAFETY, make_rate, tail_error, tail_slip
-from .stop_stiff import make_stiff_rate
 
 LANES = 16
 """Runs in flight per thread (8 and 32 measured within 10 %: benchmarks/throughput.py)."""
@@ -42,7 +42,7 @@ def _explicit_step(f, tableau):
     """step_all(st) for a four-stage explicit tableau whose stage i uses stage i-1 only (a_ij = 0 for
     j != i-1, e.g. classical RK4), with the coefficients as compile-time constants: a loop over stages with
     run-time offsets into the lane arrays defeats LLVM's vectoriser (measured 22 ns per evaluation instead of 4.5).
-    Other explicit tableaux run through the per-point kernel (models/stop_march.py)."""
+    Other explicit tableaux run through the per-point kernel (integrate/stop_point.py)."""
     rate = make_rate(f)
     W = LANES
     c, A, b, _ = tableau.arrays()
