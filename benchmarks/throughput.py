@@ -29,7 +29,7 @@ per-point path). Sections (benchmarks/README.md explains every number):
                the engine's xi_inf, and cost per RK4 stage evaluation from numpy's own step counts and the
                engine's work (target: engine >= 3x cheaper per evaluation).
 4. cold start  a new Python process: import sweep + a 10 x 10 sweep, JIT cache on disk (median of 3).
-5. estimate    sweep.engine.estimate_seconds vs the measured time, default scene and sample1 100 x 100.
+5. estimate    sweep.estimate.estimate_seconds vs the measured time, default scene and sample1 100 x 100.
 
 No longer measured (the code it measured is gone or internal): the parallel diagnostic that called the compiled
 per-point batch kernel (stop_batch) directly, in grid order and shuffled, to show the load imbalance of a static
@@ -63,7 +63,8 @@ from scipy.integrate import DOP853, LSODA
 
 import sweep
 from sweep import physics
-from sweep.engine import estimate_seconds, execute
+from sweep.engine import execute
+from sweep.estimate import estimate_seconds
 from sweep.models.stop import E_TAIL_MAX, EXP_MAX, RATE_FLOOR, TAIL_SAFETY
 from sweep.solvers import METHODS
 

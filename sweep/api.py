@@ -10,16 +10,14 @@ import xarray as xr
 
 from .backends import check_backend, open_backend
 from .dataset import build_dataset, build_driven_dataset
-from .driven_sweep import CHUNK as DRIVEN_CHUNK
-from .driven_sweep import describe
-from .engine import CHUNK_POINTS, n_samples, warm_up
+from .engine import n_samples, warm_up
 from .hopf import with_simulated_line
 from .io import open_dataset, save
 from .journal import Journal
 from .model_choice import warm_up_models
 from .params import FrictionParams
 from .plan import make_plan
-from .runner import JOURNAL_FORMAT, run_chunks, sampled_blocks, stop_outputs
+from .runner import JOURNAL_FORMAT, chunk_task, run_chunks, sampled_blocks, stop_outputs
 from .scene import Scene
 
 __all__ = ["run_sweep", "solve_point"]
@@ -35,7 +33,7 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     ``output``: also write the Dataset there (netCDF4). The run then journals every finished chunk beside it
     (``<output>.journal``, sweep/journal.py) so that a killed or interrupted run loses nothing: run again with
     ``resume=True`` to compute only the missing chunks (refused if the scene or plan differs). ``chunk_size``:
-    points per chunk (default engine.CHUNK_POINTS for stop, driven_sweep.CHUNK for driven scenes); part of
+    points per chunk (default plan.CHUNK_POINTS of the protocol); part of
     what a resume checks.
     ``backend``: "threads" (this process, numba's threads) or "dask" (dask.distributed: a LocalCluster of
     ``workers`` one-thread processes started for the run, default 2, or the existing cluster at ``scheduler``,
@@ -44,13 +42,13 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     by chunk, never held whole, and the returned Dataset reads them from the file when they are used.
     """
     history = history or "sweep.run_sweep"
-    plan = None if scene.protocol == "driven" else make_plan(scene)
-    size = chunk_size or (DRIVEN_CHUNK if plan is None else CHUNK_POINTS)
+    plan = make_plan(scene)
+    size = chunk_size or plan.chunk_size
     check_backend(backend, workers, scheduler)
     journal = None
     if output is not None:
         identity = {"format": JOURNAL_FORMAT, "scene": scene.to_toml(),
-                    "plan_hash": "" if plan is None else plan.hash(), "chunk_size": size, "n_points": scene.n_points}
+                    "plan_hash": plan.hash(), "chunk_size": size, "n_points": scene.n_points}
         journal = Journal.open(output, identity, resume)
     if backend == "dask":
         warm_up_kernels(scene, plan)  # once, before the fan-out: the workers load them from numba's cache
@@ -58,10 +56,10 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
         flat, seconds = run_chunks(scene, plan, size, journal, progress, imap)
     # with a journal the arrays sampled in time stayed there: written into the file chunk by chunk, never held whole
     blocks = None
-    if journal is not None and plan is not None and n_samples(scene, plan) > 0:
+    if journal is not None and plan.protocol == "stop" and n_samples(scene, plan) > 0:
         blocks = sampled_blocks(scene, plan.tau_samples.size, size, journal)  # (holds no reference to the plan)
-    if plan is None:
-        ds = build_driven_dataset(scene, flat, seconds, describe(scene), history=history)
+    if plan.protocol == "driven":
+        ds = build_driven_dataset(scene, flat, seconds, plan.describe(), history=history)
     else:
         ds = build_dataset(scene, plan, *stop_outputs(flat, seconds), history=history, sampled=blocks is None)
     # the Dataset holds what it needs; the plan's and the unused outputs' per-point arrays (~100 bytes per point)
@@ -77,13 +75,11 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
 
 def warm_up_kernels(scene: Scene, plan) -> None:
     """Compile (or load from numba's disk cache) every kernel the scene's chunks use, on one point each."""
-    from .backends import chunk_task
-
-    if plan is not None:
+    if plan.protocol == "stop":
         warm_up(scene, plan)
         warm_up_models()
     else:
-        chunk_task(scene, None, np.arange(1))
+        chunk_task(scene, plan.take(np.arange(1)), np.arange(1))
 
 
 def solve_point(params: FrictionParams, K_over_M: float, V: float, rtol: float = 1e-6,

@@ -1,7 +1,7 @@
 """Where the chunks of a sweep run: in this process (numba's own threads) or on a dask.distributed cluster.
 
-Either way a chunk is the same task, :func:`chunk_task` (the chunk's share of the plan made once by the driver for
-the whole scene, the chunk's points, the same compiled kernels), and its results come back to the driver, the
+Either way a chunk is the same task, :func:`sweep.runner.chunk_task` (the chunk's share of the plan made once by the
+driver for the whole scene, the chunk's points, the same compiled kernels), and its results come back to the driver, the
 single writer of the journal and of the file. A point's numbers depend on that point only and the kernels use no
 reassociating fastmath flags, so the results are bitwise the same whatever the backend, the chunking and the number
 of workers (on one instruction set).
@@ -15,7 +15,6 @@ that the workers find them in numba's on-disk cache instead of each compiling th
 from __future__ import annotations
 
 import os
-import time
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 
@@ -23,39 +22,15 @@ import numpy as np
 
 from .errors import InputError
 from .plan import Plan
+from .runner import chunk_task, in_process
 from .scene import Scene
 
-__all__ = ["BACKENDS", "check_backend", "chunk_plan", "chunk_task", "local_cluster", "open_backend"]
+__all__ = ["BACKENDS", "check_backend", "local_cluster", "open_backend"]
 
 BACKENDS = ("threads", "dask")
 IN_FLIGHT_PER_WORKER = 2
 """Chunks submitted ahead per worker: enough to keep workers busy, few enough to bound the driver's memory."""
 WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
-
-
-def chunk_task(scene: Scene, plan: Plan | None, points: np.ndarray) -> dict[str, np.ndarray]:
-    """Compute one chunk (any backend): per-point arrays plus ``seconds``, the time it took. ``plan``: the chunk's
-    share of the scene's plan (:func:`chunk_plan`; None for driven scenes), ``points`` its points in the grid."""
-    from .driven_sweep import driven_chunk
-    from .runner import stop_chunk
-
-    t0 = time.perf_counter()
-    if scene.protocol == "driven":
-        arrays = driven_chunk(scene)(points)
-    else:
-        arrays = stop_chunk(scene, plan)(np.arange(points.size))
-    arrays["seconds"] = np.array(time.perf_counter() - t0)
-    return arrays
-
-
-def chunk_plan(plan: Plan | None, points: np.ndarray) -> Plan | None:
-    """The share of ``plan`` that the chunk of ``points`` needs (made once by the driver for the whole scene)."""
-    return None if plan is None else plan.take(points)
-
-
-def _threads(scene: Scene, plan: Plan | None, todo: Iterable[tuple[int, np.ndarray]]):
-    for i, points in todo:
-        yield i, chunk_task(scene, chunk_plan(plan, points), points)
 
 
 def _import_dask():
@@ -110,7 +85,7 @@ def _restore(saved: dict[str, str | None]) -> None:
             os.environ[key] = value
 
 
-def _on_dask(client, scene: Scene, plan: Plan | None, todo: Iterable[tuple[int, np.ndarray]]):
+def _on_dask(client, scene: Scene, plan: Plan, todo: Iterable[tuple[int, np.ndarray]]):
     """Submit the chunks (a bounded number in flight) and yield them as they complete; dask retries a chunk whose
     worker died."""
     from distributed import as_completed
@@ -128,7 +103,7 @@ def _on_dask(client, scene: Scene, plan: Plan | None, todo: Iterable[tuple[int, 
         i, points = item
         # each task carries its share of the plan (~60 bytes a point): no worker holds the whole plan, and the
         # transfers overlap the computing instead of a broadcast of it all before the first chunk
-        future = client.submit(chunk_task, scene_f, chunk_plan(plan, points), points,
+        future = client.submit(chunk_task, scene_f, plan.take(points), points,
                                key=f"sweep-chunk-{i}-{id(todo)}", retries=3)
         index[future.key] = i
         pending.add(future)
@@ -169,7 +144,7 @@ def open_backend(backend: str = "threads", workers: int | None = None, scheduler
     of the context (a dask cluster started here is shut down on exit)."""
     check_backend(backend, workers, scheduler)
     if backend == "threads":
-        yield _threads
+        yield in_process
         return
     with _dask(workers, scheduler) as client:
         yield lambda scene, plan, todo: _on_dask(client, scene, plan, todo)

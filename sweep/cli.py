@@ -28,7 +28,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     plan = make_plan(scene)
     if args.dry_run:
-        from .engine import estimate_seconds
+        from .estimate import estimate_seconds
 
         seconds, mean_steps = estimate_seconds(scene, plan)
         print(plan.text())
@@ -68,11 +68,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 def _run_driven(scene, args: argparse.Namespace) -> int:
     """``sweep run`` of a driven scene: one simulation per point (no plan, no pilot estimate)."""
-    from .driven_sweep import describe
+    from .plan import make_plan
     from .plot import plot_regimes
 
     if args.dry_run:
-        for key, text in describe(scene).items():
+        for key, text in make_plan(scene).describe().items():
             print(f"{key:>28}: {text}")
         print(f"{'grid':>28}: {scene.shape[0]} K/M x {scene.shape[1]} V, observables {', '.join(scene.observables)}")
         return 0

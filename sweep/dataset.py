@@ -13,9 +13,10 @@ import numpy as np
 import xarray as xr
 
 from . import physics
+from .accuracy import ESTIMATE_RTOL, TIGHTER
 from .engine import SAMPLED, RawResult
-from .model_choice import ESTIMATE_RTOL, MODEL_FLAG, TIGHTER, ModelChoice, line_uses_inertia
-from .plan import Plan
+from .model_choice import MODEL_FLAG, ModelChoice
+from .plan import Plan, line_uses_inertia
 from .scene import Scene
 from .status import Status, flag_attrs
 

@@ -24,20 +24,17 @@ from .integrate.stop_point import Method, StopPoints, Tolerances, stop_batch
 from .integrate.stop_slip import slip_batch
 from .models.stop import NO_FINITE_LIMIT, OK
 from .physics import perturbation_growth
-from .plan import Plan, make_plan
+from .plan import CHUNK_POINTS, Plan
 from .progress import Progress
 from .scene import Scene
 from .solvers import METHODS
 from .status import Status
 
-__all__ = ["CHUNK_POINTS", "SAMPLED", "RawResult", "chunk_points", "estimate_seconds", "execute", "run_points",
-           "warm_up"]
+__all__ = ["SAMPLED", "RawResult", "chunk_points", "execute", "run_points", "warm_up"]
 
 FRACTIONS = np.array([0.5, 0.9])
 """Fractions of the relaxed slip whose times are reported as t50 and t90."""
 ORDER_SEED = 20261121
-CHUNK_POINTS = 4096
-"""Points per chunk (one compiled batch call, one progress update, one journal entry)."""
 ERROR_ABOVE_TOL = int(Status.ERROR_ABOVE_TOL)
 SAMPLED = ("xi_at", "u_at", "xi_at_err", "u_at_err")
 """The RawResult arrays sampled in time (n points x n samples): the large ones, written per chunk by a journaled run."""
@@ -152,12 +149,12 @@ def run_points(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
 
 
 def chunk_points(n: int, chunk_size: int | None = None) -> list[np.ndarray]:
-    """The points 0..n-1 split into consecutive chunks of at most ``chunk_size`` (default CHUNK_POINTS), each in a
+    """The points 0..n-1 split into consecutive chunks of at most ``chunk_size`` (default: a stop chunk), each in a
     fixed pseudo-random order: the costly points cluster on the grid, and every thread's share of a chunk then
     mixes cheap and costly ones. A chunk covers a contiguous range of the flat (K/M, V) index, so that its
     trajectories can be written into the file as one block (sweep/io.py) and never held whole."""
     rng = np.random.default_rng(ORDER_SEED)
-    bounds = np.array_split(np.arange(n), max(1, math.ceil(n / (chunk_size or CHUNK_POINTS))))
+    bounds = np.array_split(np.arange(n), max(1, math.ceil(n / (chunk_size or CHUNK_POINTS["stop"]))))
     return [rng.permutation(block) for block in bounds]
 
 
@@ -199,44 +196,3 @@ def warm_up(scene: Scene, plan: Plan) -> float:
     firsts = [int(np.argmax(plan.point_method == m)) for m in range(len(plan.point_methods))]
     execute(scene, plan, np.array(firsts), progress=False)
     return time.perf_counter() - t0
-
-
-def estimate_seconds(scene: Scene, plan: Plan | None = None, sample: int = 256) -> tuple[float, float]:
-    """Estimate the wall time of the whole sweep (with the choice of model and its inertial points) from strided
-    pilot subsamples of ``sample`` and 4 x ``sample`` points.
-
-    Returns (estimated seconds, mean steps per point of the pilot). A call has a fixed cost (~0.4 ms: chunking,
-    the ladder's array work, thread start) besides its cost per point, so the estimate is fixed + marginal x N
-    from the two pilots (one pilot scaled by N / sample overstated the default scene 3x). The kernel is warmed up
-    first and each pilot is timed three times, keeping the fastest, so that a passing hiccup of the machine does
-    not inflate the estimate. Sweeps of at most 4 x ``sample`` points are timed whole.
-    """
-    plan = plan or make_plan(scene)
-    from .model_choice import choose_stop_models, warm_up_models  # (imports this module)
-
-    warm_up(scene, plan)
-    if scene.model != "quasistatic":
-        warm_up_models()
-
-    def run(pilot: np.ndarray) -> RawResult:
-        t0 = time.perf_counter()
-        if scene.model == "inertial":
-            raw = RawResult.empty(pilot.size, 0, 0)
-        else:
-            raw = execute(scene, plan, pilot, progress=False)
-        choose_stop_models(scene, plan, raw, pilot)
-        raw.seconds = time.perf_counter() - t0
-        return raw
-
-    def timed_pilot(n: int) -> tuple[float, RawResult, int]:
-        pilot = np.arange(0, plan.n_points, max(1, plan.n_points // n))
-        runs = [run(pilot) for _ in range(3)]
-        return min(r.seconds for r in runs), runs[0], pilot.size
-
-    t_big, res, n_big = timed_pilot(4 * sample)
-    if n_big >= plan.n_points:
-        return t_big, float(res.steps.mean())
-    t_small, _, n_small = timed_pilot(sample)
-    marginal = max((t_big - t_small) / (n_big - n_small), 0.0) if n_big > n_small else t_big / n_big
-    fixed = max(t_small - marginal * n_small, 0.0)
-    return fixed + marginal * plan.n_points, float(res.steps.mean())

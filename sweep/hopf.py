@@ -46,8 +46,9 @@ from .accuracy import (
 from .dataset import REFERENCES, versions
 from .errors import InputError
 from .integrate.driven import DrivenParams, DrivenSettings, Regime, simulate_point
-from .model_choice import MODEL_FLAG, line_uses_inertia
+from .model_choice import MODEL_FLAG
 from .params import FrictionParams
+from .plan import line_uses_inertia
 from .scene import MODEL_TOL_RANGE, MODELS, STATE_LAWS
 
 __all__ = ["locate_hopf", "with_simulated_line"]

@@ -22,7 +22,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import physics
 from .accuracy import ESTIMATE_MARGIN, ESTIMATE_RTOL, FIRST_ORDER_TRUST, TIGHTER
 from .engine import ORDER_SEED, RawResult
 from .integrate.stop_inertial import RELAX_KEYS, relax_points
@@ -31,11 +30,8 @@ from .progress import Progress
 from .scene import Scene
 from .status import Status
 
-__all__ = ["ModelChoice", "MODEL_FLAG", "choose_stop_models", "line_uses_inertia", "solve_inertial",
-           "warm_up_models"]
+__all__ = ["ModelChoice", "MODEL_FLAG", "choose_stop_models", "solve_inertial", "warm_up_models"]
 
-CHUNK = 4096
-"""Points per call of the compiled batch (one progress update each)."""
 MODEL_FLAG = {"flag_values": np.array([0, 1], np.int8), "flag_meanings": "quasistatic inertial"}
 QUASISTATIC, INERTIAL = 0, 1
 
@@ -49,39 +45,21 @@ class ModelChoice:
     model_error: np.ndarray | None
 
 
-def line_uses_inertia(gamma_over_A: np.ndarray, model: str, model_tol: float) -> np.ndarray:
-    """Per V: whether the Hopf line / driven points use the inertial model (module docstring)."""
-    g = np.asarray(gamma_over_A, dtype=float)
-    if model == "auto":
-        return g > model_tol
-    return np.full(g.shape, model == "inertial")
-
-
-def _gamma_over_A(scene: Scene, plan: Plan, points: np.ndarray) -> np.ndarray:
-    """gamma/A at the plan's ``points``: looked up along V, so that a chunk costs O(its points), not O(the grid)."""
-    p = scene.params
-    return (physics.inertia_number(scene.V, p.D0, p.g) / p.A)[plan.flat_index(points) % scene.V.size]
-
-
 def _relax(scene: Scene, plan: Plan, pts: np.ndarray, inertial: bool, rtols: tuple[float, ...],
            progress: bool | None, label: str) -> list[dict[str, np.ndarray]]:
     """:func:`relax_points` of the plan's points ``pts`` at each local tolerance of ``rtols`` (atol scaled alike),
-    in chunks with a progress bar, the points in a fixed shuffled order (the costly ones cluster on the grid and
-    prange gives each thread a contiguous share; results do not depend on the order)."""
+    the points in a fixed shuffled order (the costly ones cluster on the grid and prange gives each thread a
+    contiguous share; results do not depend on the order). ``pts`` is at most a chunk (the runner's chunk loop)."""
     order = np.random.default_rng(ORDER_SEED).permutation(pts.size)
     p = pts[order]
-    G = _gamma_over_A(scene, plan, p)
-    outs: list[list[dict[str, np.ndarray]]] = [[] for _ in rtols]
+    outs = []
     with Progress(pts.size * len(rtols), enabled=progress, label=label) as bar:
-        for start in range(0, p.size, CHUNK):
-            sl = slice(start, start + CHUNK)
-            for out, rtol in zip(outs, rtols):
-                out.append(relax_points(plan.k[p[sl]], plan.a[p[sl]], plan.b[p[sl]], G[sl], inertial, rtol,
-                                        scene.atol["xi_inf"] * rtol / scene.rtol, scene.max_steps))
-                bar.update(p[sl].size)
+        for rtol in rtols:
+            outs.append(relax_points(plan.k[p], plan.a[p], plan.b[p], plan.G[p], inertial, rtol,
+                                     scene.atol["xi_inf"] * rtol / scene.rtol, scene.max_steps))
+            bar.update(p.size)
     back = np.argsort(order)
-    return [{key: np.concatenate([c[key] for c in out])[back] if out else np.empty(0) for key in RELAX_KEYS}
-            for out in outs]
+    return [{key: out[key][back] for key in RELAX_KEYS} for out in outs]
 
 
 def solve_inertial(scene: Scene, plan: Plan, raw: RawResult, rows: np.ndarray, idx: np.ndarray,
@@ -111,7 +89,7 @@ def choose_stop_models(scene: Scene, plan: Plan, raw: RawResult, idx: np.ndarray
             solve_inertial(scene, plan, raw, finite, idx, progress)
         return ModelChoice(np.full(n, scene.model == "inertial") & plan.finite[idx], None)
     pts = idx[finite]
-    G = _gamma_over_A(scene, plan, pts)
+    G = plan.G[pts]
     estimate = _relax(scene, plan, pts, False, (ESTIMATE_RTOL,), progress, "model error")[0]
     model_error = np.full(n, np.nan)
     ok = estimate["status"] == Status.OK

@@ -37,29 +37,40 @@ from .accuracy import (
     C_UNSTABLE,
     CONSERVATIVE_GAIN,
     CTRL_TOL_FACTOR,
+    DECAYED,
     ERROR_GAIN,
+    GROWTH_RTOL,
     H_MAX,
     H_PILOT,
     MAX_RATIO,
     MAX_RUNS,
     MIN_RATIO,
+    NEUTRAL_SPREAD,
     ORDER_WINDOW,
     PILOT_FACTOR,
+    RATE_FLOOR,
+    RUNAWAY_XI_DOT,
     SHARP_GAIN,
+    STATIONARY_TOL,
     STEP_SAFETY,
     STIFF_H_PILOT,
     STIFF_K_MAX,
     STIFF_PILOT_FACTOR,
+    STIFF_RATE_FLOOR,
     STIFF_WORK_MIN,
+    TAIL_SAFETY,
     TARGET,
     TIME_RESOLVED_FACTOR,
+    driven_stepper_rtol,
 )
-from .models.stop import RATE_FLOOR, TAIL_SAFETY
-from .models.stop_stiff import STIFF_RATE_FLOOR
 from .scene import Scene
 from .solvers import METHODS
 
-__all__ = ["Plan", "make_plan", "choose_method"]
+__all__ = ["CHUNK_POINTS", "Plan", "make_plan", "choose_method", "line_uses_inertia"]
+
+CHUNK_POINTS = {"stop": 4096, "driven": 1024}
+"""Points per chunk by protocol (one compiled batch call, one progress update, one journal entry): a driven point
+costs ~10-100x a stop point."""
 
 ROUNDOFF = {np.dtype(np.float64): 2.0 * np.finfo(np.float64).eps, np.dtype(np.float32): 2.0 * np.finfo(np.float32).eps}
 """Rounding error per step, relative (added to the estimate as steps * ROUNDOFF * |xi_inf|)."""
@@ -139,15 +150,22 @@ def choose_method(scene: Scene) -> tuple[str, str]:
     raise AssertionError("AUTO_METHOD covers every rtol")
 
 
-PER_POINT = ("point_method", "step", "chi", "mu1", "k", "a", "b", "s_c", "finite")
+PER_POINT = ("point_method", "step", "chi", "mu1", "k", "a", "b", "s_c", "finite", "G", "inertial")
 """The per-point arrays of a Plan (flat over its points)."""
 
 
 @dataclass(frozen=True, eq=False)
 class Plan:
-    """The resolved plan of a scene; per-point arrays are flat in C order over (K_over_M, V)."""
+    """The resolved plan of a scene, for every protocol; per-point arrays are flat in C order over (K_over_M, V).
 
+    ``model`` is the scene's model policy and ``inertial`` its per-point part known before any run (driven scene: per
+    V, inertial where gamma/A > model_tol with "auto"; stop scene: "inertial" forced); with "auto" a stop point's
+    model is decided from its measured error estimate (sweep/model_choice.py), within the policy ``model_tol``.
+    """
+
+    protocol: str
     model: str
+    model_tol: float
     method: str
     method_reason: str
     point_methods: tuple[str, ...]
@@ -169,7 +187,14 @@ class Plan:
     finite: np.ndarray
     tau_samples: np.ndarray
     needs_tau: bool
+    G: np.ndarray
+    """gamma/A per point (the inertia number over A)."""
+    inertial: np.ndarray
+    """Per point: the inertial model decided by the policy before any run."""
+    chunk_size: int
     state_law: str = "aging"
+    notes: tuple[tuple[str, str], ...] = ()
+    """The description of a protocol other than the stop scene's (:meth:`describe`)."""
     index: np.ndarray | None = None
     """Flat indices in the scene's grid (i_K n_V + i_V) of the points of a plan restricted by :meth:`take`; None:
     every point of the scene, in order."""
@@ -204,10 +229,12 @@ class Plan:
 
     def describe(self) -> dict[str, str]:
         """Human-readable summary, also stored in the Dataset attrs."""
+        if self.notes:
+            return dict(self.notes)
         step = (f"{self.step.min():.6g}..{self.step.max():.6g}" if self.step.min() < self.step.max()
                 else f"{self.step[0]:.6g}")
         text = {
-            "model": self.model,
+            "model": _model_policy(self.protocol, self.model, self.model_tol),
             "state_law": self.state_law,
             "state": ("xi (u = s - xi)" + (" + tau quadrature" if self.needs_tau else "") if self.state_law == "aging"
                       else "(xi, u) in the phase plane, then xi in t = 1/u (docs/physics.md 7.3)"),
@@ -249,9 +276,82 @@ class Plan:
         """Digest of everything that determines the numbers (compared on resume)."""
         h = hashlib.sha256()
         h.update(repr(sorted(self.describe().items())).encode())
-        for arr in (self.k, self.a, self.b, self.s_c, self.step, self.finite, self.tau_samples, self.point_method):
+        for arr in (self.k, self.a, self.b, self.s_c, self.step, self.finite, self.tau_samples, self.point_method,
+                    self.G, self.inertial):
             h.update(np.ascontiguousarray(arr).tobytes())
         return h.hexdigest()[:16]
+
+
+def line_uses_inertia(gamma_over_A: np.ndarray, model: str, model_tol: float) -> np.ndarray:
+    """Per V: whether the Hopf line / driven points use the inertial model. Inertia shifts the line
+    chi_c = mu1 (1 + gamma/A) by exactly gamma/A relative (linear theory), so with "auto" the inertial model is used
+    where gamma/A > model_tol."""
+    g = np.asarray(gamma_over_A, dtype=float)
+    if model == "auto":
+        return g > model_tol
+    return np.full(g.shape, model == "inertial")
+
+
+def _model_policy(protocol: str, model: str, model_tol: float) -> str:
+    """What the plan says of the model (the same words as the Dataset's plan_model)."""
+    if model != "auto":
+        return model
+    if protocol == "driven":
+        return (f"auto (model_tol {model_tol:g}): inertial where gamma/A > model_tol and where the quasi-static run "
+                f"broke down (regime runaway), quasi-static elsewhere (variable model)")
+    return (f"auto (model_tol {model_tol:g}): per point, inertial where the estimated error of the quasi-static model "
+            f"is larger (variable model)")
+
+
+def _axes(scene: Scene):
+    """(chi, mu1, k, a, b, G) flat over the grid."""
+    p = scene.params
+    chi_axis = physics.reduced_stiffness(scene.K_over_M, p.D0, p.g)
+    mu1_axis = physics.mu1(scene.V, p.m1, p.m2, p.V0)
+    G_axis = physics.inertia_number(scene.V, p.D0, p.g) / p.A
+    chi, mu1 = (x.ravel() for x in np.meshgrid(chi_axis, mu1_axis, indexing="ij"))
+    G = np.broadcast_to(G_axis, (scene.K_over_M.size, scene.V.size)).ravel().copy()
+    return chi, mu1, chi / p.A, mu1 / p.A, np.full(chi.size, p.m2 / p.A), G
+
+
+def _common(scene: Scene, chi, mu1, k, a, b, G, finite, inertial) -> dict:
+    """The fields of a Plan that every protocol fills the same way."""
+    return dict(protocol=scene.protocol, model=scene.model, model_tol=scene.model_tol, max_steps=int(scene.max_steps),
+                chi=chi, mu1=mu1, k=k, a=a, b=b, s_c=time_scale(k, a), finite=finite, G=G, inertial=inertial,
+                chunk_size=CHUNK_POINTS[scene.protocol], state_law=scene.state_law)
+
+
+def _driven_plan(scene: Scene) -> Plan:
+    """The plan of a driven scene: one simulation per point (sweep/integrate/driven.py)."""
+    chi, mu1, k, a, b, G = _axes(scene)
+    inertial = line_uses_inertia(G, scene.model, scene.model_tol)
+    n = k.size
+    return Plan(method="dp5", method_reason="adaptive, PI control; rodas3 where the inertial mode is stiff",
+                point_methods=("dp5",), point_method=np.zeros(n, np.int8), adaptive=True, lanes=False,
+                dtype=np.dtype(np.float64), step=np.full(n, np.nan), step_source="controller",
+                ctrl_tol=driven_stepper_rtol(scene.rtol), rule="", tau_samples=np.empty(0), needs_tau=False,
+                notes=tuple(_driven_notes(scene).items()),
+                **_common(scene, chi, mu1, k, a, b, G, np.ones(n, bool), inertial))
+
+
+W_TEXT = ", w = ln xi' with inertia"
+
+
+def _driven_notes(scene: Scene) -> dict[str, str]:
+    """What the driven run chose, for the Dataset attrs."""
+    return {
+        "model": _model_policy("driven", scene.model, scene.model_tol),
+        "state_law": scene.state_law,
+        "method": f"dp5 (adaptive, PI control) in tau on (z = tau - xi, u = ln psi"
+                  f"{W_TEXT if scene.model != 'quasistatic' else ''}), local rtol "
+                  f"{driven_stepper_rtol(scene.rtol):g} x max(perturbation, |z|)",
+        "regime_rule": (f"runaway: slip velocity > {RUNAWAY_XI_DOT:g} V; steady: state below {DECAYED:g} x "
+                        f"perturbation or 3 per-cycle growth rates < 0 agreeing to {GROWTH_RTOL:g}; stationary: "
+                        f"|a_k/a_k-1 - 1| <= {STATIONARY_TOL:g} over 3 cycles, neutral within {NEUTRAL_SPREAD:g} "
+                        f"of the first cycle's amplitude, else stick_slip; undecided after {scene.max_cycles} "
+                        f"cycles or {scene.max_steps} steps"),
+        "perturbation": f"z(0) = {scene.perturbation:g}, u(0) = 0",
+    }
 
 
 def finite_relaxed_slip(a: np.ndarray, b: np.ndarray, state_law: str = "aging") -> np.ndarray:
@@ -262,12 +362,12 @@ def finite_relaxed_slip(a: np.ndarray, b: np.ndarray, state_law: str = "aging") 
     return b > 0
 
 
-def _general_plan(scene: Scene, chi, mu1, k, a, b, finite) -> Plan:
+def _general_plan(scene: Scene, chi, mu1, k, a, b, G, finite) -> Plan:
     """The plan of a state law without the aging identity: the general two-state path of sweep/integrate/stop_slip.py
     (dp5, PI controller, a pair of tolerances per point)."""
     from .accuracy import GENERAL_ESTIMATE_GAIN, TIGHTER
 
-    return Plan(model="quasistatic", method="dp5", method_reason=f"general two-state path of the {scene.state_law} law",
+    return Plan(method="dp5", method_reason=f"general two-state path of the {scene.state_law} law",
                 point_methods=("dp5",), point_method=np.zeros(k.size, np.int8), adaptive=True, lanes=False,
                 dtype=np.dtype(np.float64), step=np.full(k.size, np.nan), step_source="controller",
                 ctrl_tol=scene.rtol / TIGHTER**2,
@@ -275,20 +375,19 @@ def _general_plan(scene: Scene, chi, mu1, k, a, b, finite) -> Plan:
                       f"dxi/dt = -1/(b + a t + k xi t^2) in t = 1/u to t = 0; local tolerances rtol/{TIGHTER:g}, "
                       f"rtol/{TIGHTER**2:g}, rtol/{TIGHTER**3:g}, the middle one returned, {GENERAL_ESTIMATE_GAIN:g} x "
                       f"the larger difference to its neighbours its error estimate"),
-                max_steps=int(scene.max_steps), chi=chi, mu1=mu1, k=k, a=a, b=b, s_c=time_scale(k, a), finite=finite,
-                tau_samples=scene.tau_samples, needs_tau=False, state_law=scene.state_law)
+                tau_samples=scene.tau_samples, needs_tau=False,
+                **_common(scene, chi, mu1, k, a, b, G, finite, np.zeros(k.size, bool)))
 
 
 def make_plan(scene: Scene) -> Plan:
-    """Decide model, state, method, float type and per-point step parameters for ``scene``."""
+    """Decide model policy, state, method, float type and per-point step parameters for ``scene`` (any protocol)."""
+    if scene.protocol == "driven":
+        return _driven_plan(scene)
     p = scene.params
-    chi_axis = physics.reduced_stiffness(scene.K_over_M, p.D0, p.g)
-    mu1_axis = physics.mu1(scene.V, p.m1, p.m2, p.V0)
-    chi, mu1 = (x.ravel() for x in np.meshgrid(chi_axis, mu1_axis, indexing="ij"))
-    k, a, b = chi / p.A, mu1 / p.A, np.full(chi.size, p.m2 / p.A)
+    chi, mu1, k, a, b, G = _axes(scene)
     finite = finite_relaxed_slip(a, b, scene.state_law)
     if scene.state_law != "aging":
-        return _general_plan(scene, chi, mu1, k, a, b, finite)
+        return _general_plan(scene, chi, mu1, k, a, b, G, finite)
     method, reason = choose_method(scene)
     tab = METHODS[method]
     ctrl_tol = scene.rtol * CTRL_TOL_FACTOR.get(method, 1.0)
@@ -312,7 +411,6 @@ def make_plan(scene: Scene) -> Plan:
             if scene.step is None:
                 step = np.where(stiff, stiff_pilot_step_for(scene.rtol), step)
     return Plan(
-        model="quasistatic",
         method=method,
         method_reason=reason,
         point_methods=point_methods,
@@ -324,15 +422,7 @@ def make_plan(scene: Scene) -> Plan:
         step_source=source,
         ctrl_tol=ctrl_tol,
         rule="; ".join(_step_rule(m, lanes) for m in point_methods),
-        max_steps=int(scene.max_steps),
-        chi=chi,
-        mu1=mu1,
-        k=k,
-        a=a,
-        b=b,
-        s_c=time_scale(k, a),
-        finite=finite,
         tau_samples=scene.tau_samples,
         needs_tau=scene.time_resolved,
-        state_law=scene.state_law,
+        **_common(scene, chi, mu1, k, a, b, G, finite, finite & (scene.model == "inertial")),
     )

@@ -9,7 +9,8 @@ chunking, the order in which chunks finish, or how many runs it took.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+import time
+from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
 import xarray as xr
@@ -22,7 +23,7 @@ from .progress import Progress
 from .scene import Scene
 from .status import Status
 
-__all__ = ["Interrupted", "run_chunks", "sampled_blocks", "stop_chunk", "stop_outputs"]
+__all__ = ["Interrupted", "chunk_task", "in_process", "run_chunks", "sampled_blocks", "stop_chunk", "stop_outputs"]
 
 JOURNAL_FORMAT = 2
 """2: chunks are consecutive ranges of points (1: points spread over the grid)."""
@@ -32,16 +33,34 @@ class Interrupted(RuntimeError):
     """A journaled run was interrupted (Ctrl-C); the message says where the finished chunks are and how to resume."""
 
 
-def run_chunks(scene: Scene, plan: Plan | None, chunk_size: int | None, journal: Journal | None,
-               progress: bool | None, imap=None) -> tuple[dict[str, np.ndarray], float]:
-    """Every chunk of ``scene`` not yet in ``journal``, computed through ``imap`` (sweep/backends.py; default: in
-    this process), then all chunks consolidated: (arrays over the scene's points, seconds spent computing them,
-    summed over chunks and over the runs that computed them). With a journal the arrays sampled in time
-    (engine.SAMPLED) stay there, never held whole: :func:`sampled_blocks` reads them back chunk by chunk."""
-    from .backends import _threads
+def chunk_task(scene: Scene, plan: Plan, points: np.ndarray) -> dict[str, np.ndarray]:
+    """Compute one chunk (any backend): per-point arrays plus ``seconds``, the time it took. ``plan``: the chunk's
+    share of the scene's plan (Plan.take, made once by the driver for the whole scene), ``points`` its points in the
+    grid."""
+    from .driven_sweep import driven_chunk
 
-    imap = imap or _threads
-    chunks = chunk_points(scene.n_points, chunk_size)
+    t0 = time.perf_counter()
+    compute = driven_chunk if plan.protocol == "driven" else stop_chunk
+    arrays = compute(scene, plan)(np.arange(points.size))
+    arrays["seconds"] = np.array(time.perf_counter() - t0)
+    return arrays
+
+
+def in_process(scene: Scene, plan: Plan, todo: Iterable[tuple[int, np.ndarray]]):
+    """The threads backend: the chunks one after another in this process (numba's threads inside each)."""
+    for i, points in todo:
+        yield i, chunk_task(scene, plan.take(points), points)
+
+
+def run_chunks(scene: Scene, plan: Plan, chunk_size: int | None, journal: Journal | None,
+               progress: bool | None, imap=None) -> tuple[dict[str, np.ndarray], float]:
+    """The one chunk loop: every chunk of ``scene`` not yet in ``journal``, computed through ``imap``
+    (sweep/backends.py; default :func:`in_process`), then all chunks consolidated: (arrays over the scene's points,
+    seconds spent computing them, summed over chunks and over the runs that computed them). With a journal the
+    arrays sampled in time (engine.SAMPLED) stay there, never held whole: :func:`sampled_blocks` reads them back
+    chunk by chunk."""
+    imap = imap or in_process
+    chunks = chunk_points(scene.n_points, chunk_size or plan.chunk_size)
     done = journal.done() if journal is not None else set()
     flat: dict[str, np.ndarray] = {}
     seconds = [0.0]
