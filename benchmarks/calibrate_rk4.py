@@ -35,9 +35,9 @@ import numpy as np
 from _common import cpu_model, git_commit, sweep_tree_dirty, versions
 
 import sweep
-from sweep.engine import execute
 from sweep.plan import C_STABLE, C_UNSTABLE, H_MAX, STEP_SAFETY
 from sweep.plan import ERROR_GAIN as PLAN_ERROR_GAIN
+from sweep.runner import execute
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_OUT = HERE / "results" / "calibrate_rk4.json"

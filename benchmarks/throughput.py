@@ -3,7 +3,7 @@
 
     python benchmarks/throughput.py [--quick] [--out benchmarks/results/throughput.json] [--no-png]
 
-Every engine number goes through the public path (sweep.make_plan + sweep.engine.execute, what run_sweep runs,
+Every engine number goes through the public path (sweep.make_plan + sweep.runner.execute, what run_sweep runs,
 or run_sweep itself), so the script does not depend on the kernels' internals. Every point is solved as the
 engine always solves it: down its step ladder (sweep/integrate/ladder.py: a pilot pair at 2 h0, h0, then up to three
 finer runs at steps chosen from the point's own error; with a step given by the user, Scene(step=h), the fixed
@@ -63,9 +63,9 @@ from scipy.integrate import DOP853, LSODA
 
 import sweep
 from sweep import physics
-from sweep.engine import execute
 from sweep.estimate import estimate_seconds
 from sweep.models.stop import E_TAIL_MAX, EXP_MAX, RATE_FLOOR, TAIL_SAFETY
+from sweep.runner import execute
 from sweep.solvers import METHODS
 
 HERE = Path(__file__).resolve().parent

@@ -10,14 +10,14 @@ import xarray as xr
 
 from .backends import check_backend, open_backend
 from .dataset import build_dataset, build_driven_dataset
-from .engine import n_samples, warm_up
+from .engine import n_samples
 from .hopf import with_simulated_line
 from .io import open_dataset, save
 from .journal import Journal
 from .model_choice import warm_up_models
 from .params import FrictionParams
 from .plan import make_plan
-from .runner import JOURNAL_FORMAT, chunk_task, run_chunks, sampled_blocks, stop_outputs
+from .runner import JOURNAL_FORMAT, chunk_task, run_chunks, sampled_blocks, stop_outputs, warm_up
 from .scene import Scene
 
 __all__ = ["run_sweep", "solve_point"]

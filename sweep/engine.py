@@ -1,4 +1,4 @@
-"""Engine: run a plan's points through the compiled kernel in chunks, in parallel, with progress.
+"""Engine: run a chunk of a plan's points through the compiled kernels, in parallel; the flat outputs.
 
 The numba layer (``stop_batch`` of integrate/stop_point.py and the lanes) knows nothing of xarray: it fills
 preallocated flat arrays, one point written once by one thread. The costly points cluster in one corner of the grid
@@ -12,7 +12,6 @@ point down its own step ladder (integrate/ladder.py).
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numba
@@ -20,17 +19,16 @@ import numpy as np
 
 from .integrate.ladder import climb
 from .integrate.lanes import lane_kernels
-from .integrate.stop_point import Method, StopPoints, Tolerances, stop_batch
+from .integrate.stop_point import Method, StopOutputs, StopPoints, Tolerances, stop_batch
 from .integrate.stop_slip import slip_batch
 from .models.stop import NO_FINITE_LIMIT, OK
 from .physics import perturbation_growth
 from .plan import CHUNK_POINTS, Plan
-from .progress import Progress
 from .scene import Scene
 from .solvers import METHODS
 from .status import Status
 
-__all__ = ["SAMPLED", "RawResult", "chunk_points", "execute", "run_points", "warm_up"]
+__all__ = ["SAMPLED", "RawResult", "chunk_points", "mark_error_above_tol", "n_samples", "run_points"]
 
 FRACTIONS = np.array([0.5, 0.9])
 """Fractions of the relaxed slip whose times are reported as t50 and t90."""
@@ -141,9 +139,7 @@ def run_points(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
     fractions = FRACTIONS if {"t50", "t90"} & set(scene.observables) else np.empty(0)
     stop_batch(Method.of(plan.tableau), StopPoints(plan.k[g], plan.a[g], plan.b[g], plan.s_c[g], plan.step[g]),
                plan.finite[g], Tolerances(scene.rtol, scene.atol["xi_inf"], plan.ctrl_tol), plan.max_steps,
-               plan.tau_samples, obs_tau, fractions, part.xi_inf, part.xi_inf_err,
-               part.status, part.steps, part.xi_at, part.u_at, part.xi_at_err, part.u_at_err, part.tau_at_fraction,
-               part.tau_at_fraction_err)
+               plan.tau_samples, obs_tau, fractions, StopOutputs(*(getattr(part, f) for f in StopOutputs._fields)))
     part.work[:] = 3 * part.steps.astype(np.int64) // 2
     return part
 
@@ -156,21 +152,6 @@ def chunk_points(n: int, chunk_size: int | None = None) -> list[np.ndarray]:
     rng = np.random.default_rng(ORDER_SEED)
     bounds = np.array_split(np.arange(n), max(1, math.ceil(n / (chunk_size or CHUNK_POINTS["stop"]))))
     return [rng.permutation(block) for block in bounds]
-
-
-def execute(scene: Scene, plan: Plan, indices: np.ndarray | None = None, progress: bool | None = None,
-            chunk_size: int | None = None) -> RawResult:
-    """Run ``plan`` over the points ``indices`` (default: all) of ``scene``; returns flat outputs."""
-    idx = np.arange(plan.n_points) if indices is None else np.asarray(indices)
-    out = RawResult.empty(idx.size, n_samples(scene, plan), 0 if plan.lanes else FRACTIONS.size)
-    t0 = time.perf_counter()
-    with Progress(idx.size, enabled=progress) as bar:
-        for sel in chunk_points(idx.size, chunk_size):
-            out.assign(sel, run_points(scene, plan, idx[sel]))
-            bar.update(sel.size)
-    mark_error_above_tol(scene, out)
-    out.seconds = time.perf_counter() - t0
-    return out
 
 
 def mark_error_above_tol(scene: Scene, out: RawResult) -> None:
@@ -187,12 +168,3 @@ def mark_error_above_tol(scene: Scene, out: RawResult) -> None:
         with np.errstate(invalid="ignore"):
             bad |= np.any(out.u_at_err > scene.rtol, axis=1)
     out.status[ok & bad] = ERROR_ABOVE_TOL
-
-
-def warm_up(scene: Scene, plan: Plan) -> float:
-    """Compile the kernels (or load them from numba's on-disk cache) on one point per method of the plan;
-    returns the seconds taken."""
-    t0 = time.perf_counter()
-    firsts = [int(np.argmax(plan.point_method == m)) for m in range(len(plan.point_methods))]
-    execute(scene, plan, np.array(firsts), progress=False)
-    return time.perf_counter() - t0

@@ -6,9 +6,10 @@ import time
 
 import numpy as np
 
-from .engine import RawResult, execute, warm_up
+from .engine import RawResult
 from .model_choice import choose_stop_models, warm_up_models
 from .plan import Plan, make_plan
+from .runner import execute, warm_up
 from .scene import Scene
 
 __all__ = ["estimate_seconds"]

@@ -273,9 +273,16 @@ class Plan:
         return "\n".join(f"{k:>28}: {v}" for k, v in self.describe().items())
 
     def hash(self) -> str:
-        """Digest of everything that determines the numbers (compared on resume)."""
+        """Digest of everything that determines the numbers (compared on resume): the plan's choices, the per-point
+        arrays and the values of the calibrated constants (sweep/accuracy.py), not the prose of :meth:`describe`."""
+        from . import accuracy
+
         h = hashlib.sha256()
-        h.update(repr(sorted(self.describe().items())).encode())
+        choices = (self.protocol, self.model, self.model_tol, self.method, self.point_methods, self.dtype.name,
+                   self.lanes, self.adaptive, self.step_source, self.ctrl_tol, self.max_steps, self.state_law,
+                   self.needs_tau, self.chunk_size)
+        constants = sorted((k, v) for k, v in vars(accuracy).items() if k.isupper())
+        h.update(repr((choices, constants)).encode())
         for arr in (self.k, self.a, self.b, self.s_c, self.step, self.finite, self.tau_samples, self.point_method,
                     self.G, self.inertial):
             h.update(np.ascontiguousarray(arr).tobytes())

@@ -9,6 +9,7 @@ chunking, the order in which chunks finish, or how many runs it took.
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Callable, Iterable, Iterator
 
@@ -23,7 +24,8 @@ from .progress import Progress
 from .scene import Scene
 from .status import Status
 
-__all__ = ["Interrupted", "chunk_task", "in_process", "run_chunks", "sampled_blocks", "stop_chunk", "stop_outputs"]
+__all__ = ["Interrupted", "chunk_task", "execute", "in_process", "run_chunks", "sampled_blocks", "stop_chunk",
+           "stop_outputs", "warm_up"]
 
 JOURNAL_FORMAT = 2
 """2: chunks are consecutive ranges of points (1: points spread over the grid)."""
@@ -46,21 +48,31 @@ def chunk_task(scene: Scene, plan: Plan, points: np.ndarray) -> dict[str, np.nda
     return arrays
 
 
-def in_process(scene: Scene, plan: Plan, todo: Iterable[tuple[int, np.ndarray]]):
+def kernel_task(scene: Scene, plan: Plan, points: np.ndarray) -> dict[str, np.ndarray]:
+    """The stop kernels alone on one chunk (no choice of model, no error marks): :func:`execute`'s task."""
+    t0 = time.perf_counter()
+    raw = run_points(scene, plan, np.arange(points.size))
+    arrays = {name: value for name, value in vars(raw).items() if isinstance(value, np.ndarray)}
+    arrays["seconds"] = np.array(time.perf_counter() - t0)
+    return arrays
+
+
+def in_process(scene: Scene, plan: Plan, todo: Iterable[tuple[int, np.ndarray]], task=chunk_task):
     """The threads backend: the chunks one after another in this process (numba's threads inside each)."""
     for i, points in todo:
-        yield i, chunk_task(scene, plan.take(points), points)
+        yield i, task(scene, plan.take(points), points)
 
 
 def run_chunks(scene: Scene, plan: Plan, chunk_size: int | None, journal: Journal | None,
                progress: bool | None, imap=None) -> tuple[dict[str, np.ndarray], float]:
     """The one chunk loop: every chunk of ``scene`` not yet in ``journal``, computed through ``imap``
-    (sweep/backends.py; default :func:`in_process`), then all chunks consolidated: (arrays over the scene's points,
-    seconds spent computing them, summed over chunks and over the runs that computed them). With a journal the
-    arrays sampled in time (engine.SAMPLED) stay there, never held whole: :func:`sampled_blocks` reads them back
-    chunk by chunk."""
+    (sweep/backends.py; default :func:`in_process`), then all chunks consolidated: (arrays over the plan's points,
+    normally the scene's, seconds spent computing them, summed over chunks and over the runs that computed them).
+    With a journal the arrays sampled in time (engine.SAMPLED) stay there, never held whole: :func:`sampled_blocks`
+    reads them back chunk by chunk."""
     imap = imap or in_process
-    chunks = chunk_points(scene.n_points, chunk_size or plan.chunk_size)
+    n = plan.n_points
+    chunks = chunk_points(n, chunk_size or plan.chunk_size)
     done = journal.done() if journal is not None else set()
     flat: dict[str, np.ndarray] = {}
     seconds = [0.0]
@@ -72,11 +84,11 @@ def run_chunks(scene: Scene, plan: Plan, chunk_size: int | None, journal: Journa
                 continue
             if name not in flat:
                 fill = np.nan if value.dtype.kind == "f" else 0
-                flat[name] = np.full((scene.n_points,) + value.shape[1:], fill, dtype=value.dtype)
+                flat[name] = np.full((n,) + value.shape[1:], fill, dtype=value.dtype)
             flat[name][points] = value
 
     todo = ((i, points) for i, points in enumerate(chunks) if i not in done)
-    with Progress(scene.n_points, enabled=progress) as bar:
+    with Progress(n, enabled=progress) as bar:
         bar.update(sum(chunks[i].size for i in done))
         try:
             for i, arrays in imap(scene, plan, todo):
@@ -93,6 +105,27 @@ def run_chunks(scene: Scene, plan: Plan, chunk_size: int | None, journal: Journa
     for i in sorted(done):  # chunks of an earlier run, from the journal
         consolidate(chunks[i], journal.read(i))
     return flat, seconds[0]
+
+
+def execute(scene: Scene, plan: Plan, indices: np.ndarray | None = None, progress: bool | None = None,
+            chunk_size: int | None = None) -> RawResult:
+    """The stop kernels alone (no choice of model) over the plan's points ``indices`` (default: all), through the
+    one chunk loop in this process; flat outputs in the order of ``indices``, error_above_tol marked."""
+    part = plan if indices is None else plan.take(np.asarray(indices))
+    flat, seconds = run_chunks(scene, part, chunk_size, None, progress,
+                               imap=functools.partial(in_process, task=kernel_task))
+    out = RawResult(**flat, seconds=seconds)
+    mark_error_above_tol(scene, out)
+    return out
+
+
+def warm_up(scene: Scene, plan: Plan) -> float:
+    """Compile the kernels (or load them from numba's on-disk cache) on one point per method of the plan;
+    returns the seconds taken."""
+    t0 = time.perf_counter()
+    firsts = [int(np.argmax(plan.point_method == m)) for m in range(len(plan.point_methods))]
+    execute(scene, plan, np.array(firsts), progress=False)
+    return time.perf_counter() - t0
 
 
 def stop_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.ndarray]]:

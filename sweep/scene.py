@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
+from .models import REGISTRY, available
 from .params import FrictionParams, require_finite, require_positive
 from .presets import presets
 from .solvers import METHODS
@@ -30,8 +31,8 @@ DRIVEN_OBSERVABLES = ("regime", "growth_rate", "period", "amplitude")
 """Observables of the driven protocol (regime, with status, is always stored)."""
 DRIVEN_METHODS = ("auto", "dp5")
 MODELS = ("auto", "quasistatic", "inertial")
-STATE_LAWS = ("aging", "slip")
-"""The state laws (sweep/models/state_laws.py; docs/physics.md 7)."""
+STATE_LAWS = tuple(sorted({law for (_, _, law) in REGISTRY}))
+"""The state laws (sweep/models/state_laws.py; docs/physics.md 7), as the model registry has them."""
 MODEL_TOL_RANGE = (1e-6, 0.5)
 """Allowed bound on the relative error of the model choice (Scene.model_tol)."""
 PERTURBATION_RANGE = (1e-8, 1.0)
@@ -256,11 +257,12 @@ class Scene:
     def _check_state_law(self) -> None:
         if self.state_law not in STATE_LAWS:
             raise InputError(f"state_law must be one of {list(STATE_LAWS)}, got {self.state_law!r}")
+        if not available(self.protocol, self.model, self.state_law):
+            have = sorted(m for (proto, m, law) in REGISTRY if proto == self.protocol and law == self.state_law)
+            raise InputError(f"state_law {self.state_law!r} runs with model {' or '.join(map(repr, have))} only "
+                             f"(sweep.models.REGISTRY), got model={self.model!r}")
         if self.state_law == "aging":
             return
-        if self.model != "quasistatic":
-            raise InputError(f"state_law {self.state_law!r} runs with model 'quasistatic' only (inertia is implemented "
-                             f"for the aging law), got model={self.model!r}")
         if self.protocol == "stop":
             if self.observables != ("xi_inf",):
                 raise InputError(f"state_law {self.state_law!r} computes the relaxed slip only (observables = "

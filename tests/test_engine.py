@@ -3,8 +3,8 @@
 import numpy as np
 
 import sweep
-from sweep.engine import execute
 from sweep.plan import make_plan
+from sweep.runner import execute
 
 PARAMS = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0033, D0=0.7e-6)
 

@@ -33,8 +33,8 @@ from hypothesis import strategies as st
 from reference import reference_stop
 
 import sweep
-from sweep.engine import execute
 from sweep.plan import make_plan
+from sweep.runner import execute
 
 G = 9.81  # m s-2 (FrictionParams default)
 V0 = 1e-6  # m s-1 (FrictionParams default)

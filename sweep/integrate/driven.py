@@ -334,28 +334,27 @@ def simulate_point(p: DrivenParams, settings: DrivenSettings, law: str = "aging"
     return point_kernel(law)(p, settings)
 
 
+@njit(cache=True)
+def _store(i, r, out):
+    """Point i's result into the output record (a function of its own: numba's parfors lose writes made through a
+    record's arrays inside the parallel loop itself)."""
+    out.regime[i], out.status[i], out.growth_rate[i], out.period[i] = r.regime, r.status, r.growth_rate, r.period
+    out.amplitude[i], out.cycles[i], out.steps[i], out.peak_w[i] = r.amplitude, r.cycles, r.steps, r.peak_w
+
+
 @functools.cache
 def driven_batch(law: str = "aging"):
-    """run(k, a, b, g, settings, out: DrivenOutputs): every point of the flat arrays k, a, b, g in parallel (one
-    thread per point at a time; a point's arithmetic does not depend on the others). The batch loop is where a
-    target other than the CPU threads would plug in."""
+    """batch(k, a, b, g, settings: DrivenSettings, out: DrivenOutputs): every point of the flat arrays k, a, b, g
+    in parallel (one thread per point at a time; a point's arithmetic does not depend on the others). The batch loop
+    is where a target other than the CPU threads would plug in."""
     point = point_kernel(law)
 
     @njit(parallel=True, cache=True)
-    def batch(k, a, b, g, settings, regime, status, growth_rate, period, amplitude, cycles, steps, peak_w):
-        # the output arrays come one by one, not as a DrivenOutputs record: numba's parfors lose the writes made
-        # into the arrays of a heterogeneous record (numba 0.6x)
+    def batch(k, a, b, g, settings, out):
         for i in prange(k.size):
-            r = point(DrivenParams(k[i], a[i], b[i], g[i]), settings)
-            regime[i], status[i], growth_rate[i], period[i] = r.regime, r.status, r.growth_rate, r.period
-            amplitude[i], cycles[i], steps[i], peak_w[i] = r.amplitude, r.cycles, r.steps, r.peak_w
+            _store(i, point(DrivenParams(k[i], a[i], b[i], g[i]), settings), out)
 
-    pin(batch, law)
-
-    def run(k, a, b, g, settings: DrivenSettings, out: DrivenOutputs) -> None:
-        batch(k, a, b, g, settings, *out)
-
-    return run
+    return pin(batch, law)
 
 
 def simulate_driven(chi: float, mu1: float, m2: float, A: float, perturbation: float = 1e-3, rtol: float = 1e-9,

@@ -563,15 +563,29 @@ class StopPoints(NamedTuple):
     h: np.ndarray
 
 
+class StopOutputs(NamedTuple):
+    """Flat per-point output arrays of :func:`stop_batch` (rows: points; sampled arrays: points x times)."""
+
+    xi_inf: np.ndarray
+    xi_inf_err: np.ndarray
+    status: np.ndarray
+    steps: np.ndarray
+    xi_at: np.ndarray
+    u_at: np.ndarray
+    xi_at_err: np.ndarray
+    u_at_err: np.ndarray
+    tau_at_fraction: np.ndarray
+    tau_at_fraction_err: np.ndarray
+
+
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def _solve_into(i, method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, xi_inf, xi_inf_err, status,
-                steps, xi_at, u_at, xi_at_err, u_at_err, tau_at_fraction, tau_at_fraction_err):
-    """Point i of :func:`stop_batch` (a function of its own: numba's parfor lowering cannot build named tuples inside
-    a parallel loop)."""
-    if not finite[i] and xi_at.shape[1] == 0:
-        xi_inf[i], xi_inf_err[i], status[i], steps[i] = math.nan, math.nan, NO_FINITE_LIMIT, 0
-        tau_at_fraction[i, :] = math.nan
-        tau_at_fraction_err[i, :] = math.nan
+def _solve_into(i, method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out):
+    """Point i of :func:`stop_batch`, written into ``out`` (a function of its own: numba's parfors can neither build
+    named tuples nor write through a record's arrays inside the parallel loop itself)."""
+    if not finite[i] and out.xi_at.shape[1] == 0:
+        out.xi_inf[i], out.xi_inf_err[i], out.status[i], out.steps[i] = math.nan, math.nan, NO_FINITE_LIMIT, 0
+        out.tau_at_fraction[i, :] = math.nan
+        out.tau_at_fraction_err[i, :] = math.nan
         return
     targets = np.concatenate((tau_samples, obs_tau[i]))
     order_t = np.argsort(targets, kind="mergesort")
@@ -579,21 +593,19 @@ def _solve_into(i, method, points, finite, tol, max_steps, tau_samples, obs_tau,
     xs, us, xe, ue = np.full(n_t, math.nan), np.full(n_t, math.nan), np.full(n_t, math.nan), np.full(n_t, math.nan)
     r = solve_stop_point(method, points.h[i], StopParams(points.k[i], points.a[i], points.b[i], points.s_c[i], False),
                          tol, max_steps, finite[i], TimeSamples(targets[order_t], xs, us, xe, ue),
-                         FractionTimes(fractions, tau_at_fraction[i], tau_at_fraction_err[i]))
-    xi_inf[i], xi_inf_err[i], status[i], steps[i] = r.xi_inf, r.xi_inf_err, r.status, r.steps
+                         FractionTimes(fractions, out.tau_at_fraction[i], out.tau_at_fraction_err[i]))
+    out.xi_inf[i], out.xi_inf_err[i], out.status[i], out.steps[i] = r.xi_inf, r.xi_inf_err, r.status, r.steps
     for j in range(n_t):
-        xi_at[i, order_t[j]], u_at[i, order_t[j]] = xs[j], us[j]
-        xi_at_err[i, order_t[j]], u_at_err[i, order_t[j]] = xe[j], ue[j]
+        out.xi_at[i, order_t[j]], out.u_at[i, order_t[j]] = xs[j], us[j]
+        out.xi_at_err[i, order_t[j]], out.u_at_err[i, order_t[j]] = xe[j], ue[j]
 
 
 @njit(parallel=True, cache=True)
-def stop_batch(method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, xi_inf, xi_inf_err, status,
-               steps, xi_at, u_at, xi_at_err, u_at_err, tau_at_fraction, tau_at_fraction_err):
-    """Solve a flat batch of stop points one by one (:func:`solve_stop_point`): ``method`` a :class:`Method`,
-    ``points`` a :class:`StopPoints` record of per-point arrays, ``finite`` whether each has a finite relaxed slip,
-    ``tol`` the scene's :class:`Tolerances`, ``tau_samples`` the trajectory's reduced times, obs_tau[i, :] point
-    i's extra reduced times (slip_at), ``fractions`` those of t50/t90 (empty: not asked for). The outputs come one
-    by one (explicit out; numba's parfors lose writes into the arrays of a heterogeneous record)."""
+def stop_batch(method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out):
+    """Solve a flat batch of stop points one by one (:func:`solve_stop_point`) into ``out`` (:class:`StopOutputs`):
+    ``method`` a :class:`Method`, ``points`` a :class:`StopPoints` record of per-point arrays, ``finite`` whether
+    each has a finite relaxed slip, ``tol`` the scene's :class:`Tolerances`, ``tau_samples`` the trajectory's reduced
+    times, obs_tau[i, :] point i's extra reduced times (slip_at), ``fractions`` those of t50/t90 (empty: not asked
+    for)."""
     for i in prange(finite.size):
-        _solve_into(i, method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, xi_inf, xi_inf_err,
-                    status, steps, xi_at, u_at, xi_at_err, u_at_err, tau_at_fraction, tau_at_fraction_err)
+        _solve_into(i, method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out)
