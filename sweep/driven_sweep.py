@@ -8,7 +8,8 @@ from collections.abc import Callable
 import numpy as np
 
 from .accuracy import driven_stepper_rtol
-from .integrate.driven import DrivenOutputs, DrivenSettings, Regime, driven_batch
+from .integrate.batch import driven_batch
+from .integrate.driven import DrivenOutputs, DrivenSettings, Regime
 from .plan import Plan
 from .scene import Scene
 

@@ -1,6 +1,6 @@
 """Engine: run a chunk of a plan's points through the compiled kernels, in parallel; the flat outputs.
 
-The numba layer (``stop_batch`` of integrate/stop_point.py and the lanes) knows nothing of xarray: it fills
+The numba layer (the batch loops of integrate/batch.py) knows nothing of xarray: it fills
 preallocated flat arrays, one point written once by one thread. The costly points cluster in one corner of the grid
 (small K/M with mu1 < 0) and numba's prange splits a batch into equal contiguous shares, so the points of a chunk
 are visited in a fixed pseudo-random order: every thread's share of it then mixes cheap and costly points
@@ -17,10 +17,10 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from .integrate.batch import StopOutputs, slip_batch, stop_batch
 from .integrate.ladder import climb
 from .integrate.lanes import lane_kernels
-from .integrate.stop_point import Method, StopOutputs, StopPoints, Tolerances, stop_batch
-from .integrate.stop_slip import slip_batch
+from .integrate.stop_point import Method, StopPoints, Tolerances
 from .models.stop import NO_FINITE_LIMIT, OK
 from .physics import perturbation_growth
 from .plan import CHUNK_POINTS, Plan

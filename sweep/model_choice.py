@@ -24,7 +24,8 @@ import numpy as np
 
 from .accuracy import ESTIMATE_MARGIN, ESTIMATE_RTOL, FIRST_ORDER_TRUST, TIGHTER
 from .engine import ORDER_SEED, RawResult
-from .integrate.stop_inertial import RELAX_KEYS, relax_points
+from .integrate.batch import relax_points
+from .integrate.stop_inertial import RELAX_KEYS
 from .plan import Plan
 from .progress import Progress
 from .scene import Scene

@@ -41,7 +41,7 @@ from enum import IntEnum
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from ..accuracy import (
     DECAYED,
@@ -64,7 +64,7 @@ from ..solvers.rosenbrock_step import make_rodas3_step, scratch
 from ..solvers.vmath import EXP_MAX
 from ..status import Status
 
-__all__ = ["DrivenOutputs", "DrivenParams", "DrivenResult", "DrivenSettings", "Regime", "driven_batch",
+__all__ = ["DrivenOutputs", "DrivenParams", "DrivenResult", "DrivenSettings", "Regime", "point_kernel",
            "simulate_driven", "simulate_point"]
 
 OK, MAX_STEPS, STEP_UNDERFLOW = int(Status.OK), int(Status.MAX_STEPS), int(Status.STEP_UNDERFLOW)
@@ -332,29 +332,6 @@ def simulate_point(p: DrivenParams, settings: DrivenSettings, law: str = "aging"
     """One driven point (reduced parameters in ``p``; state z = tau - xi, u = ln psi and, with inertia,
     w = ln xi'): see the module docstring."""
     return point_kernel(law)(p, settings)
-
-
-@njit(cache=True)
-def _store(i, r, out):
-    """Point i's result into the output record (a function of its own: numba's parfors lose writes made through a
-    record's arrays inside the parallel loop itself)."""
-    out.regime[i], out.status[i], out.growth_rate[i], out.period[i] = r.regime, r.status, r.growth_rate, r.period
-    out.amplitude[i], out.cycles[i], out.steps[i], out.peak_w[i] = r.amplitude, r.cycles, r.steps, r.peak_w
-
-
-@functools.cache
-def driven_batch(law: str = "aging"):
-    """batch(k, a, b, g, settings: DrivenSettings, out: DrivenOutputs): every point of the flat arrays k, a, b, g
-    in parallel (one thread per point at a time; a point's arithmetic does not depend on the others). The batch loop
-    is where a target other than the CPU threads would plug in."""
-    point = point_kernel(law)
-
-    @njit(parallel=True, cache=True)
-    def batch(k, a, b, g, settings, out):
-        for i in prange(k.size):
-            _store(i, point(DrivenParams(k[i], a[i], b[i], g[i]), settings), out)
-
-    return pin(batch, law)
 
 
 def simulate_driven(chi: float, mu1: float, m2: float, A: float, perturbation: float = 1e-3, rtol: float = 1e-9,

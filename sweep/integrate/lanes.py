@@ -19,12 +19,13 @@ import functools
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from ..jitcache import pin, pin_module
 from ..models.stop import EXP_MAX, FAST, MAX_STEPS, NONFINITE, OK, TAIL_SAFETY, make_rate, tail_error, tail_slip
 from ..models.stop_stiff import make_stiff_rate
 from ..solvers import METHODS, RosenbrockTableau
+from .batch import lanes_batch
 
 LANES = 16
 """Runs in flight per thread (8 and 32 measured within 10 %: benchmarks/throughput.py)."""
@@ -182,18 +183,9 @@ def make_lane_kernels(dtype, tableau):
                 queued = take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c)
                 busy -= lane_run[lane] < 0
 
-    @njit(parallel=True, cache=True)
-    def relax_batch(k, a, bb, s_c, run_point, run_h, max_steps, rtol, atol, groups, xi_inf, tail_err,
-                    status, steps):
-        """All runs, in ``groups`` strided groups (each stepped in lanes by one thread)."""
-        groups = max(1, min(groups, run_point.size // W))
-        for g in prange(groups):
-            relax_runs(k, a, bb, s_c, run_point, run_h, np.arange(g, run_point.size, groups), max_steps,
-                       rtol, atol, xi_inf, tail_err, status, steps)
-
-    for kernel in (load, take_next, relax_runs, relax_batch):
+    for kernel in (load, take_next, relax_runs):
         pin(kernel, f.__name__, tableau.name)
-    return relax_runs, relax_batch
+    return relax_runs, pin(lanes_batch(relax_runs, W), f.__name__, tableau.name)
 
 
 @functools.cache

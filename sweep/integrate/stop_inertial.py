@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from ..accuracy import HANDOVER_FRACTION
 from ..jitcache import pin_module
@@ -23,7 +23,7 @@ from ..solvers.fastmath import FAST
 from ..solvers.rosenbrock_step import make_rodas3_step, scratch
 from ..status import Status
 
-__all__ = ["relax", "relax_batch", "relax_points", "RELAX_KEYS"]
+__all__ = ["relax", "RELAX_KEYS"]
 
 RELAX_KEYS = ("xi_inf", "correction", "status", "steps", "s_handover")
 """The outputs of :func:`relax_points`."""
@@ -99,25 +99,6 @@ def relax(k, a, b, G, inertial, rtol, atol, max_steps):
             return (xi + tail_slip(k, a, b, u, E), tail_correction(k, a, b, p_quasi[3], u, E, y[1]), OK, steps,
                     s_handover)
     return math.nan, math.nan, MAX_STEPS, steps, s_handover
-
-
-@njit(parallel=True, cache=True)
-def relax_batch(k, a, b, G, inertial, rtol, atol, max_steps, xi_inf, correction, status, steps, s_handover):
-    """:func:`relax` over flat arrays of points (in parallel); results written into the output arrays."""
-    for i in prange(k.size):
-        xi_inf[i], correction[i], status[i], steps[i], s_handover[i] = relax(k[i], a[i], b[i], G[i], inertial,
-                                                                             rtol, atol, max_steps)
-
-
-def relax_points(k: np.ndarray, a: np.ndarray, b: np.ndarray, G: np.ndarray, inertial: bool, rtol: float,
-                 atol: float, max_steps: int) -> dict[str, np.ndarray]:
-    """:func:`relax_batch` with its output arrays: keys xi_inf, correction, status, steps, s_handover."""
-    n = np.size(k)
-    out = dict(zip(RELAX_KEYS, (np.full(n, np.nan), np.full(n, np.nan), np.zeros(n, np.int8), np.zeros(n, np.int64),
-                                np.zeros(n))))
-    relax_batch(*(np.ascontiguousarray(x, dtype=float) for x in (k, a, b, G)), inertial, rtol, atol, max_steps,
-                *out.values())
-    return out
 
 
 pin_module(__name__)

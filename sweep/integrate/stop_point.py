@@ -39,7 +39,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from ..accuracy import COARSE_GAIN, TAIL_RTOL, TAIL_TIGHTENING
 from ..models.stop import (
@@ -577,35 +577,3 @@ class StopOutputs(NamedTuple):
     tau_at_fraction: np.ndarray
     tau_at_fraction_err: np.ndarray
 
-
-@njit(cache=True, fastmath=FAST, error_model="numpy")
-def _solve_into(i, method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out):
-    """Point i of :func:`stop_batch`, written into ``out`` (a function of its own: numba's parfors can neither build
-    named tuples nor write through a record's arrays inside the parallel loop itself)."""
-    if not finite[i] and out.xi_at.shape[1] == 0:
-        out.xi_inf[i], out.xi_inf_err[i], out.status[i], out.steps[i] = math.nan, math.nan, NO_FINITE_LIMIT, 0
-        out.tau_at_fraction[i, :] = math.nan
-        out.tau_at_fraction_err[i, :] = math.nan
-        return
-    targets = np.concatenate((tau_samples, obs_tau[i]))
-    order_t = np.argsort(targets, kind="mergesort")
-    n_t = targets.size
-    xs, us, xe, ue = np.full(n_t, math.nan), np.full(n_t, math.nan), np.full(n_t, math.nan), np.full(n_t, math.nan)
-    r = solve_stop_point(method, points.h[i], StopParams(points.k[i], points.a[i], points.b[i], points.s_c[i], False),
-                         tol, max_steps, finite[i], TimeSamples(targets[order_t], xs, us, xe, ue),
-                         FractionTimes(fractions, out.tau_at_fraction[i], out.tau_at_fraction_err[i]))
-    out.xi_inf[i], out.xi_inf_err[i], out.status[i], out.steps[i] = r.xi_inf, r.xi_inf_err, r.status, r.steps
-    for j in range(n_t):
-        out.xi_at[i, order_t[j]], out.u_at[i, order_t[j]] = xs[j], us[j]
-        out.xi_at_err[i, order_t[j]], out.u_at_err[i, order_t[j]] = xe[j], ue[j]
-
-
-@njit(parallel=True, cache=True)
-def stop_batch(method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out):
-    """Solve a flat batch of stop points one by one (:func:`solve_stop_point`) into ``out`` (:class:`StopOutputs`):
-    ``method`` a :class:`Method`, ``points`` a :class:`StopPoints` record of per-point arrays, ``finite`` whether
-    each has a finite relaxed slip, ``tol`` the scene's :class:`Tolerances`, ``tau_samples`` the trajectory's reduced
-    times, obs_tau[i, :] point i's extra reduced times (slip_at), ``fractions`` those of t50/t90 (empty: not asked
-    for)."""
-    for i in prange(finite.size):
-        _solve_into(i, method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out)

@@ -16,16 +16,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
-from ..accuracy import GENERAL_ESTIMATE_GAIN, TIGHTER
 from ..models.stop_slip import SlipStopParams, handover_u, inverse_rhs, phase_rhs
 from ..solvers import DP5
 from ..solvers.controllers import PI_CONTROLLER
 from ..status import Status
 from .adaptive import make_march
 
-__all__ = ["relax_slip", "slip_batch"]
+__all__ = ["relax_slip"]
 
 OK, NO_FINITE_LIMIT = int(Status.OK), int(Status.NO_FINITE_LIMIT)
 H_START = 1e-3
@@ -51,14 +50,3 @@ def relax_slip(k, a, b, rtol, atol, max_steps):
     status2, steps2, _ = _inverse(z, SlipStopParams(k, a, b, t_e), 0.1 * t_e, 0, t_e, rtol, atol, max_steps - steps)
     return (z[1] if status2 == OK else math.nan), status2, steps + steps2
 
-
-@njit(parallel=True, cache=True)
-def slip_batch(k, a, b, rtol, atol, max_steps, xi_inf, xi_inf_err, status, steps):
-    """Every point of the flat arrays k, a, b at three local tolerances (module docstring)."""
-    for i in prange(k.size):
-        x1, s1, n1 = relax_slip(k[i], a[i], b[i], rtol / TIGHTER, atol / TIGHTER, max_steps)
-        x2, s2, n2 = relax_slip(k[i], a[i], b[i], rtol / TIGHTER**2, atol / TIGHTER**2, max_steps)
-        x3, s3, n3 = relax_slip(k[i], a[i], b[i], rtol / TIGHTER**3, atol / TIGHTER**3, max_steps)
-        xi_inf[i], xi_inf_err[i] = x2, GENERAL_ESTIMATE_GAIN * max(abs(x2 - x1), abs(x3 - x2))
-        status[i] = s2 if s2 != OK else (s1 if s1 != OK else s3)
-        steps[i] = n2

@@ -1,0 +1,137 @@
+"""Every batch loop of the engine: a parallel loop over a flat batch of points with explicit outputs, one per driver.
+
+This module is where the target of the computation lives: today numba's CPU threads (``prange``); a GPU target
+(one thread per point or lane) would be a second set of these loops, calling the same per-point drivers of
+:mod:`sweep.integrate`. A point's arithmetic never depends on the other points of its batch, so results do not
+depend on the batch, its order or the number of threads.
+
+Two numba constraints shape the loops: the parallel loop itself can neither build named tuples nor write through
+a record's arrays (numba 0.6x loses such writes silently), so each point's work and writes happen in a per-point
+function called from the loop (:func:`_solve_into`, :func:`_store`).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from ..accuracy import GENERAL_ESTIMATE_GAIN, TIGHTER
+from ..jitcache import pin, pin_module
+from ..models.stop import StopParams
+from ..solvers.fastmath import FAST
+from ..status import Status
+from .driven import DrivenParams, point_kernel
+from .stop_inertial import RELAX_KEYS, relax
+from .stop_point import FractionTimes, StopOutputs, TimeSamples, solve_stop_point
+from .stop_slip import relax_slip
+
+__all__ = ["StopOutputs", "driven_batch", "lanes_batch", "relax_batch", "relax_points", "slip_batch", "stop_batch"]
+
+OK, NO_FINITE_LIMIT = int(Status.OK), int(Status.NO_FINITE_LIMIT)
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def _solve_into(i, method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out):
+    """Point i of :func:`stop_batch`, written into ``out`` (a function of its own: numba's parfors can neither build
+    named tuples nor write through a record's arrays inside the parallel loop itself)."""
+    if not finite[i] and out.xi_at.shape[1] == 0:
+        out.xi_inf[i], out.xi_inf_err[i], out.status[i], out.steps[i] = math.nan, math.nan, NO_FINITE_LIMIT, 0
+        out.tau_at_fraction[i, :] = math.nan
+        out.tau_at_fraction_err[i, :] = math.nan
+        return
+    targets = np.concatenate((tau_samples, obs_tau[i]))
+    order_t = np.argsort(targets, kind="mergesort")
+    n_t = targets.size
+    xs, us, xe, ue = np.full(n_t, math.nan), np.full(n_t, math.nan), np.full(n_t, math.nan), np.full(n_t, math.nan)
+    r = solve_stop_point(method, points.h[i], StopParams(points.k[i], points.a[i], points.b[i], points.s_c[i], False),
+                         tol, max_steps, finite[i], TimeSamples(targets[order_t], xs, us, xe, ue),
+                         FractionTimes(fractions, out.tau_at_fraction[i], out.tau_at_fraction_err[i]))
+    out.xi_inf[i], out.xi_inf_err[i], out.status[i], out.steps[i] = r.xi_inf, r.xi_inf_err, r.status, r.steps
+    for j in range(n_t):
+        out.xi_at[i, order_t[j]], out.u_at[i, order_t[j]] = xs[j], us[j]
+        out.xi_at_err[i, order_t[j]], out.u_at_err[i, order_t[j]] = xe[j], ue[j]
+
+
+@njit(parallel=True, cache=True)
+def stop_batch(method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out):
+    """Solve a flat batch of stop points one by one (:func:`solve_stop_point`) into ``out`` (:class:`StopOutputs`):
+    ``method`` a :class:`Method`, ``points`` a :class:`StopPoints` record of per-point arrays, ``finite`` whether
+    each has a finite relaxed slip, ``tol`` the scene's :class:`Tolerances`, ``tau_samples`` the trajectory's reduced
+    times, obs_tau[i, :] point i's extra reduced times (slip_at), ``fractions`` those of t50/t90 (empty: not asked
+    for)."""
+    for i in prange(finite.size):
+        _solve_into(i, method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out)
+
+
+@njit(parallel=True, cache=True)
+def relax_batch(k, a, b, G, inertial, rtol, atol, max_steps, xi_inf, correction, status, steps, s_handover):
+    """:func:`relax` over flat arrays of points (in parallel); results written into the output arrays."""
+    for i in prange(k.size):
+        xi_inf[i], correction[i], status[i], steps[i], s_handover[i] = relax(k[i], a[i], b[i], G[i], inertial,
+                                                                             rtol, atol, max_steps)
+
+
+def relax_points(k: np.ndarray, a: np.ndarray, b: np.ndarray, G: np.ndarray, inertial: bool, rtol: float,
+                 atol: float, max_steps: int) -> dict[str, np.ndarray]:
+    """:func:`relax_batch` with its output arrays: keys xi_inf, correction, status, steps, s_handover."""
+    n = np.size(k)
+    out = dict(zip(RELAX_KEYS, (np.full(n, np.nan), np.full(n, np.nan), np.zeros(n, np.int8), np.zeros(n, np.int64),
+                                np.zeros(n))))
+    relax_batch(*(np.ascontiguousarray(x, dtype=float) for x in (k, a, b, G)), inertial, rtol, atol, max_steps,
+                *out.values())
+    return out
+
+
+@njit(parallel=True, cache=True)
+def slip_batch(k, a, b, rtol, atol, max_steps, xi_inf, xi_inf_err, status, steps):
+    """Every point of the flat arrays k, a, b at three local tolerances (module docstring)."""
+    for i in prange(k.size):
+        x1, s1, n1 = relax_slip(k[i], a[i], b[i], rtol / TIGHTER, atol / TIGHTER, max_steps)
+        x2, s2, n2 = relax_slip(k[i], a[i], b[i], rtol / TIGHTER**2, atol / TIGHTER**2, max_steps)
+        x3, s3, n3 = relax_slip(k[i], a[i], b[i], rtol / TIGHTER**3, atol / TIGHTER**3, max_steps)
+        xi_inf[i], xi_inf_err[i] = x2, GENERAL_ESTIMATE_GAIN * max(abs(x2 - x1), abs(x3 - x2))
+        status[i] = s2 if s2 != OK else (s1 if s1 != OK else s3)
+        steps[i] = n2
+
+
+@njit(cache=True)
+def _store(i, r, out):
+    """Point i's result into the output record (a function of its own: numba's parfors lose writes made through a
+    record's arrays inside the parallel loop itself)."""
+    out.regime[i], out.status[i], out.growth_rate[i], out.period[i] = r.regime, r.status, r.growth_rate, r.period
+    out.amplitude[i], out.cycles[i], out.steps[i], out.peak_w[i] = r.amplitude, r.cycles, r.steps, r.peak_w
+
+
+@functools.cache
+def driven_batch(law: str = "aging"):
+    """batch(k, a, b, g, settings: DrivenSettings, out: DrivenOutputs): every point of the flat arrays k, a, b, g
+    in parallel (one thread per point at a time; a point's arithmetic does not depend on the others). The batch loop
+    is where a target other than the CPU threads would plug in."""
+    point = point_kernel(law)
+
+    @njit(parallel=True, cache=True)
+    def batch(k, a, b, g, settings, out):
+        for i in prange(k.size):
+            _store(i, point(DrivenParams(k[i], a[i], b[i], g[i]), settings), out)
+
+    return pin(batch, law)
+
+
+def lanes_batch(relax_runs, lanes: int):
+    """relax_batch(k, a, b, s_c, run_point, run_h, max_steps, rtol, atol, groups, xi_inf, tail_err, status, steps):
+    all runs of the lanes kernel ``relax_runs`` (sweep/integrate/lanes.py), in ``groups`` strided groups, each
+    stepped in lanes by one thread."""
+
+    @njit(parallel=True, cache=True)
+    def relax_batch(k, a, bb, s_c, run_point, run_h, max_steps, rtol, atol, groups, xi_inf, tail_err,
+                    status, steps):
+        groups = max(1, min(groups, run_point.size // lanes))
+        for g in prange(groups):
+            relax_runs(k, a, bb, s_c, run_point, run_h, np.arange(g, run_point.size, groups), max_steps,
+                       rtol, atol, xi_inf, tail_err, status, steps)
+
+    return relax_batch
+pin_module(__name__)
