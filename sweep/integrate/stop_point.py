@@ -129,6 +129,17 @@ class Continuation(NamedTuple):
     u: float
 
 
+class StepState(NamedTuple):
+    """The state (xi, s, tau) at the start of a mesh step and its derivative there."""
+
+    xi: float
+    s: float
+    tau: float
+    dxi: float
+    ds: float
+    dtau: float
+
+
 class Run(NamedTuple):
     """A :func:`march` result (its docstring)."""
 
@@ -189,14 +200,16 @@ def hermite_crossing(y0, y1, m0, m1, target):
 
 
 @njit(cache=True, fastmath=FAST)
-def state_where(method, K, work, component, target, theta, xi, s, tau, d0x, d0s, d0t, h, split, p):
+def state_where(method, K, work, component, target, theta, start, h, split, p):
     """State (xi, s, tau) and slip rate dxi/dtau inside a mesh step h where ``component`` (0: xi, 2: tau) equals
     ``target``: Newton on theta in [0, 1] with exact partial steps of size theta*h from the mesh step's start (the
     method's own local order), started from the estimate ``theta``. The partial step is taken as ``split`` equal
     substeps, like the run's own steps: the fine run's path to a sample is then the coarse run's path with every
     step halved, as for the values at mesh points, and the pair keeps its h^p ratio there too. (Located from the
     fine run's own last substep instead, a sample just past the middle of a coarse step came out of a partial
-    step barely longer than the fine run's full one: as accurate, and estimates 0.14x the true error.)"""
+    step barely longer than the fine run's full one: as accurate, and estimates 0.14x the true error.)
+    ``start``: the mesh step's start (:class:`StepState`)."""
+    xi, s, tau, d0x, d0s, d0t = start
     x1, s1, t1, dx1, dt1 = xi, s, tau, d0x, d0t
     for _ in range(8):
         x1, s1, t1 = xi, s, tau
@@ -285,15 +298,15 @@ def march(method, plan_mesh, p, tol, max_steps, want_limit, samples):
     cont = Continuation(tau_targets.size, 0.0, 1.0, 0.0)
     track, n_track = np.empty((256, 3)), 0
     n, sub = 0, 0
-    xm, sm, tm, dxm, dsm, dtm = xi, s, tau, dxi, ds, dtau  # state at the start of the current mesh step
+    start = StepState(xi, s, tau, dxi, ds, dtau)  # at the start of the current mesh step
     while n < max_steps:
         if mode == REPLAY:
             h = mesh[min(n // split, n_mesh - 1)] / split
             sub = n % split
             if sub == 0:
-                xm, sm, tm, dxm, dsm, dtm = xi, s, tau, dxi, ds, dtau
+                start = StepState(xi, s, tau, dxi, ds, dtau)
         else:
-            xm, sm, tm, dxm, dsm, dtm = xi, s, tau, dxi, ds, dtau
+            start = StepState(xi, s, tau, dxi, ds, dtau)
         K[0, 0], K[0, 1], K[0, 2] = dxi, ds, dtau
         xi1, s1, tau1, ex, es, et = erk_step(method, K, work, xi, s, tau, h, p)
         if fsal:
@@ -327,14 +340,13 @@ def march(method, plan_mesh, p, tol, max_steps, want_limit, samples):
         # targets crossed in this substep, located from the mesh step's start (theta relative to the mesh step)
         while it < tau_targets.size and tau_targets[it] <= tau1:
             th = (sub + hermite_crossing(tau, tau1, h * dtau, h * dtau1, tau_targets[it])) / split
-            xt, st, _, _ = state_where(method, K, work, 2, tau_targets[it], th, xm, sm, tm, dxm, dsm, dtm, h * split,
-                                       split, p_tau)
+            xt, st, _, _ = state_where(method, K, work, 2, tau_targets[it], th, start, h * split, split, p_tau)
             xi_at[it], u_at[it], at_mesh[it] = xt, st - xt, (n - 1) // split
             it += 1
         while ix < xi_targets.size and xi_targets[ix] <= xi1:
             th = (sub + hermite_crossing(xi, xi1, h * dxi, h * dxi1, xi_targets[ix])) / split
-            _, _, tau_at[ix], rate_at[ix] = state_where(method, K, work, 0, xi_targets[ix], th, xm, sm, tm, dxm, dsm,
-                                                        dtm, h * split, split, p_tau)
+            _, _, tau_at[ix], rate_at[ix] = state_where(method, K, work, 0, xi_targets[ix], th, start, h * split,
+                                                        split, p_tau)
             ix += 1
         xi, s, tau, dxi, ds, dtau = xi1, s1, tau1, dxi1, ds1, dtau1
         sigma += h
