@@ -138,17 +138,19 @@ _stiff_step = make_rodas3_step(inertial_system)
 
 
 def _make_advance(rhs, with_inertia: bool):
-    """advance(stiff, y, h, p, K, ys, y_new, err, work): one step of size h from y (rates in K[0]):
-    Dormand-Prince, or RODAS3 where ``stiff``; False if the Rosenbrock matrix was singular."""
+    """advance(stiff, y, h, p, K, ys, y_new, err, work) -> (done, ln xi' at y_new or NaN): one step of size h from
+    y (rates in K[0]): Dormand-Prince (FSAL: its last stage is the rates at y_new, kept in K[-1]), or RODAS3 where
+    ``stiff``."""
     erk_step = make_erk_step(rhs, 3, DP5)
 
     @njit(inline="always", fastmath=FAST, error_model="numpy")
     def advance(stiff, y, h, p, K, ys, y_new, err, work):
+        """(done, FSAL): done False if the Rosenbrock matrix was singular; FSAL True when the rates at y_new are
+        in K[-1] (the explicit FSAL stepper) and ln xi' there is the returned aux, NaN otherwise."""
         if with_inertia and stiff:
             Kr, M, piv, f, ft, ysr = work
-            return _stiff_step(0.0, y, h, p, y_new, err, Kr, M, piv, f, ft, ysr)
-        erk_step(K, ys, y, h, p, y_new, err)
-        return True
+            return _stiff_step(0.0, y, h, p, y_new, err, Kr, M, piv, f, ft, ysr), math.nan
+        return True, erk_step(K, ys, y, h, p, y_new, err)
 
     return advance
 
@@ -255,7 +257,7 @@ def _make_simulate(law: str, with_inertia: bool):
             # explicit where it is stable, RODAS3 where the inertial mode's rate would hold the explicit step down
             stiff = with_inertia and p.g > 0.0 and h * stiffness(y, p) > STIFF_SWITCH
             q = RODAS3_ORDER if stiff else DP5_ORDER
-            done = advance(stiff, y, h, p, K, ys, y_new, err_v, work)
+            done, lw_fsal = advance(stiff, y, h, p, K, ys, y_new, err_v, work)
             steps += 1
             scale = rtol * max(size, abs(y_new[0]), abs(y_new[1]), abs(y_new[2]))
             err = max(abs(err_v[0]), abs(err_v[1]), abs(err_v[2])) / scale if done else math.nan
@@ -266,7 +268,11 @@ def _make_simulate(law: str, with_inertia: bool):
                     return DrivenResult(Regime.UNDECIDED, STEP_UNDERFLOW, grow[-1], per[-1], math.nan, cycles, steps,
                                         w_peak)
                 continue
-            lw1 = rhs(y_new, p, dy)
+            if stiff:
+                lw1 = rhs(y_new, p, dy)
+            else:  # FSAL: dp5's last stage is the rates at y_new
+                lw1 = lw_fsal
+                dy[0], dy[1], dy[2] = K[_STAGES - 1, 0], K[_STAGES - 1, 1], K[_STAGES - 1, 2]
             dz1 = dy[0]
             w_peak = max(w_peak, lw1)
             if lw1 > W_RUNAWAY:  # an accepted state: the slip velocity itself is past the threshold
