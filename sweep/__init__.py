@@ -1,5 +1,6 @@
 """sweep: Numba-accelerated parameter-space sweeps of the Baumberger & Gauthier (1996) spring-block model."""
 
+from ._version import __version__
 from .api import run_sweep, solve_point
 from .backends import local_cluster
 from .errors import InputError
@@ -14,4 +15,3 @@ from .status import Status
 
 __all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "default_scene", "load_scene", "local_cluster",
            "locate_hopf", "make_plan", "open", "presets", "provenance", "run_sweep", "save", "solve_point"]
-__version__ = "0.1.0"

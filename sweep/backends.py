@@ -63,7 +63,8 @@ def _import_dask():
         import dask
         import distributed
     except ImportError:
-        raise InputError("backend 'dask' needs dask.distributed: pip install 'sweep[distributed]'") from None
+        raise InputError("backend 'dask' needs dask.distributed: pip install '.[distributed]' in the sweep "
+                         "checkout") from None
     return dask, distributed
 
 

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._version import __version__
 from .errors import InputError
 
 DEFAULT_OUT = Path("sweep-out") / "landscape.nc"
@@ -192,6 +193,7 @@ def _positive_int(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="sweep", description=__doc__)
+    parser.add_argument("--version", action="version", version=f"sweep {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="run a scene (default: the built-in sample2 landscape) and write netCDF + PNG")
     run.add_argument("config", nargs="?", help="scene TOML file (omit for the built-in default scene)")
@@ -206,7 +208,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="points per chunk (journal entry); default 4096 for stop, 1024 for driven scenes")
     run.add_argument("--workers", type=_positive_int, default=None,
                      help="run the chunks on a dask LocalCluster of N one-thread worker processes (pip install "
-                          "'sweep[distributed]'); same numbers as the default threads backend")
+                          "'.[distributed]' from the sweep checkout); same numbers as the default threads backend")
     run.add_argument("--scheduler", default=None, metavar="ADDRESS",
                      help="run the chunks on an existing dask cluster, e.g. tcp://host:8786 (its workers need sweep "
                           "installed)")
