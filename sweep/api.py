@@ -52,9 +52,9 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
         identity = {"format": JOURNAL_FORMAT, "scene": scene.to_toml(),
                     "plan_hash": "" if plan is None else plan.hash(), "chunk_size": size, "n_points": scene.n_points}
         journal = Journal.open(output, identity, resume)
-    if backend == "dask":
-        warm_up_kernels(scene, plan)  # once, before the fan-out: the workers load them from numba's cache
-    with open_backend(backend, workers, scheduler) as imap:
+    with open_backend(backend, workers, scheduler) as imap:  # connect first: a bad scheduler fails in seconds
+        if backend == "dask":
+            warm_up_kernels(scene, plan)  # once, before the fan-out: the workers load them from numba's cache
         flat, seconds = run_chunks(scene, plan, size, journal, progress, imap)
     # with a journal the arrays sampled in time stayed there: written into the file chunk by chunk, never held whole
     blocks = None

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import shlex
 import sys
 import time
@@ -122,32 +123,40 @@ def _model_summary(ds) -> str:
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:
-    from .io import open_dataset
+    from .files import read_sweep_file
     from .plot import plot_file
 
-    ds = open_dataset(args.file)
+    ds, _ = read_sweep_file(args.file)
     for png in plot_file(ds, args.output or Path(args.file).with_suffix(".png"), variable=args.variable):
         print(f"wrote {png}")
     return 0
 
 
-def _cmd_info(args: argparse.Namespace) -> int:
-    from .io import open_dataset
+FLAGS = ("status", "regime", "bifurcation", "model")
+"""Flag variables that ``sweep info`` counts, where the file has them."""
 
-    ds = open_dataset(args.file)
-    print(f"{args.file}: {ds.attrs.get('title', '')}")
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    """``sweep info FILE``: what the file is, where it comes from, its axes, flag counts and value ranges."""
+    from .files import read_sweep_file
+
+    ds, kind = read_sweep_file(args.file)
+    print(f"{args.file}: {ds.attrs.get('title', '')} ({kind} file)")
     print(f"  source: {ds.attrs.get('source', '?')}")
     print(f"  history: {ds.attrs.get('history', '?')}")
     print("  dims: " + ", ".join(f"{k}={v}" for k, v in ds.sizes.items()))
     for name in ("K_over_M", "V"):
-        c = ds[name]
-        print(f"  {name}: {c.values.min():.4g} .. {c.values.max():.4g} [{c.units}]")
+        if name in ds.dims:
+            c = ds[name]
+            print(f"  {name}: {float(c.min()):.4g} .. {float(c.max()):.4g} [{c.attrs.get('units', '?')}]")
     for key in sorted(k for k in ds.attrs if k.startswith("plan_")):
         print(f"  {key}: {ds.attrs[key]}")
-    print("  " + _flag_summary(ds, "status"))
+    for name in FLAGS:
+        if name in ds and "flag_meanings" in ds[name].attrs:
+            print("  " + _flag_summary(ds, name))
     for name, var in ds.data_vars.items():
         vals = var.values[np.isfinite(var.values)] if var.dtype.kind == "f" else var.values
-        rng = f"{vals.min():.4g} .. {vals.max():.4g}" if vals.size else "all NaN"
+        rng = f"{float(vals.min()):.4g} .. {float(vals.max()):.4g}" if vals.size else "all NaN"
         print(f"  {name:18s} [{var.attrs.get('units', '')}] {rng}  {var.attrs.get('long_name', '')}")
     return 0
 
@@ -240,18 +249,43 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    from .runner import Interrupted
-
+    """Run the command line; returns the exit code: 0 done, 1 finished with failures (a summary says which), 2 a
+    user mistake (one line on stderr, no traceback), 130 interrupted (Ctrl-C)."""
     try:
+        args = build_parser().parse_args(argv)
         return args.func(args)
-    except (InputError, FileNotFoundError) as exc:
-        print(f"sweep: error: {exc}", file=sys.stderr)
-        return 2
-    except Interrupted as exc:  # Ctrl-C during a journaled run: nothing finished is lost
-        print(f"sweep: {exc}", file=sys.stderr)
-        return 130
+    except InputError as exc:
+        return _fail(f"error: {exc}", 2)
+    except (FileNotFoundError, PermissionError, IsADirectoryError, NotADirectoryError) as exc:
+        return _fail(f"error: {exc}", 2)
+    except KeyboardInterrupt:
+        return _fail("interrupted (Ctrl-C)", 130)
+    except Exception as exc:
+        from .runner import Interrupted
+
+        if isinstance(exc, Interrupted):  # Ctrl-C during a journaled run: nothing finished is lost
+            return _fail(str(exc), 130)
+        raise
+
+
+def _fail(message: str, code: int) -> int:
+    """Print ``sweep: message`` on one line of stderr; return the exit code."""
+    print(f"sweep: {message}", file=sys.stderr)
+    return code
+
+
+def entry_point() -> None:
+    """The ``sweep`` command: :func:`main`, then exit with its code. After a Ctrl-C the process ends with
+    ``os._exit(130)``: CPython can turn a normal exit after a caught KeyboardInterrupt into death by SIGINT (exit
+    status -2 instead of 130) when the interrupt arrived inside an import; everything is written atomically, so
+    nothing is lost by skipping the interpreter's finalisation."""
+    code = main()
+    if code == 130:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
+    sys.exit(code)
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    entry_point()

@@ -41,3 +41,104 @@ def test_distribution_name_is_ours_and_the_version_has_one_source():
 def test_version_flag(tmp_path):
     proc = sweep_cli("--version", cwd=tmp_path)
     assert proc.returncode == 0 and proc.stdout.strip() == f"sweep {sweep.__version__}", proc
+
+
+# --- one-line errors instead of tracebacks ------------------------------------------------------------------------
+
+SMALL = "preset = \"sample2\"\n[K_over_M]\nvalues = [1e4, 1e5]\n[V]\nvalues = [1e-6, 1e-5]\n"
+
+
+def _write_kind(kind: str, folder: Path) -> Path:
+    """A small file of each kind sweep writes (stop, driven, Hopf, a figure of ``sweep reproduce``)."""
+    import numpy as np
+
+    p = sweep.presets["sample2"]
+    if kind == "figure":
+        from sweep.figures import reproduce
+
+        return reproduce("fig4b", folder)[0].data
+    if kind == "hopf":
+        return sweep.save(sweep.locate_hopf(p, [1e-6, 1e-4], bifurcation=False), folder / "hopf.nc")
+    scene = sweep.Scene(protocol=kind, params=p, K_over_M=np.array([3e4, 3e5]), V=np.array([1e-6, 2e-6]))
+    return sweep.save(sweep.run_sweep(scene, progress=False), folder / f"{kind}.nc")
+
+
+@pytest.mark.parametrize("kind", ["stop", "driven", "hopf", "figure"])
+def test_info_and_plot_handle_every_file_sweep_writes(tmp_path, kind):
+    path = _write_kind(kind, tmp_path)
+    proc = sweep_cli("info", str(path), cwd=tmp_path)
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr
+    assert f"({'stop' if kind == 'figure' else kind} file)" in proc.stdout
+    proc = sweep_cli("plot", str(path), "-o", str(tmp_path / "p.png"), cwd=tmp_path)
+    assert proc.returncode == 0 and "wrote" in proc.stdout, proc.stderr
+
+
+def _not_a_sweep_file(what: str, folder: Path) -> Path:
+    path = folder / "x.nc"
+    if what == "text":
+        path.write_text("hello\n")
+    elif what == "other netCDF":
+        import xarray as xr
+
+        xr.Dataset({"a": ("x", [1.0, 2.0])}).to_netcdf(path)
+    elif what == "directory":
+        path.mkdir()
+    return path
+
+
+@pytest.mark.parametrize("command", ["info", "plot"])
+@pytest.mark.parametrize("what, message", [("missing", "no such file"), ("text", "is not a netCDF file"),
+                                           ("other netCDF", "is not a sweep file"), ("directory", "is not a file")])
+def test_anything_else_is_refused_in_one_line(tmp_path, command, what, message):
+    path = _not_a_sweep_file(what, tmp_path)
+    err = one_line_error(sweep_cli(command, str(path), cwd=tmp_path))
+    assert err.startswith("sweep: error:") and message in err and "x.nc" in err
+
+
+@pytest.mark.parametrize("command", ["run", "hopf"])
+def test_a_netcdf_file_given_as_scene_is_refused_in_one_line(tmp_path, command):
+    path = _write_kind("hopf", tmp_path)
+    err = one_line_error(sweep_cli(command, str(path), "-o", str(tmp_path / "o.nc"), cwd=tmp_path))
+    assert "not a TOML text file" in err
+
+
+def test_a_bad_scheduler_address_fails_within_seconds(tmp_path):
+    import time
+
+    (tmp_path / "s.toml").write_text(SMALL)
+    t0 = time.perf_counter()
+    proc = sweep_cli("run", "s.toml", "-o", "o.nc", "--scheduler", "tcp://127.0.0.1:9", cwd=tmp_path, timeout=60)
+    err = one_line_error(proc)
+    assert "could not connect to the dask scheduler at 'tcp://127.0.0.1:9'" in err
+    assert time.perf_counter() - t0 < 25  # 5 s connection timeout plus starting Python (was 30 s + a traceback)
+    assert not (tmp_path / "o.nc.journal").exists() or not any((tmp_path / "o.nc.journal").glob("chunk-*"))
+    proc = sweep_cli("run", "s.toml", "-o", "o.nc", "-q", cwd=tmp_path)  # the refused run left nothing in the way
+    assert proc.returncode == 0, proc.stderr
+
+
+def test_ctrl_c_while_compiling_is_one_line_and_exit_130(tmp_path):
+    """An empty numba cache (NUMBA_CACHE_DIR): the kernels compile for tens of seconds; Ctrl-C in that time."""
+    import os
+    import signal
+    import time
+
+    (tmp_path / "s.toml").write_text(SMALL)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
+    proc = subprocess.Popen([sys.executable, "-m", "sweep.cli", "run", "s.toml", "-o", "o.nc"], cwd=tmp_path,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(4.0)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, (out, err)
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "sweep: interrupted (Ctrl-C)", err
+
+
+def test_api_messages_print_plain_numbers():
+    with pytest.raises(sweep.InputError) as info:
+        sweep.solve_point(sweep.presets["sample2"], K_over_M=-2.8e5, V=1e-6)
+    assert "got min -280000.0" in str(info.value) and "np." not in str(info.value)
+    import numpy as np
+
+    with pytest.raises(sweep.InputError, match=r"got 0$"):
+        sweep.Scene(protocol="stop", params=sweep.presets["sample2"], K_over_M=[1e4], V=[1e-6],
+                    max_steps=np.int64(0))
