@@ -18,6 +18,7 @@ from .io import open_dataset, save
 from .journal import Journal
 from .model_choice import warm_up_models
 from .params import FrictionParams
+from .plausibility import warn_implausible, warn_not_ok
 from .plan import make_plan
 from .runner import JOURNAL_FORMAT, run_chunks, sampled_blocks, stop_outputs
 from .scene import Scene
@@ -44,6 +45,7 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     by chunk, never held whole, and the returned Dataset reads them from the file when they are used.
     """
     history = history or "sweep.run_sweep"
+    warn_implausible(scene.K_over_M, scene.V)  # likely unit mistakes, before any work
     plan = None if scene.protocol == "driven" else make_plan(scene)
     size = chunk_size or (DRIVEN_CHUNK if plan is None else CHUNK_POINTS)
     check_backend(backend, workers, scheduler)
@@ -97,4 +99,6 @@ def solve_point(params: FrictionParams, K_over_M: float, V: float, rtol: float =
     scene = Scene(protocol="stop", params=params, K_over_M=[K_over_M], V=[V], rtol=rtol,
                   observables=tuple(observables), trajectory_tau=trajectory_tau, t_obs=tuple(t_obs), method=method,
                   step=step, precision=precision, max_steps=max_steps, model=model, model_tol=model_tol)
-    return run_sweep(scene, progress=False, history="sweep.solve_point").isel(K_over_M=0, V=0)
+    point = run_sweep(scene, progress=False, history="sweep.solve_point").isel(K_over_M=0, V=0)
+    warn_not_ok(point, f"solve_point(K_over_M={float(K_over_M):g}, V={float(V):g})")  # never a silent NaN
+    return point

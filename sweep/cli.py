@@ -7,6 +7,7 @@ import os
 import shlex
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -21,9 +22,11 @@ FIGURE_NAMES = ("fig2", "fig3a", "fig3b", "fig4a", "fig4b")
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from .plausibility import PlausibilityWarning, warn_implausible
     from .scene import default_scene, load_scene
 
     scene = load_scene(args.config) if args.config else default_scene()
+    warn_implausible(scene.K_over_M, scene.V)  # before any work, the dry run included
     if scene.protocol == "driven":
         return _run_driven(scene, args)
     from .plan import make_plan
@@ -48,7 +51,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     t_warm = time.perf_counter()
     warm_up_kernels(scene, plan)
-    locate_hopf(scene.params, scene.V[:1], bifurcation=False)  # compile / load the kernel of the simulated line
+    with warnings.catch_warnings():  # the scene's axes were checked above; this is one of its velocities
+        warnings.simplefilter("ignore", PlausibilityWarning)
+        locate_hopf(scene.params, scene.V[:1], bifurcation=False)  # compile / load the kernel of the simulated line
     compile_s = time.perf_counter() - t_warm
     t0 = time.perf_counter()
     ds = _run_to_file(scene, args)
@@ -65,7 +70,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"sweep: could not draw the picture ({type(exc).__name__}: {exc}); the data are in {out}",
               file=sys.stderr)
         return 1
-    return 0
+    return _most_failed(ds, out)
 
 
 def _run_driven(scene, args: argparse.Namespace) -> int:
@@ -87,7 +92,22 @@ def _run_driven(scene, args: argparse.Namespace) -> int:
     print(_model_summary(ds))
     print(_flag_summary(ds, "regime"))
     print(f"wrote {plot_regimes(ds, args.png or out.with_suffix('.png'))}")
-    return 0
+    return _most_failed(ds, out)
+
+
+MOST_FAILED = 0.5
+"""A run in which more than this fraction of the points ends with a status other than ok exits with code 1."""
+
+
+def _most_failed(ds, out: Path) -> int:
+    """Exit code of a finished run: 1, with a one-line summary on stderr, where most points did not end ok."""
+    from .plausibility import not_ok_summary
+
+    bad, text = not_ok_summary(ds["status"].values, ds["status"].attrs["flag_meanings"].split())
+    if bad <= MOST_FAILED * ds["status"].size:
+        return 0
+    return _fail(f"{bad} of {ds['status'].size} points did not end ok ({text}); the values are in {out} but most "
+                 "are NaN or inaccurate: check the units (K_over_M [s-2], V [m/s]) and ranges", 1)
 
 
 def _run_to_file(scene, args: argparse.Namespace):
@@ -248,9 +268,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings of sweep (implausible inputs, failed points) as one line ``sweep: warning: ...``; others as usual."""
+    from .plausibility import PlausibilityWarning
+
+    if issubclass(category, PlausibilityWarning):
+        print(f"sweep: warning: {message}", file=sys.stderr)
+    else:
+        _python_show_warning(message, category, filename, lineno, file, line)
+
+
+_python_show_warning = warnings.showwarning
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code: 0 done, 1 finished with failures (a summary says which), 2 a
     user mistake (one line on stderr, no traceback), 130 interrupted (Ctrl-C)."""
+    warnings.showwarning = _show_warning
     try:
         args = build_parser().parse_args(argv)
         return args.func(args)

@@ -37,6 +37,7 @@ from .errors import InputError
 from .model_choice import MODEL_FLAG, line_uses_inertia
 from .models.driven import Regime, simulate_point
 from .params import FrictionParams
+from .plausibility import warn_implausible
 from .scene import MODEL_TOL_RANGE, MODELS
 
 __all__ = ["locate_hopf", "with_simulated_line"]
@@ -150,6 +151,7 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
         raise InputError(f"V must be a non-empty sequence of finite velocities > 0 [m s-1], got {V!r}")
     if not (math.isfinite(rtol) and 1e-8 <= rtol <= 0.1):
         raise InputError(f"rtol must be in [1e-8, 0.1] (relative width of the located bracket), got {rtol!r}")
+    warn_implausible(V=v)
     p = params
     mu1 = np.asarray(physics.mu1(v, p.m1, p.m2, p.V0), dtype=float)
     inertial = line_uses_inertia(np.asarray(physics.inertia_number(v, p.D0, p.g)) / p.A, model, model_tol)

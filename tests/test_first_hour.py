@@ -142,3 +142,43 @@ def test_api_messages_print_plain_numbers():
     with pytest.raises(sweep.InputError, match=r"got 0$"):
         sweep.Scene(protocol="stop", params=sweep.presets["sample2"], K_over_M=[1e4], V=[1e-6],
                     max_steps=np.int64(0))
+
+
+# --- plausibility: likely unit mistakes ---------------------------------------------------------------------------
+
+UM_AS_M = "preset = \"sample2\"\n[K_over_M]\nstart = 1e3\nstop = 1e6\nnum = 4\n[V]\nstart = 0.1\nstop = 100\nnum = 3\n"
+
+
+def test_v_in_um_per_s_is_warned_before_any_work_and_a_failed_run_exits_1(tmp_path):
+    (tmp_path / "um.toml").write_text(UM_AS_M)
+    proc = sweep_cli("run", "um.toml", "--dry-run", "-o", "um.nc", cwd=tmp_path)
+    assert proc.returncode == 0
+    warning = "sweep: warning: V up to 100 m/s: did you give µm/s? V is in m/s"
+    assert proc.stderr.count(warning) == 1, proc.stderr
+    proc = sweep_cli("run", "um.toml", "-o", "um.nc", "-q", cwd=tmp_path)
+    assert proc.returncode == 1 and proc.stderr.count(warning) == 1, (proc.stdout, proc.stderr)
+    last = proc.stderr.strip().splitlines()[-1]
+    assert last.startswith("sweep: 12 of 12 points did not end ok (") and "check the units" in last, last
+    assert (tmp_path / "um.nc").exists()  # the values are kept for inspection
+
+
+@pytest.mark.parametrize("km, v, words", [([1e3, 1e13], [1e-6], "K/M 1000..1e+13 s^-2 is outside"),
+                                          ([1e-3, 1e3], [1e-6], "K/M 0.001..1000 s^-2 is outside"),
+                                          ([1e3], [1e-6, 5.0], "V up to 5 m/s: did you give µm/s?"),
+                                          ([1e3], [1e-6, 1e5], "V up to 100000 m/s: V is in m/s")])
+def test_implausible_axes_name_the_likely_unit_mistake(km, v, words):
+    from sweep.plausibility import implausible
+
+    assert any(words in m for m in implausible(km, v)), implausible(km, v)
+    assert implausible([1e3, 1e6], [1e-7, 1e-4]) == []
+
+
+def test_solve_point_at_1_m_per_s_warns_and_its_status_says_why():
+    from sweep.plausibility import PlausibilityWarning
+
+    with pytest.warns(PlausibilityWarning) as record:
+        pt = sweep.solve_point(sweep.presets["sample2"], K_over_M=2.8e5, V=1.0, observables=["xi_inf"])
+    status = pt["status"].attrs["flag_meanings"].split()[int(pt["status"])]
+    assert status != "ok"
+    texts = [str(w.message) for w in record]
+    assert any(f"ended with status {status}" in t for t in texts), texts
