@@ -9,6 +9,7 @@ import numpy as np
 import xarray as xr
 
 from .backends import check_backend, open_backend
+from .compile_notice import announce_if_cold
 from .dataset import build_dataset, build_driven_dataset
 from .driven_sweep import CHUNK as DRIVEN_CHUNK
 from .driven_sweep import describe
@@ -46,6 +47,7 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     """
     history = history or "sweep.run_sweep"
     warn_implausible(scene.K_over_M, scene.V)  # likely unit mistakes, before any work
+    announce_if_cold()  # logs (logger "sweep") that the kernels compile now, on a machine without numba's cache
     plan = None if scene.protocol == "driven" else make_plan(scene)
     size = chunk_size or (DRIVEN_CHUNK if plan is None else CHUNK_POINTS)
     check_backend(backend, workers, scheduler)

@@ -14,6 +14,7 @@ import numpy as np
 
 from ._version import __version__
 from .errors import InputError
+from .log import configure as configure_logging
 
 DEFAULT_OUT = Path("sweep-out") / "landscape.nc"
 FIGURES_OUT = Path("sweep-out") / "figures"
@@ -22,11 +23,14 @@ FIGURE_NAMES = ("fig2", "fig3a", "fig3b", "fig4a", "fig4b")
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from .compile_notice import announce_if_cold
     from .plausibility import PlausibilityWarning, warn_implausible
     from .scene import default_scene, load_scene
 
     scene = load_scene(args.config) if args.config else default_scene()
     warn_implausible(scene.K_over_M, scene.V)  # before any work, the dry run included
+    if not args.dry_run:
+        announce_if_cold()  # within a second of the start, before the plan imports and compiles anything
     if scene.protocol == "driven":
         return _run_driven(scene, args)
     from .plan import make_plan
@@ -46,21 +50,23 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"{'estimated time':>28}: {seconds:.1f} s on this machine")
         return 0
     from .api import warm_up_kernels
+    from .compile_notice import SLOW_S, timed
     from .hopf import locate_hopf
     from .plot import plot_file
 
     t_warm = time.perf_counter()
-    warm_up_kernels(scene, plan)
-    with warnings.catch_warnings():  # the scene's axes were checked above; this is one of its velocities
-        warnings.simplefilter("ignore", PlausibilityWarning)
-        locate_hopf(scene.params, scene.V[:1], bifurcation=False)  # compile / load the kernel of the simulated line
+    with timed("kernels"):  # says so before a first compile (empty numba cache) and when it takes long
+        warm_up_kernels(scene, plan)
+        with warnings.catch_warnings():  # the scene's axes were checked above; this is one of its velocities
+            warnings.simplefilter("ignore", PlausibilityWarning)
+            locate_hopf(scene.params, scene.V[:1], bifurcation=False)  # compile / load the simulated line's kernel
     compile_s = time.perf_counter() - t_warm
     t0 = time.perf_counter()
     ds = _run_to_file(scene, args)
     out = args.output
     elapsed = time.perf_counter() - t0
     print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, {scene.n_points / max(elapsed, 1e-9):,.0f} "
-          f"points/s; kernel {'compiled' if compile_s > 2 else 'loaded'} in {compile_s:.1f} s beforehand)")
+          f"points/s; kernel {'compiled' if compile_s > SLOW_S else 'loaded'} in {compile_s:.1f} s beforehand)")
     print(_flag_summary(ds, "status"))
     print(_model_summary(ds))
     try:
@@ -190,7 +196,7 @@ def _cmd_hopf(args: argparse.Namespace) -> int:
 
     params, v, kwargs = hopf_config(args.config)
     t0 = time.perf_counter()
-    ds = locate_hopf(params, v, **kwargs)
+    ds = locate_hopf(params, v, progress=False if args.quiet else None, **kwargs)
     ds.attrs["history"] = _history()
     out = save(ds, args.output)
     print(f"wrote {out} ({v.size} velocities in {time.perf_counter() - t0:.2f} s; {_flag_summary(ds, 'bifurcation')}; "
@@ -223,13 +229,17 @@ def _positive_int(text: str) -> int:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="sweep", description=__doc__)
     parser.add_argument("--version", action="version", version=f"sweep {__version__}")
+    common = argparse.ArgumentParser(add_help=False)  # -v / -q after any command: sweep run -q, sweep hopf -v
+    talk = common.add_mutually_exclusive_group()
+    talk.add_argument("-v", "--verbose", action="store_true", help="also debug details (logger 'sweep')")
+    talk.add_argument("-q", "--quiet", action="store_true", help="warnings and errors only, no progress bar")
     sub = parser.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="run a scene (default: the built-in sample2 landscape) and write netCDF + PNG")
+    add = lambda name, **kw: sub.add_parser(name, parents=[common], **kw)  # noqa: E731
+    run = add("run", help="run a scene (default: the built-in sample2 landscape) and write netCDF + PNG")
     run.add_argument("config", nargs="?", help="scene TOML file (omit for the built-in default scene)")
     run.add_argument("-o", "--output", type=Path, default=DEFAULT_OUT, help=f"netCDF output (default {DEFAULT_OUT})")
     run.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
     run.add_argument("--dry-run", action="store_true", help="print the plan and an estimated time, then exit")
-    run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     run.add_argument("--resume", action="store_true",
                      help="continue an interrupted run into the same output: compute only the chunks missing from "
                           "its journal (OUTPUT.journal), after checking that the scene and plan are the same")
@@ -242,7 +252,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="run the chunks on an existing dask cluster, e.g. tcp://host:8786 (its workers need sweep "
                           "installed)")
     run.set_defaults(func=_cmd_run)
-    plot = sub.add_parser("plot", help="draw the picture that fits a sweep file: stop landscape (and transients), "
+    plot = add("plot", help="draw the picture that fits a sweep file: stop landscape (and transients), "
                                        "driven regimes, or Hopf line")
     plot.add_argument("file")
     plot.add_argument("-o", "--output", type=Path, help="PNG path (default: the file with .png)")
@@ -250,19 +260,19 @@ def build_parser() -> argparse.ArgumentParser:
                       help="draw this (K_over_M, V) variable alone (default: xi_inf and the stress relaxation of a "
                            "stop sweep, the regime and amplitude of a driven one)")
     plot.set_defaults(func=_cmd_plot)
-    hopf = sub.add_parser("hopf", help="locate the Hopf line over the V axis of a scene file (netCDF + PNG)")
+    hopf = add("hopf", help="locate the Hopf line over the V axis of a scene file (netCDF + PNG)")
     hopf.add_argument("config", help="TOML with preset and/or [params], a [V] axis table, optional rtol, model")
     hopf.add_argument("-o", "--output", type=Path, default=Path("sweep-out") / "hopf.nc", help="netCDF output")
     hopf.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
     hopf.set_defaults(func=_cmd_hopf)
-    rep = sub.add_parser("reproduce", help="regenerate the paper's figures from the presets (netCDF + PNG + key "
+    rep = add("reproduce", help="regenerate the paper's figures from the presets (netCDF + PNG + key "
                                            "numbers beside the paper's)")
     rep.add_argument("name", choices=[*FIGURE_NAMES, "all"], metavar="NAME",
                      help=f"one of {', '.join([*FIGURE_NAMES, 'all'])}")
     rep.add_argument("-o", "--output", type=Path, default=FIGURES_OUT,
                      help=f"output folder (default {FIGURES_OUT})")
     rep.set_defaults(func=_cmd_reproduce)
-    info = sub.add_parser("info", help="summarise a sweep file")
+    info = add("info", help="summarise a sweep file")
     info.add_argument("file")
     info.set_defaults(func=_cmd_info)
     return parser
@@ -287,6 +297,7 @@ def main(argv: list[str] | None = None) -> int:
     warnings.showwarning = _show_warning
     try:
         args = build_parser().parse_args(argv)
+        configure_logging(verbose=args.verbose, quiet=args.quiet)
         return args.func(args)
     except InputError as exc:
         return _fail(f"error: {exc}", 2)

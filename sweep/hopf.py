@@ -32,12 +32,14 @@ import numpy as np
 import xarray as xr
 
 from . import physics
+from .compile_notice import announce_if_cold
 from .dataset import REFERENCES, versions
 from .errors import InputError
 from .model_choice import MODEL_FLAG, line_uses_inertia
 from .models.driven import Regime, simulate_point
 from .params import FrictionParams
 from .plausibility import warn_implausible
+from .progress import Progress
 from .scene import MODEL_TOL_RANGE, MODELS
 
 __all__ = ["locate_hopf", "with_simulated_line"]
@@ -128,7 +130,7 @@ def _bifurcation(k_c: float, a: float, b: float, g: float, rtol: float) -> tuple
 
 
 def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto", rtol: float = 1e-3,
-                bifurcation: bool = True, model_tol: float = 1e-2) -> xr.Dataset:
+                bifurcation: bool = True, model_tol: float = 1e-2, progress: bool | None = False) -> xr.Dataset:
     """The Hopf line over the velocities ``V`` [m s-1] (Dataset over V).
 
     Variables: ``K_over_M_c`` [s-2] located by simulation (bisection on the sign of the measured growth rate to a
@@ -138,7 +140,8 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
     "none" where mu1(V) <= 0: steady sliding is then stable at every stiffness. ``model``: "quasistatic",
     "inertial" (the full Newton equation with gamma = V^2/(g D0); linear line chi_c = mu1 (1 + gamma/A)) or "auto"
     (default): per V, inertial where gamma/A > ``model_tol``, the relative shift of the line by inertia (flag
-    variable ``model``).
+    variable ``model``). ``progress``: a bar over the velocities on stderr (None: on an interactive terminal once
+    the run takes more than ~2 s; sweep/progress.py).
     """
     if model not in MODELS:
         raise InputError(f"model must be one of {list(MODELS)}, got {model!r}")
@@ -152,13 +155,14 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
     if not (math.isfinite(rtol) and 1e-8 <= rtol <= 0.1):
         raise InputError(f"rtol must be in [1e-8, 0.1] (relative width of the located bracket), got {rtol!r}")
     warn_implausible(V=v)
+    announce_if_cold()
     p = params
     mu1 = np.asarray(physics.mu1(v, p.m1, p.m2, p.V0), dtype=float)
     inertial = line_uses_inertia(np.asarray(physics.inertia_number(v, p.D0, p.g)) / p.A, model, model_tol)
     gamma = np.asarray(physics.inertia_number(v, p.D0, p.g), dtype=float) * inertial
     chi_c, kinds, amps, evals = (np.full(v.size, np.nan), np.zeros(v.size, np.int8), np.full(v.size, np.nan),
                                  np.zeros(v.size, np.int64))
-    for i, m in enumerate(mu1):
+    for i, m in enumerate(Progress(v.size, progress, label="hopf", unit="velocities").iterate(mu1)):
         if m <= 0.0:
             continue
         k_c, evals[i] = _locate(m / p.A, p.m2 / p.A, gamma[i] / p.A, rtol)

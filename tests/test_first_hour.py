@@ -182,3 +182,64 @@ def test_solve_point_at_1_m_per_s_warns_and_its_status_says_why():
     assert status != "ok"
     texts = [str(w.message) for w in record]
     assert any(f"ended with status {status}" in t for t in texts), texts
+
+
+# --- logging, the compile notice, progress ------------------------------------------------------------------------
+
+def test_first_run_on_an_empty_cache_says_it_compiles_before_anything_else(tmp_path):
+    """NUMBA_CACHE_DIR pointing to an empty folder is a fresh machine: the notice comes first, within a second."""
+    import os
+    import time
+
+    (tmp_path / "s.toml").write_text(SMALL)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
+    proc = subprocess.Popen([sys.executable, "-m", "sweep.cli", "run", "s.toml", "-o", "o.nc"], cwd=tmp_path,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    t0 = time.perf_counter()
+    first = proc.stderr.readline()
+    waited = time.perf_counter() - t0
+    proc.kill()
+    proc.communicate()
+    assert first.startswith("sweep: compiling numba kernels, first run on this machine only: up to ~"), first
+    assert waited < 10  # ~0.3 s when idle; the machine is shared
+
+
+def test_quiet_and_verbose_go_through_the_sweep_logger(tmp_path):
+    (tmp_path / "s.toml").write_text(SMALL)
+    loud = sweep_cli("run", "s.toml", "-o", "o.nc", "-v", cwd=tmp_path)
+    assert loud.returncode == 0 and "sweep: kernels ready in" in loud.stderr, loud.stderr
+    quiet = sweep_cli("run", "s.toml", "-o", "o.nc", "-q", cwd=tmp_path)
+    assert quiet.returncode == 0 and quiet.stderr == "", quiet.stderr
+
+
+def test_the_compile_notice_is_logged_from_python(monkeypatch, caplog):
+    import logging
+
+    import sweep.compile_notice as notice
+
+    monkeypatch.setattr(notice, "_checked", False)
+    monkeypatch.setattr(notice, "cache_is_cold", lambda: True)
+    with caplog.at_level(logging.INFO, logger="sweep"):
+        sweep.solve_point(sweep.presets["sample2"], K_over_M=1e4, V=1e-6, observables=["xi_inf"])
+    assert any(r.name == "sweep" and "compiling numba kernels" in r.getMessage() for r in caplog.records)
+
+
+def test_cache_is_cold_follows_numba_cache_dir(tmp_path, monkeypatch):
+    from sweep.compile_notice import cache_is_cold
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert cache_is_cold()
+    (tmp_path / "sweep_0123").mkdir()
+    (tmp_path / "sweep_0123" / "engine.stop_batch-46.py311.nbi").write_bytes(b"")
+    assert not cache_is_cold()
+
+
+def test_locate_hopf_shows_progress_over_the_velocities(monkeypatch, capsys):
+    import numpy as np
+
+    import sweep.progress
+
+    monkeypatch.setattr(sweep.progress, "SHOW_AFTER_S", 0.0)
+    sweep.locate_hopf(sweep.presets["sample2"], np.logspace(-7, -6, 3), bifurcation=False, progress=True)
+    err = capsys.readouterr().err
+    assert "hopf [" in err and "3/3 velocities" in err and err.endswith("\n")
