@@ -40,12 +40,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
         from .engine import estimate_seconds
 
         seconds, mean_steps = estimate_seconds(scene, plan)
-        print(plan.text())
+        print(_plan_text(scene, plan))
         print(f"{'grid':>28}: {scene.shape[0]} K/M x {scene.shape[1]} V, rtol {scene.rtol:g}, "
               f"observables {', '.join(scene.observables)}")
-        print(f"{'model':>28}: {scene.model}" + (f" (model_tol {scene.model_tol:g}: per point, inertial where the "
-                                                  f"estimated error of the quasi-static model is larger)"
-                                                  if scene.model == "auto" else ""))
         print(f"{'estimated steps per point':>28}: {mean_steps:.0f} (mean of a pilot subsample)")
         print(f"{'estimated time':>28}: {seconds:.1f} s on this machine")
         return 0
@@ -77,6 +74,17 @@ def _cmd_run(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return 1
     return _most_failed(ds, out)
+
+
+def _plan_text(scene, plan) -> str:
+    """The plan's text with one line about the model: the scene's (the plan describes the quasi-static pass; with
+    model "auto" the inertial points are chosen per point after it)."""
+    model = f"{'model':>28}: {scene.model}" + (
+        f" (model_tol {scene.model_tol:g}): the quasi-static plan below for every point, then the inertial model "
+        "where the estimated error of the quasi-static one is larger" if scene.model == "auto" else "")
+    lines = plan.text().splitlines()
+    keep = [line for line in lines if line.split(":")[0].strip() != "model"]
+    return "\n".join([model, *keep])
 
 
 def _run_driven(scene, args: argparse.Namespace) -> int:
