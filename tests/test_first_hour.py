@@ -243,3 +243,88 @@ def test_locate_hopf_shows_progress_over_the_velocities(monkeypatch, capsys):
     sweep.locate_hopf(sweep.presets["sample2"], np.logspace(-7, -6, 3), bifurcation=False, progress=True)
     err = capsys.readouterr().err
     assert "hopf [" in err and "3/3 velocities" in err and err.endswith("\n")
+
+
+# --- pictures -----------------------------------------------------------------------------------------------------
+
+def _stop(km, v, **kw):
+    import numpy as np
+
+    scene = sweep.Scene(protocol="stop", params=sweep.presets["sample2"], K_over_M=np.asarray(km),
+                        V=np.asarray(v), **kw)
+    return sweep.run_sweep(scene, progress=False)
+
+
+def _map(ds, variable="xi_inf"):
+    from sweep.plot_maps import draw_map
+    from sweep.plot_style import figure_legend, new_figure
+
+    fig, ax = new_figure("map")
+    draw_map(fig, ax, ds, variable)
+    figure_legend(fig, ax)
+    fig.canvas.draw()
+    return fig, ax
+
+
+def test_two_velocities_hatch_follows_the_line_not_the_cells():
+    """Between the two rows of the grid the hatched region ends at the Hopf line (3 % either side of it), where
+    hatching grid cells put a stable band under the hatch."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from sweep.plot_maps import hopf_line_dense
+
+    ds = _stop(np.logspace(4, 6, 40), [1e-7, 1e-6])
+    fig, ax = _map(ds)
+    hatched = [c for c in ax.collections if c.get_hatch() == "//"]
+    assert len(hatched) == 1
+    region = hatched[0].get_paths()[0]  # data coordinates (K/M, V in µm/s)
+    v_um, _, kc = hopf_line_dense(ds)
+    between = (v_um > 0.12) & (v_um < 0.9)
+    assert region.contains_points(np.c_[0.97 * kc[between], v_um[between]]).all()
+    assert not region.contains_points(np.c_[1.03 * kc[between], v_um[between]]).any()
+    plt.close(fig)
+
+
+def test_single_map_legend_fits_inside_the_figure():
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    ds = _stop(np.logspace(4, 6, 12), [1e-7, 1e-6], observables=["xi_inf", "t50"])
+    fig, _ = _map(ds, "t50")
+    box = fig.legends[0].get_window_extent()
+    assert box.x0 >= 0 and box.x1 <= fig.bbox.width and box.y0 >= 0, (box, fig.bbox)
+    plt.close(fig)
+
+
+def test_the_simulated_line_over_200_velocities_is_thinned():
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    ds = _stop(np.logspace(3, 6, 3), np.logspace(-7, -5, 200))
+    fig, ax = _map(ds)
+    (line,) = [ln for ln in ax.lines if ln.get_label().startswith("Hopf line located by simulation")]
+    assert len(line.get_xdata()) <= 25 and "markers at" in line.get_label()
+    plt.close(fig)
+
+
+def test_hopf_gap_shows_the_bisection_bracket_on_each_point():
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from sweep.plot_curves import draw_hopf_gap
+    from sweep.plot_style import new_figure
+
+    ds = sweep.locate_hopf(sweep.presets["sample2"], np.logspace(-7, -6, 4), bifurcation=False)
+    fig, ax = new_figure()
+    draw_hopf_gap(ax, ds)
+    assert ax.containers and "bisection bracket ± rtol/2" in ax.containers[0].get_label()
+    assert "no gap resolved" in ax.get_title()
+    plt.close(fig)
+
+
+def test_dry_run_prints_one_model_line(tmp_path):
+    (tmp_path / "s.toml").write_text(SMALL)
+    proc = sweep_cli("run", "s.toml", "--dry-run", cwd=tmp_path)
+    models = [line for line in proc.stdout.splitlines() if line.split(":")[0].strip() == "model"]
+    assert proc.returncode == 0 and len(models) == 1 and "auto" in models[0], proc.stdout
