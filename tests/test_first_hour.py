@@ -328,3 +328,9 @@ def test_dry_run_prints_one_model_line(tmp_path):
     proc = sweep_cli("run", "s.toml", "--dry-run", cwd=tmp_path)
     models = [line for line in proc.stdout.splitlines() if line.split(":")[0].strip() == "model"]
     assert proc.returncode == 0 and len(models) == 1 and "auto" in models[0], proc.stdout
+
+
+def test_readme_numbers_are_those_of_the_benchmark_results():
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "readme_numbers.py"), "--check"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
