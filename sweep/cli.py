@@ -110,18 +110,19 @@ def _run_driven(scene, args: argparse.Namespace) -> int:
 
 
 MOST_FAILED = 0.5
-"""A run in which more than this fraction of the points ends with a status other than ok exits with code 1."""
+"""A run in which more than this fraction of the points failed (a status other than ok and no_finite_limit, which
+is the model's answer) exits with code 1."""
 
 
 def _most_failed(ds, out: Path) -> int:
-    """Exit code of a finished run: 1, with a one-line summary on stderr, where most points did not end ok."""
+    """Exit code of a finished run: 1, with a one-line summary on stderr, where most points failed (NOT_FAILED)."""
     from .plausibility import not_ok_summary
 
-    bad, text = not_ok_summary(ds["status"].values, ds["status"].attrs["flag_meanings"].split())
+    bad, text = not_ok_summary(ds["status"].values, ds["status"].attrs["flag_meanings"].split(), failed_only=True)
     if bad <= MOST_FAILED * ds["status"].size:
         return 0
-    return _fail(f"{bad} of {ds['status'].size} points did not end ok ({text}); the values are in {out} but most "
-                 "are NaN or inaccurate: check the units (K_over_M [s-2], V [m/s]) and ranges", 1)
+    return _fail(f"{bad} of {ds['status'].size} points failed ({text}); the values are in {out} but most are NaN "
+                 "or inaccurate: check the units (K_over_M [s-2], V [m/s]) and ranges", 1)
 
 
 def _run_to_file(scene, args: argparse.Namespace):

@@ -13,7 +13,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["K_OVER_M_RANGE", "PlausibilityWarning", "V_MAX", "implausible", "not_ok_summary", "warn_implausible",
+__all__ = ["K_OVER_M_RANGE", "NOT_FAILED", "PlausibilityWarning", "V_MAX", "implausible", "not_ok_summary", "warn_implausible",
            "warn_not_ok"]
 
 V_MAX = 1e-2
@@ -59,10 +59,16 @@ def warn_implausible(K_over_M: np.ndarray | None = None, V: np.ndarray | None = 
 _ISSUED: set[str] = set()
 
 
-def not_ok_summary(status: np.ndarray, meanings: list[str]) -> tuple[int, str]:
-    """(number of points whose status is not ok, "name count, ..." of those statuses)."""
+NOT_FAILED = ("ok", "no_finite_limit")
+"""Statuses that are answers, not failures: no_finite_limit is the model's (no finite relaxed slip there)."""
+
+
+def not_ok_summary(status: np.ndarray, meanings: list[str], failed_only: bool = False) -> tuple[int, str]:
+    """(number of points whose status is not ok, "name count, ..." of those statuses); ``failed_only``: leave out
+    the statuses of :data:`NOT_FAILED` (the computation did not fail there)."""
     status = np.asarray(status).reshape(-1)
-    codes, counts = np.unique(status[status != 0], return_counts=True)
+    skip = [meanings.index(name) for name in (NOT_FAILED if failed_only else NOT_FAILED[:1]) if name in meanings]
+    codes, counts = np.unique(status[~np.isin(status, skip)], return_counts=True)
     return int(counts.sum()), ", ".join(f"{meanings[c]} {n}" for c, n in zip(codes, counts))
 
 

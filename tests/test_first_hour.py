@@ -158,7 +158,7 @@ def test_v_in_um_per_s_is_warned_before_any_work_and_a_failed_run_exits_1(tmp_pa
     proc = sweep_cli("run", "um.toml", "-o", "um.nc", "-q", cwd=tmp_path)
     assert proc.returncode == 1 and proc.stderr.count(warning) == 1, (proc.stdout, proc.stderr)
     last = proc.stderr.strip().splitlines()[-1]
-    assert last.startswith("sweep: 12 of 12 points did not end ok (") and "check the units" in last, last
+    assert last.startswith("sweep: 12 of 12 points failed (") and "check the units" in last, last
     assert (tmp_path / "um.nc").exists()  # the values are kept for inspection
 
 
