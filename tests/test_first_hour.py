@@ -111,9 +111,21 @@ def test_a_bad_scheduler_address_fails_within_seconds(tmp_path):
     err = one_line_error(proc)
     assert "could not connect to the dask scheduler at 'tcp://127.0.0.1:9'" in err
     assert time.perf_counter() - t0 < 25  # 5 s connection timeout plus starting Python (was 30 s + a traceback)
-    assert not (tmp_path / "o.nc.journal").exists() or not any((tmp_path / "o.nc.journal").glob("chunk-*"))
-    proc = sweep_cli("run", "s.toml", "-o", "o.nc", "-q", cwd=tmp_path)  # the refused run left nothing in the way
-    assert proc.returncode == 0, proc.stderr
+    assert not any((tmp_path / "o.nc.journal").glob("chunk-*"))
+
+
+def test_a_journal_without_chunks_does_not_block_a_new_run(tmp_path):
+    """What a run stopped before its first chunk leaves (refused scheduler, Ctrl-C while compiling): nothing to
+    resume, so a new run starts afresh instead of asking for --resume; a journal with chunks is still kept."""
+    from sweep.journal import Journal, journal_path
+
+    Journal.open(tmp_path / "o.nc", {"scene": "a"}, resume=False)
+    Journal.open(tmp_path / "o.nc", {"scene": "b"}, resume=False)  # no InputError
+    journal = Journal.open(tmp_path / "o.nc", {"scene": "b"}, resume=False)
+    journal.write(0, {"x": __import__("numpy").zeros(1)})
+    with pytest.raises(sweep.InputError, match="resume"):
+        Journal.open(tmp_path / "o.nc", {"scene": "b"}, resume=False)
+    assert journal_path(tmp_path / "o.nc").is_dir()
 
 
 def test_ctrl_c_while_compiling_is_one_line_and_exit_130(tmp_path):
@@ -157,6 +169,7 @@ def test_v_in_um_per_s_is_warned_before_any_work_and_a_failed_run_exits_1(tmp_pa
     assert proc.stderr.count(warning) == 1, proc.stderr
     proc = sweep_cli("run", "um.toml", "-o", "um.nc", "-q", cwd=tmp_path)
     assert proc.returncode == 1 and proc.stderr.count(warning) == 1, (proc.stdout, proc.stderr)
+    assert len(proc.stderr.strip().splitlines()) == 2  # -q: the warning and the summary, no progress or notes
     last = proc.stderr.strip().splitlines()[-1]
     assert last.startswith("sweep: 12 of 12 points failed (") and "check the units" in last, last
     assert (tmp_path / "um.nc").exists()  # the values are kept for inspection
@@ -204,12 +217,11 @@ def test_first_run_on_an_empty_cache_says_it_compiles_before_anything_else(tmp_p
     assert waited < 10  # ~0.3 s when idle; the machine is shared
 
 
-def test_quiet_and_verbose_go_through_the_sweep_logger(tmp_path):
+def test_verbose_goes_through_the_sweep_logger(tmp_path):
+    """(-q, warnings and errors only: test_v_in_um_per_s_is_warned_before_any_work_and_a_failed_run_exits_1.)"""
     (tmp_path / "s.toml").write_text(SMALL)
     loud = sweep_cli("run", "s.toml", "-o", "o.nc", "-v", cwd=tmp_path)
     assert loud.returncode == 0 and "sweep: kernels ready in" in loud.stderr, loud.stderr
-    quiet = sweep_cli("run", "s.toml", "-o", "o.nc", "-q", cwd=tmp_path)
-    assert quiet.returncode == 0 and quiet.stderr == "", quiet.stderr
 
 
 def test_the_compile_notice_is_logged_from_python(monkeypatch, caplog):
