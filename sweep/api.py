@@ -19,8 +19,8 @@ from .io import open_dataset, save
 from .journal import Journal
 from .model_choice import warm_up_models
 from .params import FrictionParams
-from .plausibility import warn_implausible, warn_not_ok
 from .plan import make_plan
+from .plausibility import warn_implausible, warn_not_ok
 from .runner import JOURNAL_FORMAT, run_chunks, sampled_blocks, stop_outputs
 from .scene import Scene
 

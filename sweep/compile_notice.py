@@ -77,7 +77,8 @@ def timed(what: str = "kernels") -> Iterator[None]:
 
     def notice() -> None:
         if not done.wait(SLOW_S) and not _compiling_announced:
-            LOGGER.info("compiling %s not yet in numba's cache (first use only, up to ~%d s on 2 cores)", what, _total())
+            LOGGER.info("compiling %s not yet in numba's cache (first use only, up to ~%d s on 2 cores)", what,
+                        _total())
 
     t0 = time.perf_counter()
     thread = threading.Thread(target=notice, daemon=True)

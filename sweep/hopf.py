@@ -146,7 +146,8 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
     if model not in MODELS:
         raise InputError(f"model must be one of {list(MODELS)}, got {model!r}")
     if not (math.isfinite(model_tol) and MODEL_TOL_RANGE[0] <= model_tol <= MODEL_TOL_RANGE[1]):
-        raise InputError(f"model_tol must be in [{MODEL_TOL_RANGE[0]:g}, {MODEL_TOL_RANGE[1]:g}], got {float(model_tol)!r}")
+        raise InputError(f"model_tol must be in [{MODEL_TOL_RANGE[0]:g}, {MODEL_TOL_RANGE[1]:g}], got "
+                         f"{float(model_tol)!r}")
     if not isinstance(params, FrictionParams):
         raise InputError(f"params must be a sweep.FrictionParams, got {type(params).__name__}")
     v = np.asarray(V, dtype=float).reshape(-1)

@@ -13,8 +13,8 @@ import warnings
 
 import numpy as np
 
-__all__ = ["K_OVER_M_RANGE", "NOT_FAILED", "PlausibilityWarning", "V_MAX", "implausible", "not_ok_summary", "warn_implausible",
-           "warn_not_ok"]
+__all__ = ["K_OVER_M_RANGE", "NOT_FAILED", "PlausibilityWarning", "V_MAX", "implausible", "not_ok_summary",
+           "warn_implausible", "warn_not_ok"]
 
 V_MAX = 1e-2
 """Largest plausible driving velocity [m s-1] (1 cm/s)."""
