@@ -1,17 +1,52 @@
-"""sweep: Numba-accelerated parameter-space sweeps of the Baumberger & Gauthier (1996) spring-block model."""
+"""sweep: Numba-accelerated parameter-space sweeps of the Baumberger & Gauthier (1996) spring-block model.
 
-from .api import run_sweep, solve_point
-from .backends import local_cluster
+The public names below are imported on first use (PEP 562), so that ``import sweep`` and the command line start
+without loading numba: ``sweep --version`` answers at once and a Ctrl-C while the kernels load is a one-line
+message, not a traceback from inside an import.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+from ._version import __version__
 from .errors import InputError
-from .hopf import locate_hopf
-from .io import open_dataset as open
-from .io import save
 from .params import FrictionParams
-from .plan import Plan, make_plan
-from .presets import presets, provenance
-from .scene import Scene, default_scene, load_scene
-from .status import Status
+from .presets import presets, provenance  # eager: the name would otherwise be the submodule sweep.presets
 
-__all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "default_scene", "load_scene", "local_cluster",
-           "locate_hopf", "make_plan", "open", "presets", "provenance", "run_sweep", "save", "solve_point"]
-__version__ = "0.1.0"
+_PUBLIC = {
+    "run_sweep": "api", "solve_point": "api", "local_cluster": "backends", "locate_hopf": "hopf",
+    "open": ("io", "open_dataset"), "save": "io", "Plan": "plan", "make_plan": "plan", "Scene": "scene",
+    "default_scene": "scene", "load_scene": "scene", "Status": "status",
+}
+"""Public name -> module of the package (or (module, name in it))."""
+
+__all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "__version__", "default_scene", "load_scene",
+           "local_cluster", "locate_hopf", "make_plan", "open", "presets", "provenance", "run_sweep", "save",
+           "solve_point"]
+
+
+def __getattr__(name: str):
+    where = _PUBLIC.get(name)
+    if where is None:
+        raise AttributeError(f"module 'sweep' has no attribute {name!r}")
+    module, attr = (where, name) if isinstance(where, str) else where
+    value = getattr(importlib.import_module(f".{module}", __name__), attr)
+    globals()[name] = value  # next time a plain module attribute
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
+
+if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
+    from .api import run_sweep, solve_point
+    from .backends import local_cluster
+    from .hopf import locate_hopf
+    from .io import open_dataset as open
+    from .io import save
+    from .plan import Plan, make_plan
+    from .scene import Scene, default_scene, load_scene
+    from .status import Status

@@ -9,6 +9,7 @@ import numpy as np
 import xarray as xr
 
 from .backends import check_backend, open_backend
+from .compile_notice import announce_if_cold
 from .dataset import build_dataset, build_driven_dataset
 from .engine import n_samples
 from .hopf import with_simulated_line
@@ -17,6 +18,7 @@ from .journal import Journal
 from .model_choice import warm_up_models
 from .params import FrictionParams
 from .plan import make_plan
+from .plausibility import warn_implausible, warn_not_ok
 from .runner import JOURNAL_FORMAT, chunk_task, run_chunks, sampled_blocks, stop_outputs, warm_up
 from .scene import Scene
 
@@ -42,6 +44,8 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     by chunk, never held whole, and the returned Dataset reads them from the file when they are used.
     """
     history = history or "sweep.run_sweep"
+    warn_implausible(scene.K_over_M, scene.V)  # likely unit mistakes, before any work
+    announce_if_cold()  # logs (logger "sweep") that the kernels compile now, on a machine without numba's cache
     plan = make_plan(scene)
     size = chunk_size or plan.chunk_size
     check_backend(backend, workers, scheduler)
@@ -50,9 +54,9 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
         identity = {"format": JOURNAL_FORMAT, "scene": scene.to_toml(),
                     "plan_hash": plan.hash(), "chunk_size": size, "n_points": scene.n_points}
         journal = Journal.open(output, identity, resume)
-    if backend == "dask":
-        warm_up_kernels(scene, plan)  # once, before the fan-out: the workers load them from numba's cache
-    with open_backend(backend, workers, scheduler) as imap:
+    with open_backend(backend, workers, scheduler) as imap:  # connect first: a bad scheduler fails in seconds
+        if backend == "dask":
+            warm_up_kernels(scene, plan)  # once, before the fan-out: the workers load them from numba's cache
         flat, seconds = run_chunks(scene, plan, size, journal, progress, imap)
     # with a journal the arrays sampled in time stayed there: written into the file chunk by chunk, never held whole
     blocks = None
@@ -93,4 +97,6 @@ def solve_point(params: FrictionParams, K_over_M: float, V: float, rtol: float =
     scene = Scene(protocol="stop", params=params, K_over_M=[K_over_M], V=[V], rtol=rtol,
                   observables=tuple(observables), trajectory_tau=trajectory_tau, t_obs=tuple(t_obs), method=method,
                   step=step, precision=precision, max_steps=max_steps, model=model, model_tol=model_tol)
-    return run_sweep(scene, progress=False, history="sweep.solve_point").isel(K_over_M=0, V=0)
+    point = run_sweep(scene, progress=False, history="sweep.solve_point").isel(K_over_M=0, V=0)
+    warn_not_ok(point, f"solve_point(K_over_M={float(K_over_M):g}, V={float(V):g})")  # never a silent NaN
+    return point

@@ -30,6 +30,8 @@ __all__ = ["BACKENDS", "check_backend", "local_cluster", "open_backend"]
 BACKENDS = ("threads", "dask")
 IN_FLIGHT_PER_WORKER = 2
 """Chunks submitted ahead per worker: enough to keep workers busy, few enough to bound the driver's memory."""
+CONNECT_TIMEOUT_S = 5.0
+"""How long to try to reach an existing dask scheduler [s] before giving up with an InputError."""
 WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
 
 
@@ -38,7 +40,8 @@ def _import_dask():
         import dask
         import distributed
     except ImportError:
-        raise InputError("backend 'dask' needs dask.distributed: pip install 'sweep[distributed]'") from None
+        raise InputError("backend 'dask' needs dask.distributed: pip install '.[distributed]' in the sweep "
+                         "checkout") from None
     return dask, distributed
 
 
@@ -67,7 +70,13 @@ def _dask(workers: int | None, scheduler: str | None):
     """A dask Client: connected to ``scheduler``, or on a :func:`local_cluster` of ``workers`` started for it."""
     _, distributed = _import_dask()
     if scheduler is not None:
-        with distributed.Client(scheduler) as client:
+        try:
+            client = distributed.Client(scheduler, timeout=CONNECT_TIMEOUT_S)
+        except (OSError, TimeoutError, ValueError) as exc:
+            why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise InputError(f"could not connect to the dask scheduler at {scheduler!r} (tried for at most "
+                             f"{CONNECT_TIMEOUT_S:g} s): {why}") from None
+        with client:
             yield client
         return
     with local_cluster(workers or 2) as address, distributed.Client(address) as client:

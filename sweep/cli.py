@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import argparse
+import os
 import shlex
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 
+from ._version import __version__
 from .errors import InputError
+from .log import configure as configure_logging
 
 DEFAULT_OUT = Path("sweep-out") / "landscape.nc"
 FIGURES_OUT = Path("sweep-out") / "figures"
@@ -19,9 +23,14 @@ FIGURE_NAMES = ("fig2", "fig3a", "fig3b", "fig4a", "fig4b")
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from .compile_notice import announce_if_cold
+    from .plausibility import PlausibilityWarning, warn_implausible
     from .scene import default_scene, load_scene
 
     scene = load_scene(args.config) if args.config else default_scene()
+    warn_implausible(scene.K_over_M, scene.V)  # before any work, the dry run included
+    if not args.dry_run:
+        announce_if_cold()  # within a second of the start, before the plan imports and compiles anything
     if scene.protocol == "driven":
         return _run_driven(scene, args)
     from .plan import make_plan
@@ -31,29 +40,30 @@ def _cmd_run(args: argparse.Namespace) -> int:
         from .estimate import estimate_seconds
 
         seconds, mean_steps = estimate_seconds(scene, plan)
-        print(plan.text())
+        print(_plan_text(scene, plan))
         print(f"{'grid':>28}: {scene.shape[0]} K/M x {scene.shape[1]} V, rtol {scene.rtol:g}, "
               f"observables {', '.join(scene.observables)}")
-        print(f"{'model':>28}: {scene.model}" + (f" (model_tol {scene.model_tol:g}: per point, inertial where the "
-                                                  f"estimated error of the quasi-static model is larger)"
-                                                  if scene.model == "auto" else ""))
         print(f"{'estimated steps per point':>28}: {mean_steps:.0f} (mean of a pilot subsample)")
         print(f"{'estimated time':>28}: {seconds:.1f} s on this machine")
         return 0
     from .api import warm_up_kernels
+    from .compile_notice import SLOW_S, timed
     from .hopf import locate_hopf
     from .plot import plot_file
 
     t_warm = time.perf_counter()
-    warm_up_kernels(scene, plan)
-    locate_hopf(scene.params, scene.V[:1], bifurcation=False)  # compile / load the kernel of the simulated line
+    with timed("kernels"):  # says so before a first compile (empty numba cache) and when it takes long
+        warm_up_kernels(scene, plan)
+        with warnings.catch_warnings():  # the scene's axes were checked above; this is one of its velocities
+            warnings.simplefilter("ignore", PlausibilityWarning)
+            locate_hopf(scene.params, scene.V[:1], bifurcation=False)  # compile / load the simulated line's kernel
     compile_s = time.perf_counter() - t_warm
     t0 = time.perf_counter()
     ds = _run_to_file(scene, args)
     out = args.output
     elapsed = time.perf_counter() - t0
     print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, {scene.n_points / max(elapsed, 1e-9):,.0f} "
-          f"points/s; kernel {'compiled' if compile_s > 2 else 'loaded'} in {compile_s:.1f} s beforehand)")
+          f"points/s; kernel {'compiled' if compile_s > SLOW_S else 'loaded'} in {compile_s:.1f} s beforehand)")
     print(_flag_summary(ds, "status"))
     print(_model_summary(ds))
     try:
@@ -63,7 +73,18 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"sweep: could not draw the picture ({type(exc).__name__}: {exc}); the data are in {out}",
               file=sys.stderr)
         return 1
-    return 0
+    return _most_failed(ds, out)
+
+
+def _plan_text(scene, plan) -> str:
+    """The plan's text with one line about the model: the scene's (the plan describes the quasi-static pass; with
+    model "auto" the inertial points are chosen per point after it)."""
+    model = f"{'model':>28}: {scene.model}" + (
+        f" (model_tol {scene.model_tol:g}): the quasi-static plan below for every point, then the inertial model "
+        "where the estimated error of the quasi-static one is larger" if scene.model == "auto" else "")
+    lines = plan.text().splitlines()
+    keep = [line for line in lines if line.split(":")[0].strip() != "model"]
+    return "\n".join([model, *keep])
 
 
 def _run_driven(scene, args: argparse.Namespace) -> int:
@@ -85,7 +106,23 @@ def _run_driven(scene, args: argparse.Namespace) -> int:
     print(_model_summary(ds))
     print(_flag_summary(ds, "regime"))
     print(f"wrote {plot_regimes(ds, args.png or out.with_suffix('.png'))}")
-    return 0
+    return _most_failed(ds, out)
+
+
+MOST_FAILED = 0.5
+"""A run in which more than this fraction of the points failed (a status other than ok and no_finite_limit, which
+is the model's answer) exits with code 1."""
+
+
+def _most_failed(ds, out: Path) -> int:
+    """Exit code of a finished run: 1, with a one-line summary on stderr, where most points failed (NOT_FAILED)."""
+    from .plausibility import not_ok_summary
+
+    bad, text = not_ok_summary(ds["status"].values, ds["status"].attrs["flag_meanings"].split(), failed_only=True)
+    if bad <= MOST_FAILED * ds["status"].size:
+        return 0
+    return _fail(f"{bad} of {ds['status'].size} points failed ({text}); the values are in {out} but most are NaN "
+                 "or inaccurate: check the units (K_over_M [s-2], V [m/s]) and ranges", 1)
 
 
 def _run_to_file(scene, args: argparse.Namespace):
@@ -121,32 +158,40 @@ def _model_summary(ds) -> str:
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:
-    from .io import open_dataset
+    from .files import read_sweep_file
     from .plot import plot_file
 
-    ds = open_dataset(args.file)
+    ds, _ = read_sweep_file(args.file)
     for png in plot_file(ds, args.output or Path(args.file).with_suffix(".png"), variable=args.variable):
         print(f"wrote {png}")
     return 0
 
 
-def _cmd_info(args: argparse.Namespace) -> int:
-    from .io import open_dataset
+FLAGS = ("status", "regime", "bifurcation", "model")
+"""Flag variables that ``sweep info`` counts, where the file has them."""
 
-    ds = open_dataset(args.file)
-    print(f"{args.file}: {ds.attrs.get('title', '')}")
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    """``sweep info FILE``: what the file is, where it comes from, its axes, flag counts and value ranges."""
+    from .files import read_sweep_file
+
+    ds, kind = read_sweep_file(args.file)
+    print(f"{args.file}: {ds.attrs.get('title', '')} ({kind} file)")
     print(f"  source: {ds.attrs.get('source', '?')}")
     print(f"  history: {ds.attrs.get('history', '?')}")
     print("  dims: " + ", ".join(f"{k}={v}" for k, v in ds.sizes.items()))
     for name in ("K_over_M", "V"):
-        c = ds[name]
-        print(f"  {name}: {c.values.min():.4g} .. {c.values.max():.4g} [{c.units}]")
+        if name in ds.dims:
+            c = ds[name]
+            print(f"  {name}: {float(c.min()):.4g} .. {float(c.max()):.4g} [{c.attrs.get('units', '?')}]")
     for key in sorted(k for k in ds.attrs if k.startswith("plan_")):
         print(f"  {key}: {ds.attrs[key]}")
-    print("  " + _flag_summary(ds, "status"))
+    for name in FLAGS:
+        if name in ds and "flag_meanings" in ds[name].attrs:
+            print("  " + _flag_summary(ds, name))
     for name, var in ds.data_vars.items():
         vals = var.values[np.isfinite(var.values)] if var.dtype.kind == "f" else var.values
-        rng = f"{vals.min():.4g} .. {vals.max():.4g}" if vals.size else "all NaN"
+        rng = f"{float(vals.min()):.4g} .. {float(vals.max()):.4g}" if vals.size else "all NaN"
         print(f"  {name:18s} [{var.attrs.get('units', '')}] {rng}  {var.attrs.get('long_name', '')}")
     return 0
 
@@ -160,7 +205,7 @@ def _cmd_hopf(args: argparse.Namespace) -> int:
 
     params, v, kwargs = hopf_config(args.config)
     t0 = time.perf_counter()
-    ds = locate_hopf(params, v, **kwargs)
+    ds = locate_hopf(params, v, progress=False if args.quiet else None, **kwargs)
     ds.attrs["history"] = _history()
     out = save(ds, args.output)
     print(f"wrote {out} ({v.size} velocities in {time.perf_counter() - t0:.2f} s; {_flag_summary(ds, 'bifurcation')}; "
@@ -192,13 +237,18 @@ def _positive_int(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="sweep", description=__doc__)
+    parser.add_argument("--version", action="version", version=f"sweep {__version__}")
+    common = argparse.ArgumentParser(add_help=False)  # -v / -q after any command: sweep run -q, sweep hopf -v
+    talk = common.add_mutually_exclusive_group()
+    talk.add_argument("-v", "--verbose", action="store_true", help="also debug details (logger 'sweep')")
+    talk.add_argument("-q", "--quiet", action="store_true", help="warnings and errors only, no progress bar")
     sub = parser.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="run a scene (default: the built-in sample2 landscape) and write netCDF + PNG")
+    add = lambda name, **kw: sub.add_parser(name, parents=[common], **kw)  # noqa: E731
+    run = add("run", help="run a scene (default: the built-in sample2 landscape) and write netCDF + PNG")
     run.add_argument("config", nargs="?", help="scene TOML file (omit for the built-in default scene)")
     run.add_argument("-o", "--output", type=Path, default=DEFAULT_OUT, help=f"netCDF output (default {DEFAULT_OUT})")
     run.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
     run.add_argument("--dry-run", action="store_true", help="print the plan and an estimated time, then exit")
-    run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     run.add_argument("--resume", action="store_true",
                      help="continue an interrupted run into the same output: compute only the chunks missing from "
                           "its journal (OUTPUT.journal), after checking that the scene and plan are the same")
@@ -206,12 +256,12 @@ def build_parser() -> argparse.ArgumentParser:
                      help="points per chunk (journal entry); default 4096 for stop, 1024 for driven scenes")
     run.add_argument("--workers", type=_positive_int, default=None,
                      help="run the chunks on a dask LocalCluster of N one-thread worker processes (pip install "
-                          "'sweep[distributed]'); same numbers as the default threads backend")
+                          "'.[distributed]' from the sweep checkout); same numbers as the default threads backend")
     run.add_argument("--scheduler", default=None, metavar="ADDRESS",
                      help="run the chunks on an existing dask cluster, e.g. tcp://host:8786 (its workers need sweep "
                           "installed)")
     run.set_defaults(func=_cmd_run)
-    plot = sub.add_parser("plot", help="draw the picture that fits a sweep file: stop landscape (and transients), "
+    plot = add("plot", help="draw the picture that fits a sweep file: stop landscape (and transients), "
                                        "driven regimes, or Hopf line")
     plot.add_argument("file")
     plot.add_argument("-o", "--output", type=Path, help="PNG path (default: the file with .png)")
@@ -219,37 +269,77 @@ def build_parser() -> argparse.ArgumentParser:
                       help="draw this (K_over_M, V) variable alone (default: xi_inf and the stress relaxation of a "
                            "stop sweep, the regime and amplitude of a driven one)")
     plot.set_defaults(func=_cmd_plot)
-    hopf = sub.add_parser("hopf", help="locate the Hopf line over the V axis of a scene file (netCDF + PNG)")
+    hopf = add("hopf", help="locate the Hopf line over the V axis of a scene file (netCDF + PNG)")
     hopf.add_argument("config", help="TOML with preset and/or [params], a [V] axis table, optional rtol, model")
     hopf.add_argument("-o", "--output", type=Path, default=Path("sweep-out") / "hopf.nc", help="netCDF output")
     hopf.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
     hopf.set_defaults(func=_cmd_hopf)
-    rep = sub.add_parser("reproduce", help="regenerate the paper's figures from the presets (netCDF + PNG + key "
+    rep = add("reproduce", help="regenerate the paper's figures from the presets (netCDF + PNG + key "
                                            "numbers beside the paper's)")
     rep.add_argument("name", choices=[*FIGURE_NAMES, "all"], metavar="NAME",
                      help=f"one of {', '.join([*FIGURE_NAMES, 'all'])}")
     rep.add_argument("-o", "--output", type=Path, default=FIGURES_OUT,
                      help=f"output folder (default {FIGURES_OUT})")
     rep.set_defaults(func=_cmd_reproduce)
-    info = sub.add_parser("info", help="summarise a sweep file")
+    info = add("info", help="summarise a sweep file")
     info.add_argument("file")
     info.set_defaults(func=_cmd_info)
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    from .runner import Interrupted
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings of sweep (implausible inputs, failed points) as one line ``sweep: warning: ...``; others as usual."""
+    from .plausibility import PlausibilityWarning
 
+    if issubclass(category, PlausibilityWarning):
+        print(f"sweep: warning: {message}", file=sys.stderr)
+    else:
+        _python_show_warning(message, category, filename, lineno, file, line)
+
+
+_python_show_warning = warnings.showwarning
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; returns the exit code: 0 done, 1 finished with failures (a summary says which), 2 a
+    user mistake (one line on stderr, no traceback), 130 interrupted (Ctrl-C)."""
+    warnings.showwarning = _show_warning
     try:
+        args = build_parser().parse_args(argv)
+        configure_logging(verbose=args.verbose, quiet=args.quiet)
         return args.func(args)
-    except (InputError, FileNotFoundError) as exc:
-        print(f"sweep: error: {exc}", file=sys.stderr)
-        return 2
-    except Interrupted as exc:  # Ctrl-C during a journaled run: nothing finished is lost
-        print(f"sweep: {exc}", file=sys.stderr)
-        return 130
+    except InputError as exc:
+        return _fail(f"error: {exc}", 2)
+    except (FileNotFoundError, PermissionError, IsADirectoryError, NotADirectoryError) as exc:
+        return _fail(f"error: {exc}", 2)
+    except KeyboardInterrupt:
+        return _fail("interrupted (Ctrl-C)", 130)
+    except Exception as exc:
+        from .runner import Interrupted
+
+        if isinstance(exc, Interrupted):  # Ctrl-C during a journaled run: nothing finished is lost
+            return _fail(str(exc), 130)
+        raise
+
+
+def _fail(message: str, code: int) -> int:
+    """Print ``sweep: message`` on one line of stderr; return the exit code."""
+    print(f"sweep: {message}", file=sys.stderr)
+    return code
+
+
+def entry_point() -> None:
+    """The ``sweep`` command: :func:`main`, then exit with its code. After a Ctrl-C the process ends with
+    ``os._exit(130)``: CPython can turn a normal exit after a caught KeyboardInterrupt into death by SIGINT (exit
+    status -2 instead of 130) when the interrupt arrived inside an import; everything is written atomically, so
+    nothing is lost by skipping the interpreter's finalisation."""
+    code = main()
+    if code == 130:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
+    sys.exit(code)
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    entry_point()

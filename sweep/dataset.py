@@ -36,7 +36,9 @@ def versions() -> str:
         except metadata.PackageNotFoundError:
             return "unknown"
 
-    return (f"sweep {v('sweep')}, numba {v('numba')}, numpy {v('numpy')}, xarray {v('xarray')}, "
+    from ._version import __version__
+
+    return (f"sweep {__version__}, numba {v('numba')}, numpy {v('numpy')}, xarray {v('xarray')}, "
             f"python {sys.version.split()[0]}")
 
 

@@ -43,12 +43,15 @@ from .accuracy import (
     TYPE_CYCLES,
     TYPE_DISTANCE,
 )
+from .compile_notice import announce_if_cold
 from .dataset import REFERENCES, versions
 from .errors import InputError
 from .integrate.driven import DrivenParams, DrivenSettings, Regime, simulate_point
 from .model_choice import MODEL_FLAG
 from .params import FrictionParams
 from .plan import line_uses_inertia
+from .plausibility import warn_implausible
+from .progress import Progress
 from .scene import MODEL_TOL_RANGE, MODELS, STATE_LAWS
 
 __all__ = ["locate_hopf", "with_simulated_line"]
@@ -129,7 +132,8 @@ def _bifurcation(k_c: float, a: float, b: float, g: float, rtol: float, law: str
 
 
 def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto", rtol: float = 1e-3,
-                bifurcation: bool = True, model_tol: float = 1e-2, state_law: str = "aging") -> xr.Dataset:
+                bifurcation: bool = True, model_tol: float = 1e-2, state_law: str = "aging",
+                progress: bool | None = False) -> xr.Dataset:
     """The Hopf line over the velocities ``V`` [m s-1] (Dataset over V).
 
     Variables: ``K_over_M_c`` [s-2] located by simulation (bisection on the sign of the measured growth rate to a
@@ -140,11 +144,14 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
     "inertial" (the full Newton equation with gamma = V^2/(g D0); linear line chi_c = mu1 (1 + gamma/A)) or "auto"
     (default): per V, inertial where gamma/A > ``model_tol``, the relative shift of the line by inertia (flag
     variable ``model``). ``state_law``: "aging" (the paper's) or "slip" (quasi-static only; docs/physics.md 7).
+    ``progress``: a bar over the velocities on stderr (None: on an interactive terminal once the run takes more
+    than ~2 s; sweep/progress.py).
     """
     if model not in MODELS:
         raise InputError(f"model must be one of {list(MODELS)}, got {model!r}")
     if not (math.isfinite(model_tol) and MODEL_TOL_RANGE[0] <= model_tol <= MODEL_TOL_RANGE[1]):
-        raise InputError(f"model_tol must be in [{MODEL_TOL_RANGE[0]:g}, {MODEL_TOL_RANGE[1]:g}], got {model_tol!r}")
+        raise InputError(f"model_tol must be in [{MODEL_TOL_RANGE[0]:g}, {MODEL_TOL_RANGE[1]:g}], got "
+                         f"{float(model_tol)!r}")
     if not isinstance(params, FrictionParams):
         raise InputError(f"params must be a sweep.FrictionParams, got {type(params).__name__}")
     if state_law not in STATE_LAWS or (state_law != "aging" and model != "quasistatic"):
@@ -155,13 +162,15 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
         raise InputError(f"V must be a non-empty sequence of finite velocities > 0 [m s-1], got {V!r}")
     if not (math.isfinite(rtol) and 1e-8 <= rtol <= 0.1):
         raise InputError(f"rtol must be in [1e-8, 0.1] (relative width of the located bracket), got {rtol!r}")
+    warn_implausible(V=v)
+    announce_if_cold()
     p = params
     mu1 = np.asarray(physics.mu1(v, p.m1, p.m2, p.V0), dtype=float)
     inertial = line_uses_inertia(np.asarray(physics.inertia_number(v, p.D0, p.g)) / p.A, model, model_tol)
     gamma = np.asarray(physics.inertia_number(v, p.D0, p.g), dtype=float) * inertial
     chi_c, kinds, amps, evals = (np.full(v.size, np.nan), np.zeros(v.size, np.int8), np.full(v.size, np.nan),
                                  np.zeros(v.size, np.int64))
-    for i, m in enumerate(mu1):
+    for i, m in enumerate(Progress(v.size, progress, label="hopf", unit="velocities").iterate(mu1)):
         if m <= 0.0:
             continue
         k_c, evals[i] = _locate(m / p.A, p.m2 / p.A, gamma[i] / p.A, rtol, state_law)

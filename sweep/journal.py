@@ -60,6 +60,8 @@ class Journal:
         """Start the journal of ``output``, or with ``resume`` continue an existing one after checking that it
         belongs to the same run (``identity``: JSON-serialisable; compared key by key)."""
         path = journal_path(output)
+        if (path / MANIFEST).is_file() and not resume and not any(path.glob("chunk-*.npz")):
+            shutil.rmtree(path)  # a run stopped before its first chunk (e.g. Ctrl-C while compiling): nothing to lose
         if (path / MANIFEST).is_file():
             if not resume:
                 raise InputError(f"{path} holds the chunks of an interrupted run: resume it (sweep run ... --resume, "

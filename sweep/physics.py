@@ -204,7 +204,7 @@ def xi_inf_m2zero(chi, A, m1):
     separates: (A/(chi - m1)) (exp((chi - m1) xi/A) - 1) = (A/m1) (1 - exp(-m1 s/A)). As s -> inf
     (needs m1 > 0), exp((chi - m1) xi_inf/A) = chi/m1.
 
-    chi, A, m1 [1]. Evaluated as (A/m1) log1p(x)/x with x = chi/m1 - 1 (series for |x| < 1e-4), so it is
+    chi, A, m1 [1]. Evaluated as (A/m1) log1p(x)/x with x = chi/m1 - 1 (series for abs(x) < 1e-4), so it is
     smooth through chi = m1. NaN where m1 <= 0 (xi grows without bound) or chi <= 0.
     """
     chi, m1 = np.asarray(chi, dtype=float), np.asarray(m1, dtype=float)

@@ -18,26 +18,14 @@ from pathlib import Path
 import xarray as xr
 
 from .errors import InputError
+from .files import KINDS, file_kind  # noqa: F401 (re-exported: sweep.plot.file_kind)
 from .plot_curves import draw_curve, draw_hopf, draw_hopf_gap, draw_psi, draw_regime_curve, draw_xi, trajectory_points
 from .plot_maps import draw_map, draw_regime_map
 from .plot_style import caption, figure_legend, new_figure, save
 
 __all__ = ["file_kind", "plot_file", "plot_hopf", "plot_landscape", "plot_regimes", "plot_trajectories"]
 
-KINDS = ("stop", "driven", "hopf")
 STOP_VARIABLES = ("xi_inf", "stress_relaxation")
-
-
-def file_kind(ds: xr.Dataset) -> str:
-    """"hopf" (sweep.locate_hopf), "driven" or "stop" (sweep.run_sweep) from the variables of the file."""
-    if "K_over_M_c" in ds.data_vars and "bifurcation" in ds:
-        return "hopf"
-    if "regime" in ds:
-        return "driven"
-    if "xi_inf" in ds:
-        return "stop"
-    raise InputError("not a sweep file: expected xi_inf (stop sweep), regime (driven sweep) or K_over_M_c (Hopf "
-                     f"line); found {sorted(ds.data_vars)}")
 
 
 def has_trajectories(ds: xr.Dataset) -> bool:

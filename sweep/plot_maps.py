@@ -9,9 +9,19 @@ import xarray as xr
 from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
 
 from . import physics
-from .plot_style import KM_LABEL, V_LABEL, file_params, km_per_chi, label, mark_failed, mark_no_hopf_line, um_per_s
+from .plot_style import (
+    KM_LABEL,
+    V_LABEL,
+    file_params,
+    km_per_chi,
+    label,
+    mark_failed,
+    mark_no_hopf_line,
+    thinned,
+    um_per_s,
+)
 
-__all__ = ["draw_map", "draw_regime_map", "REGIME_COLOURS"]
+__all__ = ["draw_map", "draw_regime_map", "hopf_line_dense", "REGIME_COLOURS"]
 
 REGIME_COLOURS = ["#0072b2", "#e69f00", "#009e73", "#cc79a7", "#999999"]
 """Okabe-Ito colours (distinct for colour-blind readers), one per regime code."""
@@ -28,7 +38,7 @@ def draw_map(fig, ax, ds: xr.Dataset, variable: str) -> None:
     mesh = ax.pcolormesh(km, v_um, np.ma.masked_where(~(np.isfinite(z) & (z > 0)), z), shading="nearest",
                          cmap=CMAPS.get(variable, "viridis"), norm=norm)
     fig.colorbar(mesh, ax=ax, label=label(ds, variable))
-    _hatch_unstable(ax, km, v_um, ds["stable"].values.T)
+    _hatch_unstable(ax, ds)
     _hopf_lines(ax, ds, v_um)
     mark_no_hopf_line(ax, v_um, ds["mu1"].values)
     kk, vv = np.meshgrid(km, v_um, indexing="ij")
@@ -52,30 +62,51 @@ def draw_regime_map(fig, ax, ds: xr.Dataset) -> None:
     _frame(ax, km, v_um)
 
 
-def _hatch_unstable(ax, km: np.ndarray, v_um: np.ndarray, unstable_is_zero: np.ndarray) -> None:
-    unstable = unstable_is_zero == 0
-    if unstable.any():
-        ax.contourf(km, v_um, unstable.astype(float), levels=[0.5, 1.5], colors="none", hatches=["//"], zorder=2)
-        ax.fill_between([], [], [], facecolor="none", hatch="//", label="steady sliding unstable (stick-slip side)")
+def hopf_line_dense(ds: xr.Dataset, num: int = 400) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The Hopf line dense in V over the file's V range: (V [µm/s], K/M_c of eq. 3 quasi-static [s-2], K/M_c of
+    the model the file used [s-2]); NaN where mu1(V) <= 0. The model's line is eq. 3 times the file's own ratio
+    chi_c / chi_c_quasistatic (1 + gamma/A where inertia moves it), interpolated in ln V."""
+    p = file_params(ds)
+    v_file = ds["V"].values
+    v = np.geomspace(v_file.min(), v_file.max(), num)
+    kc = physics.hopf_K_over_M(v, p["A"], p["m1"], p["m2"], p["D0"], p.get("V0", 1e-6), p.get("g", 9.81))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = ds["chi_c"].values / ds["chi_c_quasistatic"].values
+    ratio = np.where(np.isfinite(ratio), ratio, 1.0)
+    return v * 1e6, kc, kc * np.interp(np.log(v), np.log(v_file), ratio)
+
+
+def _hatch_unstable(ax, ds: xr.Dataset) -> None:
+    """Hatch the stick-slip side (steady sliding unstable: K/M below the Hopf line of the model used), bounded by
+    the line itself, dense in V, not by the cells of the grid (which, with few velocities, would hatch stable
+    points)."""
+    km = ds["K_over_M"].values
+    v_um, _, kc = hopf_line_dense(ds)
+    edge = np.clip(np.where(np.isfinite(kc), kc, km.min()), km.min(), km.max())
+    inside = edge > km.min()
+    if inside.any():
+        ax.fill_betweenx(v_um, km.min(), edge, where=inside, facecolor="none", edgecolor="k", hatch="//", lw=0,
+                         zorder=2, label="steady sliding unstable (stick-slip side)")
 
 
 def _hopf_lines(ax, ds: xr.Dataset, v_um: np.ndarray) -> None:
     """The quasi-static Hopf line eq. 3 from the file's parameters (dense in V, so that it runs into the edge of
     the V range without a line), the file's own line where inertia moves it (chi_c = mu1 (1 + gamma/A)), and the
-    line located by simulation (sweep.hopf.with_simulated_line) where the file has it."""
-    p = file_params(ds)
-    v = np.geomspace(ds["V"].values.min(), ds["V"].values.max(), 400)
-    kc = physics.hopf_K_over_M(v, p["A"], p["m1"], p["m2"], p["D0"], p.get("V0", 1e-6), p.get("g", 9.81))
-    ax.plot(kc, v * 1e6, "w-", lw=2.6, zorder=3)  # a halo: the line stays visible on any colour
-    ax.plot(kc, v * 1e6, "r--", lw=1.6, zorder=3, label="Hopf line, linear theory (eq. 3, quasi-static)")
+    line located by simulation (sweep.hopf.with_simulated_line) where the file has it; markers thinned to at most
+    ~25 on a dense V axis, so that they do not merge into a band hiding the theory."""
+    v_dense, kc, _ = hopf_line_dense(ds)
+    ax.plot(kc, v_dense, "w-", lw=2.6, zorder=3)  # a halo: the line stays visible on any colour
+    ax.plot(kc, v_dense, "r--", lw=1.6, zorder=3, label="Hopf line, linear theory (eq. 3, quasi-static)")
     used, quasistatic = ds["chi_c"].values, ds["chi_c_quasistatic"].values
     shifted = np.isfinite(used) & (np.abs(used - quasistatic) > 1e-3 * np.abs(quasistatic))
+    show = thinned(v_um.size)
     if shifted.any():  # inertia moves the line by gamma/A relative where the model used has it
-        ax.plot(used * km_per_chi(ds), v_um, ":", color="r", marker="+", lw=1.2, zorder=3,
+        ax.plot(used * km_per_chi(ds), v_um, ":", color="r", marker="+", lw=1.2, zorder=3, markevery=list(show),
                 label="Hopf line with inertia, χ$_c$ = μ$_1$ (1 + γ/A)")
     if "K_over_M_c_simulated" in ds.coords:
-        ax.plot(ds["K_over_M_c_simulated"].values, v_um, "o", ms=3.5, mfc="none", mec="r", zorder=3,
-                label="Hopf line located by simulation")
+        note = "" if show.size == v_um.size else f" (markers at {show.size} of {v_um.size} V)"
+        ax.plot(ds["K_over_M_c_simulated"].values[show], v_um[show], "o", ms=3.5, mfc="none", mec="r", zorder=3,
+                label="Hopf line located by simulation" + note)
 
 
 def _frame(ax, km: np.ndarray, v_um: np.ndarray) -> None:

@@ -25,7 +25,7 @@ from .presets import presets  # noqa: E402
 __all__ = ["DPI", "SIZES", "KM_LABEL", "V_LABEL", "TAU_LABEL", "CHI_LABEL", "new_figure", "figure_legend", "save",
            "label",
            "caption", "file_params", "preset_name", "um_per_s", "km_per_chi", "no_hopf_line_band",
-           "mark_no_hopf_line", "mark_failed", "flag_names"]
+           "mark_no_hopf_line", "mark_failed", "flag_names", "thinned"]
 
 DPI = 100
 SIZES = {"single": (6.4, 4.8), "map": (7.6, 5.6), "pair": (12.8, 5.2)}
@@ -57,8 +57,9 @@ def figure_legend(fig, axes) -> None:
     for ax in np.atleast_1d(axes):
         for handle, text in zip(*ax.get_legend_handles_labels()):
             entries.setdefault(text, handle)
-    if entries:
-        fig.legend(list(entries.values()), list(entries), loc="outside lower center", ncol=3, fontsize=7,
+    if entries:  # three columns under two panels, two under one (three would be wider than the figure)
+        ncol = min(len(entries), 3 if np.atleast_1d(axes).size > 1 else 2)
+        fig.legend(list(entries.values()), list(entries), loc="outside lower center", ncol=ncol, fontsize=7,
                    frameon=False)
 
 
@@ -160,6 +161,12 @@ def mark_no_hopf_line(ax, v: np.ndarray, mu1: np.ndarray, axis: str = "y", over_
             line(edge, color="white", lw=2.4, zorder=2.5)
         line(edge, color="k" if over_data else "0.4", ls="-.", lw=1.2, zorder=2.5,
              label="no Hopf line beyond (μ$_1$(V) ≤ 0, tinted): stable at every K/M" if over_data and not i else None)
+
+
+def thinned(n: int, most: int = 25) -> np.ndarray:
+    """Indices of at most ``most`` of ``n`` points, evenly spread: markers that stay apart on a dense axis instead of
+    merging into a band that hides the line under them."""
+    return np.unique(np.linspace(0, n - 1, min(n, most)).round().astype(int))
 
 
 def flag_names(ds: xr.Dataset, name: str) -> list[str]:

@@ -46,6 +46,11 @@ TAU_MAX = 1e250
 """Largest reduced time that can be asked for (float64 carries tau up to ~1e308)."""
 
 
+def _plain(value: Any) -> Any:
+    """A numpy scalar as the Python number it holds, so that messages print ``-1000.0``, not ``np.float64(...)``."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
 def _axis(name: str, values: Any) -> np.ndarray:
     """Validate one grid axis: 1-D, non-empty, finite, > 0, strictly increasing."""
     try:
@@ -59,7 +64,7 @@ def _axis(name: str, values: Any) -> np.ndarray:
     if not np.all(np.isfinite(arr)):
         raise InputError(f"{name} contains NaN or inf: all values must be finite")
     if np.any(arr <= 0):
-        raise InputError(f"{name} must be > 0 (allowed range: 0 < {name} < inf), got min {arr.min()!r}")
+        raise InputError(f"{name} must be > 0 (allowed range: 0 < {name} < inf), got min {_plain(arr.min())!r}")
     if np.any(np.diff(arr) <= 0):
         raise InputError(f"{name} must be strictly increasing (sorted, no duplicates)")
     arr.setflags(write=False)
@@ -186,7 +191,7 @@ class Scene:
         self._check_method()
         self._check_driven()
         if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, (int, np.integer)) or self.max_steps < 1:
-            raise InputError(f"max_steps must be an integer >= 1, got {self.max_steps!r}")
+            raise InputError(f"max_steps must be an integer >= 1, got {_plain(self.max_steps)!r}")
 
     def _check_method(self) -> None:
         if self.method != "auto" and self.method not in METHODS:
@@ -223,7 +228,7 @@ class Scene:
         object.__setattr__(self, "perturbation", pert)
         if isinstance(self.max_cycles, bool) or not isinstance(self.max_cycles, (int, np.integer)) \
                 or self.max_cycles < 4:
-            raise InputError(f"max_cycles must be an integer >= 4, got {self.max_cycles!r}")
+            raise InputError(f"max_cycles must be an integer >= 4, got {_plain(self.max_cycles)!r}")
         self._check_model()
         if self.protocol != "driven":
             return
@@ -283,7 +288,7 @@ class Scene:
         if not lo < hi <= TAU_MAX:
             raise InputError(f"trajectory_tau needs 0 < min < max <= {TAU_MAX:g}, got ({lo!r}, {hi!r})")
         if isinstance(num, bool) or int(num) != num or num < 2:
-            raise InputError(f"trajectory_tau num must be an integer >= 2, got {num!r}")
+            raise InputError(f"trajectory_tau num must be an integer >= 2, got {_plain(num)!r}")
         object.__setattr__(self, "trajectory_tau", (lo, hi, int(num)))
 
     @property
@@ -407,7 +412,10 @@ def _read_toml(source: str | Path) -> dict[str, Any]:
         path = Path(text)
         if not path.is_file():
             raise InputError(f"scene file {text!r} does not exist")
-        text = path.read_text()
+        try:
+            text = path.read_text()
+        except UnicodeDecodeError:
+            raise InputError(f"scene file {text!r} is not a TOML text file") from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

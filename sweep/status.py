@@ -28,7 +28,7 @@ class Status(IntEnum):
     xi_inf, slip_inf, stress_relaxation, t50 and t90 are NaN by definition; finite-time observables
     (slip_at, trajectory) are still computed."""
     ERROR_ABOVE_TOL = 5
-    """Computed, but the error estimate of at least one observable (``<name>_error``) exceeds rtol |value| +
+    """Computed, but the error estimate of at least one observable (``<name>_error``) exceeds rtol abs(value) +
     atol: the value is kept for inspection and must not be trusted to rtol."""
     QUASISTATIC_BREAKDOWN = 6
     """Driven scene: the slip velocity passed the threshold in the file's attrs (regime runaway): the quasi-static

@@ -1,0 +1,93 @@
+"""Say so before numba compiles sweep's kernels: on a machine whose numba cache holds none of them, the first run
+compiles for about a minute, with nothing else to show for it.
+
+:func:`announce_if_cold` logs one INFO line (logger ``sweep``) at once when numba's on-disk cache holds no index
+file (``*.nbi``) of the package, checked once per process; :func:`timed` wraps an explicit warm-up and logs a line
+if it is still running after :data:`SLOW_S` (a cache that holds some kernels but not the ones a scene needs), then
+how long it took. Measured on the 2-core development machine with an empty cache (NUMBA_CACHE_DIR set to an empty
+folder, 2026-11-24): the relaxed-slip engine (lanes, rk4/ros4) 17 s, the inertial stop 38 s, the driven kernel and
+the Hopf line 22 s; loading all of them from the cache takes ~1.5 s.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from .log import LOGGER
+
+__all__ = ["COLD_COMPILE_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "timed"]
+
+
+COLD_COMPILE_S = {"relaxed-slip engine": 17, "inertial stop": 38, "driven / Hopf line": 22}
+"""Seconds to compile each kernel family from an empty cache on the 2-core development machine (module docstring)."""
+SLOW_S = 3.0
+"""A warm-up still running after this many seconds is compiling, not loading: say so."""
+PACKAGE = Path(__file__).resolve().parent
+_checked = False
+_compiling_announced = False
+
+
+def cache_is_cold() -> bool:
+    """True when numba's on-disk cache holds no index file (``*.nbi``) of the package yet, so that the next kernel
+    call compiles. numba keeps the cache in NUMBA_CACHE_DIR where that is set, else beside the sources
+    (``__pycache__``), else (package folder not writable) in the user-wide ~/.cache/numba, under the sources' path."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return not _has_index(Path(os.environ["NUMBA_CACHE_DIR"]))
+    user_wide = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "numba"
+    return not (any(_has_index(d) for d in PACKAGE.rglob("__pycache__"))
+                or _has_index(user_wide, must_contain=PACKAGE.name))
+
+
+def _has_index(folder: Path, must_contain: str = "") -> bool:
+    """Whether ``folder`` holds a numba index file (anywhere below it, in a path containing ``must_contain``)."""
+    return folder.is_dir() and any(must_contain in str(p) for p in folder.rglob("*.nbi"))
+
+
+def _total() -> int:
+    return sum(COLD_COMPILE_S.values())
+
+
+def announce_if_cold() -> bool:
+    """Log, once per process, that the kernels are about to be compiled, if numba's cache is empty; True if it
+    logged."""
+    global _checked, _compiling_announced
+    if _checked:
+        return False
+    _checked = True
+    if not cache_is_cold():
+        return False
+    _compiling_announced = True
+    LOGGER.info("compiling numba kernels, first run on this machine only: up to ~%d s on 2 cores (%s); later runs "
+                "load them from numba's cache in ~1.5 s", _total(),
+                ", ".join(f"{k} ~{v} s" for k, v in COLD_COMPILE_S.items()))
+    return True
+
+
+@contextmanager
+def timed(what: str = "kernels") -> Iterator[None]:
+    """Around a warm-up: :func:`announce_if_cold`, a line if it is still running after :data:`SLOW_S` (compiling),
+    and at the end its duration (INFO if it compiled, else DEBUG)."""
+    announce_if_cold()
+    done = threading.Event()
+
+    def notice() -> None:
+        if not done.wait(SLOW_S) and not _compiling_announced:
+            LOGGER.info("compiling %s not yet in numba's cache (first use only, up to ~%d s on 2 cores)", what,
+                        _total())
+
+    t0 = time.perf_counter()
+    thread = threading.Thread(target=notice, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        done.set()
+        thread.join()
+        seconds = time.perf_counter() - t0
+        LOGGER.log(20 if seconds > SLOW_S else 10, "%s ready in %.1f s (%s)", what, seconds,
+                   "compiled, now cached" if seconds > SLOW_S else "loaded from numba's cache")

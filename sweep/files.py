@@ -1,0 +1,61 @@
+"""Which of sweep's own files a path holds, read with a one-line error for anything else.
+
+sweep writes three kinds of netCDF file: a stop sweep (``sweep run``, ``sweep reproduce``: variable ``xi_inf``), a
+driven sweep (``regime``) and a Hopf line (``sweep hopf``: ``K_over_M_c`` and ``bifurcation``). Every command that
+reads a file goes through :func:`read_sweep_file`, so a missing file, a file that is not netCDF and a netCDF file
+of some other program are each refused with an :class:`~sweep.errors.InputError` naming the path.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import xarray as xr
+
+from .errors import InputError
+
+__all__ = ["KINDS", "file_kind", "read_sweep_file"]
+
+KINDS = ("stop", "driven", "hopf")
+
+
+def file_kind(ds: xr.Dataset) -> str:
+    """"hopf" (sweep.locate_hopf), "driven" or "stop" (sweep.run_sweep) from the variables of the file;
+    :class:`InputError` for a Dataset that is none of them."""
+    if "K_over_M_c" in ds.data_vars and "bifurcation" in ds:
+        return "hopf"
+    if "regime" in ds:
+        return "driven"
+    if "xi_inf" in ds:
+        return "stop"
+    raise InputError("not a sweep file: expected xi_inf (stop sweep), regime (driven sweep) or K_over_M_c (Hopf "
+                     f"line); found {sorted(ds.data_vars)}")
+
+
+def read_sweep_file(path: str | os.PathLike, load: bool = True) -> tuple[xr.Dataset, str]:
+    """(Dataset, kind) of a file written by sweep (kind as :func:`file_kind`). ``load``: read it whole into memory
+    and close it (default) or open it lazily. Raises :class:`InputError` (one line, naming the path) for a missing
+    file, a file that is not netCDF or a netCDF file that sweep did not write."""
+    from .io import open_dataset
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"no such file: {str(path)!r}" if not path.exists() else f"{str(path)!r} is not a file")
+    try:
+        ds = open_dataset(path, load=load)
+    except (OSError, ValueError, TypeError) as exc:  # netCDF4's "Unknown file format", HDF errors, xarray decoding
+        raise InputError(f"{str(path)!r} is not a netCDF file written by sweep ({_first_line(exc)})") from None
+    try:
+        kind = file_kind(ds)
+    except InputError as exc:
+        ds.close()
+        raise InputError(f"{str(path)!r} is {exc}") from None
+    if kind != "hopf" and not {"K_over_M", "V"} <= set(ds.dims):  # one point (sweep.solve_point) saved as 0-d
+        ds = ds.expand_dims(("K_over_M", "V"))
+    return ds, kind
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0] if text else ''}"

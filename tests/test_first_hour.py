@@ -1,0 +1,348 @@
+"""What a new user meets in the first hour (issue 16): packaging, one-line errors instead of tracebacks, warnings on
+implausible units, logging and progress. The CLI is run through a subprocess: exit code and the one-line message."""
+
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+import sweep
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def sweep_cli(*args, cwd, timeout=600, env=None):
+    return subprocess.run([sys.executable, "-m", "sweep.cli", *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=timeout, env=env)
+
+
+def one_line_error(proc, code=2) -> str:
+    """The stderr of a refused command: exit ``code``, one line, no traceback."""
+    assert proc.returncode == code, (proc.returncode, proc.stdout, proc.stderr)
+    err = proc.stderr.strip()
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    return err
+
+
+# --- packaging ---------------------------------------------------------------------------------------------------
+
+def test_distribution_name_is_ours_and_the_version_has_one_source():
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    assert project["name"] == "sweep-friction"  # "sweep" on PyPI is an unrelated project
+    assert "version" not in project and "version" in project["dynamic"]
+    assert project["license"] == "MIT" and (ROOT / "LICENSE").is_file()
+    assert (ROOT / "sweep" / "py.typed").is_file()
+    readme = (ROOT / "README.md").read_text()
+    assert "sweep[" not in readme  # never an install command naming someone else's distribution
+
+
+def test_version_flag(tmp_path):
+    proc = sweep_cli("--version", cwd=tmp_path)
+    assert proc.returncode == 0 and proc.stdout.strip() == f"sweep {sweep.__version__}", proc
+
+
+# --- one-line errors instead of tracebacks ------------------------------------------------------------------------
+
+SMALL = "preset = \"sample2\"\n[K_over_M]\nvalues = [1e4, 1e5]\n[V]\nvalues = [1e-6, 1e-5]\n"
+
+
+def _write_kind(kind: str, folder: Path) -> Path:
+    """A small file of each kind sweep writes (stop, driven, Hopf, a figure of ``sweep reproduce``)."""
+    import numpy as np
+
+    p = sweep.presets["sample2"]
+    if kind == "figure":
+        from sweep.figures import reproduce
+
+        return reproduce("fig4b", folder)[0].data
+    if kind == "hopf":
+        return sweep.save(sweep.locate_hopf(p, [1e-6, 1e-4], bifurcation=False), folder / "hopf.nc")
+    scene = sweep.Scene(protocol=kind, params=p, K_over_M=np.array([3e4, 3e5]), V=np.array([1e-6, 2e-6]))
+    return sweep.save(sweep.run_sweep(scene, progress=False), folder / f"{kind}.nc")
+
+
+@pytest.mark.parametrize("kind", ["stop", "driven", "hopf", "figure"])
+def test_info_and_plot_handle_every_file_sweep_writes(tmp_path, kind):
+    path = _write_kind(kind, tmp_path)
+    proc = sweep_cli("info", str(path), cwd=tmp_path)
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr
+    assert f"({'stop' if kind == 'figure' else kind} file)" in proc.stdout
+    proc = sweep_cli("plot", str(path), "-o", str(tmp_path / "p.png"), cwd=tmp_path)
+    assert proc.returncode == 0 and "wrote" in proc.stdout, proc.stderr
+
+
+def _not_a_sweep_file(what: str, folder: Path) -> Path:
+    path = folder / "x.nc"
+    if what == "text":
+        path.write_text("hello\n")
+    elif what == "other netCDF":
+        import xarray as xr
+
+        xr.Dataset({"a": ("x", [1.0, 2.0])}).to_netcdf(path)
+    elif what == "directory":
+        path.mkdir()
+    return path
+
+
+@pytest.mark.parametrize("command", ["info", "plot"])
+@pytest.mark.parametrize("what, message", [("missing", "no such file"), ("text", "is not a netCDF file"),
+                                           ("other netCDF", "is not a sweep file"), ("directory", "is not a file")])
+def test_anything_else_is_refused_in_one_line(tmp_path, command, what, message):
+    path = _not_a_sweep_file(what, tmp_path)
+    err = one_line_error(sweep_cli(command, str(path), cwd=tmp_path))
+    assert err.startswith("sweep: error:") and message in err and "x.nc" in err
+
+
+@pytest.mark.parametrize("command", ["run", "hopf"])
+def test_a_netcdf_file_given_as_scene_is_refused_in_one_line(tmp_path, command):
+    path = _write_kind("hopf", tmp_path)
+    err = one_line_error(sweep_cli(command, str(path), "-o", str(tmp_path / "o.nc"), cwd=tmp_path))
+    assert "not a TOML text file" in err
+
+
+def test_a_bad_scheduler_address_fails_within_seconds(tmp_path):
+    import time
+
+    (tmp_path / "s.toml").write_text(SMALL)
+    t0 = time.perf_counter()
+    proc = sweep_cli("run", "s.toml", "-o", "o.nc", "--scheduler", "tcp://127.0.0.1:9", cwd=tmp_path, timeout=60)
+    err = one_line_error(proc)
+    assert "could not connect to the dask scheduler at 'tcp://127.0.0.1:9'" in err
+    assert time.perf_counter() - t0 < 25  # 5 s connection timeout plus starting Python (was 30 s + a traceback)
+    assert not any((tmp_path / "o.nc.journal").glob("chunk-*"))
+
+
+def test_a_journal_without_chunks_does_not_block_a_new_run(tmp_path):
+    """What a run stopped before its first chunk leaves (refused scheduler, Ctrl-C while compiling): nothing to
+    resume, so a new run starts afresh instead of asking for --resume; a journal with chunks is still kept."""
+    from sweep.journal import Journal, journal_path
+
+    Journal.open(tmp_path / "o.nc", {"scene": "a"}, resume=False)
+    Journal.open(tmp_path / "o.nc", {"scene": "b"}, resume=False)  # no InputError
+    journal = Journal.open(tmp_path / "o.nc", {"scene": "b"}, resume=False)
+    journal.write(0, {"x": __import__("numpy").zeros(1)})
+    with pytest.raises(sweep.InputError, match="resume"):
+        Journal.open(tmp_path / "o.nc", {"scene": "b"}, resume=False)
+    assert journal_path(tmp_path / "o.nc").is_dir()
+
+
+def test_ctrl_c_while_compiling_is_one_line_and_exit_130(tmp_path):
+    """An empty numba cache (NUMBA_CACHE_DIR): the kernels compile for tens of seconds; Ctrl-C in that time."""
+    import os
+    import signal
+    import time
+
+    (tmp_path / "s.toml").write_text(SMALL)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
+    proc = subprocess.Popen([sys.executable, "-m", "sweep.cli", "run", "s.toml", "-o", "o.nc"], cwd=tmp_path,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(4.0)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, (out, err)
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "sweep: interrupted (Ctrl-C)", err
+
+
+def test_api_messages_print_plain_numbers():
+    with pytest.raises(sweep.InputError) as info:
+        sweep.solve_point(sweep.presets["sample2"], K_over_M=-2.8e5, V=1e-6)
+    assert "got min -280000.0" in str(info.value) and "np." not in str(info.value)
+    import numpy as np
+
+    with pytest.raises(sweep.InputError, match=r"got 0$"):
+        sweep.Scene(protocol="stop", params=sweep.presets["sample2"], K_over_M=[1e4], V=[1e-6],
+                    max_steps=np.int64(0))
+
+
+# --- plausibility: likely unit mistakes ---------------------------------------------------------------------------
+
+UM_AS_M = "preset = \"sample2\"\n[K_over_M]\nstart = 1e3\nstop = 1e6\nnum = 4\n[V]\nstart = 0.1\nstop = 100\nnum = 3\n"
+
+
+def test_v_in_um_per_s_is_warned_before_any_work_and_a_failed_run_exits_1(tmp_path):
+    (tmp_path / "um.toml").write_text(UM_AS_M)
+    proc = sweep_cli("run", "um.toml", "--dry-run", "-o", "um.nc", cwd=tmp_path)
+    assert proc.returncode == 0
+    warning = "sweep: warning: V up to 100 m/s: did you give µm/s? V is in m/s"
+    assert proc.stderr.count(warning) == 1, proc.stderr
+    proc = sweep_cli("run", "um.toml", "-o", "um.nc", "-q", cwd=tmp_path)
+    assert proc.returncode == 1 and proc.stderr.count(warning) == 1, (proc.stdout, proc.stderr)
+    assert len(proc.stderr.strip().splitlines()) == 2  # -q: the warning and the summary, no progress or notes
+    last = proc.stderr.strip().splitlines()[-1]
+    assert last.startswith("sweep: 12 of 12 points failed (") and "check the units" in last, last
+    assert (tmp_path / "um.nc").exists()  # the values are kept for inspection
+
+
+@pytest.mark.parametrize("km, v, words", [([1e3, 1e13], [1e-6], "K/M 1000..1e+13 s^-2 is outside"),
+                                          ([1e-3, 1e3], [1e-6], "K/M 0.001..1000 s^-2 is outside"),
+                                          ([1e3], [1e-6, 5.0], "V up to 5 m/s: did you give µm/s?"),
+                                          ([1e3], [1e-6, 1e5], "V up to 100000 m/s: V is in m/s")])
+def test_implausible_axes_name_the_likely_unit_mistake(km, v, words):
+    from sweep.plausibility import implausible
+
+    assert any(words in m for m in implausible(km, v)), implausible(km, v)
+    assert implausible([1e3, 1e6], [1e-7, 1e-4]) == []
+
+
+def test_solve_point_at_1_m_per_s_warns_and_its_status_says_why():
+    from sweep.plausibility import PlausibilityWarning
+
+    with pytest.warns(PlausibilityWarning) as record:
+        pt = sweep.solve_point(sweep.presets["sample2"], K_over_M=2.8e5, V=1.0, observables=["xi_inf"])
+    status = pt["status"].attrs["flag_meanings"].split()[int(pt["status"])]
+    assert status != "ok"
+    texts = [str(w.message) for w in record]
+    assert any(f"ended with status {status}" in t for t in texts), texts
+
+
+# --- logging, the compile notice, progress ------------------------------------------------------------------------
+
+def test_first_run_on_an_empty_cache_says_it_compiles_before_anything_else(tmp_path):
+    """NUMBA_CACHE_DIR pointing to an empty folder is a fresh machine: the notice comes first, within a second."""
+    import os
+    import time
+
+    (tmp_path / "s.toml").write_text(SMALL)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
+    proc = subprocess.Popen([sys.executable, "-m", "sweep.cli", "run", "s.toml", "-o", "o.nc"], cwd=tmp_path,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    t0 = time.perf_counter()
+    first = proc.stderr.readline()
+    waited = time.perf_counter() - t0
+    proc.kill()
+    proc.communicate()
+    assert first.startswith("sweep: compiling numba kernels, first run on this machine only: up to ~"), first
+    assert waited < 10  # ~0.3 s when idle; the machine is shared
+
+
+def test_verbose_goes_through_the_sweep_logger(tmp_path):
+    """(-q, warnings and errors only: test_v_in_um_per_s_is_warned_before_any_work_and_a_failed_run_exits_1.)"""
+    (tmp_path / "s.toml").write_text(SMALL)
+    loud = sweep_cli("run", "s.toml", "-o", "o.nc", "-v", cwd=tmp_path)
+    assert loud.returncode == 0 and "sweep: kernels ready in" in loud.stderr, loud.stderr
+
+
+def test_the_compile_notice_is_logged_from_python(monkeypatch, caplog):
+    import logging
+
+    import sweep.compile_notice as notice
+
+    monkeypatch.setattr(notice, "_checked", False)
+    monkeypatch.setattr(notice, "cache_is_cold", lambda: True)
+    with caplog.at_level(logging.INFO, logger="sweep"):
+        sweep.solve_point(sweep.presets["sample2"], K_over_M=1e4, V=1e-6, observables=["xi_inf"])
+    assert any(r.name == "sweep" and "compiling numba kernels" in r.getMessage() for r in caplog.records)
+
+
+def test_cache_is_cold_follows_numba_cache_dir(tmp_path, monkeypatch):
+    from sweep.compile_notice import cache_is_cold
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert cache_is_cold()
+    (tmp_path / "sweep_0123").mkdir()
+    (tmp_path / "sweep_0123" / "engine.stop_batch-46.py311.nbi").write_bytes(b"")
+    assert not cache_is_cold()
+
+
+def test_locate_hopf_shows_progress_over_the_velocities(monkeypatch, capsys):
+    import numpy as np
+
+    import sweep.progress
+
+    monkeypatch.setattr(sweep.progress, "SHOW_AFTER_S", 0.0)
+    sweep.locate_hopf(sweep.presets["sample2"], np.logspace(-7, -6, 3), bifurcation=False, progress=True)
+    err = capsys.readouterr().err
+    assert "hopf [" in err and "3/3 velocities" in err and err.endswith("\n")
+
+
+# --- pictures -----------------------------------------------------------------------------------------------------
+
+def _stop(km, v, **kw):
+    import numpy as np
+
+    scene = sweep.Scene(protocol="stop", params=sweep.presets["sample2"], K_over_M=np.asarray(km),
+                        V=np.asarray(v), **kw)
+    return sweep.run_sweep(scene, progress=False)
+
+
+def _map(ds, variable="xi_inf"):
+    from sweep.plot_maps import draw_map
+    from sweep.plot_style import figure_legend, new_figure
+
+    fig, ax = new_figure("map")
+    draw_map(fig, ax, ds, variable)
+    figure_legend(fig, ax)
+    fig.canvas.draw()
+    return fig, ax
+
+
+def test_two_velocities_hatch_follows_the_line_not_the_cells():
+    """Between the two rows of the grid the hatched region ends at the Hopf line (3 % either side of it), where
+    hatching grid cells put a stable band under the hatch."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from sweep.plot_maps import hopf_line_dense
+
+    ds = _stop(np.logspace(4, 6, 40), [1e-7, 1e-6])
+    fig, ax = _map(ds)
+    hatched = [c for c in ax.collections if c.get_hatch() == "//"]
+    assert len(hatched) == 1
+    region = hatched[0].get_paths()[0]  # data coordinates (K/M, V in µm/s)
+    v_um, _, kc = hopf_line_dense(ds)
+    between = (v_um > 0.12) & (v_um < 0.9)
+    assert region.contains_points(np.c_[0.97 * kc[between], v_um[between]]).all()
+    assert not region.contains_points(np.c_[1.03 * kc[between], v_um[between]]).any()
+    plt.close(fig)
+
+
+def test_single_map_legend_fits_inside_the_figure():
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    ds = _stop(np.logspace(4, 6, 12), [1e-7, 1e-6], observables=["xi_inf", "t50"])
+    fig, _ = _map(ds, "t50")
+    box = fig.legends[0].get_window_extent()
+    assert box.x0 >= 0 and box.x1 <= fig.bbox.width and box.y0 >= 0, (box, fig.bbox)
+    plt.close(fig)
+
+
+def test_the_simulated_line_over_200_velocities_is_thinned():
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    ds = _stop(np.logspace(3, 6, 3), np.logspace(-7, -5, 200))
+    fig, ax = _map(ds)
+    (line,) = [ln for ln in ax.lines if ln.get_label().startswith("Hopf line located by simulation")]
+    assert len(line.get_xdata()) <= 25 and "markers at" in line.get_label()
+    plt.close(fig)
+
+
+def test_hopf_gap_shows_the_bisection_bracket_on_each_point():
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from sweep.plot_curves import draw_hopf_gap
+    from sweep.plot_style import new_figure
+
+    ds = sweep.locate_hopf(sweep.presets["sample2"], np.logspace(-7, -6, 4), bifurcation=False)
+    fig, ax = new_figure()
+    draw_hopf_gap(ax, ds)
+    assert ax.containers and "bisection bracket ± rtol/2" in ax.containers[0].get_label()
+    assert "no gap resolved" in ax.get_title()
+    plt.close(fig)
+
+
+def test_dry_run_prints_one_model_line(tmp_path):
+    (tmp_path / "s.toml").write_text(SMALL)
+    proc = sweep_cli("run", "s.toml", "--dry-run", cwd=tmp_path)
+    models = [line for line in proc.stdout.splitlines() if line.split(":")[0].strip() == "model"]
+    assert proc.returncode == 0 and len(models) == 1 and "auto" in models[0], proc.stdout
+
+
+def test_readme_numbers_are_those_of_the_benchmark_results():
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "readme_numbers.py"), "--check"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
