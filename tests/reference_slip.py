@@ -1,7 +1,7 @@
 """Independent high-accuracy scipy reference for the SLIP state law (Ruina 1983), with an ``aging=True`` switch
 that reproduces the aging-law reference (tests/reference.py) from the same code. Nothing here imports ``sweep``.
 
-Notation (reduced, PHYSICS.md 2): ' = d/dtau, u = ln psi, k = chi/A, a = mu1(V)/A, b = m2/A,
+Notation (reduced, docs/physics.md 2): ' = d/dtau, u = ln psi, k = chi/A, a = mu1(V)/A, b = m2/A,
 L = k xi + a u + b u^2 (stop) and E = xi' psi = exp(-L).
 
 1. State laws. Aging: psi' = 1 - xi' psi. Slip: psi' = -xi' psi ln(xi' psi). The quasi-static force balance is

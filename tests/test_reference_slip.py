@@ -216,7 +216,7 @@ def test_state_independent_case_mu1_equal_minus_A():
 
 @pytest.mark.parametrize("name", ["g_chiA0.01_mA1_m2A0.1", "g_chiA1000_mA3_m2A0.3_stiff", "s2_KM2.8e5_V10um"])
 def test_early_stage_is_the_same_for_both_laws(name):
-    """tau << 1: psi ~ 1 and xi = ln(1 + k tau)/k (PHYSICS.md eq. 12) for both laws."""
+    """tau << 1: psi ~ 1 and xi = ln(1 + k tau)/k (docs/physics.md eq. 12) for both laws."""
     c = next(c for c in STOP_CASES if c.name == name)
     k = c.chi / c.A
     tau = 1e-6 / k
