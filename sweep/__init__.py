@@ -29,7 +29,12 @@ __all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "__version
 
 def __getattr__(name: str):
     where = _PUBLIC.get(name)
-    if where is None:
+    if where is None:  # a submodule, as after "import sweep.<name>"
+        try:
+            return importlib.import_module(f".{name}", __name__)
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__name__}.{name}":
+                raise
         raise AttributeError(f"module 'sweep' has no attribute {name!r}")
     module, attr = (where, name) if isinstance(where, str) else where
     value = getattr(importlib.import_module(f".{module}", __name__), attr)
