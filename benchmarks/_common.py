@@ -20,11 +20,10 @@ import subprocess
 import time
 from pathlib import Path
 
-from _machine import cpu_model, loadavg, usable_cpus  # noqa: F401 (re-exported)
-
 import numba
 import numpy as np
 import scipy
+from _machine import cpu_model, loadavg, usable_cpus  # noqa: F401 (re-exported)
 from scipy.integrate import BDF, LSODA, Radau
 
 import sweep

@@ -1,8 +1,8 @@
 #!/usr/bin/env python
 """Compare two sweep trees (an old commit and a new one) for speed, first-call compile time and numbers.
 
-    python benchmarks/compare_commits.py [--old REV] [--new REV | --new-tree DIR] [--repeats N] [--quick]
-                                         [--out benchmarks/results/compare_commits.json]
+    python benchmarks/compare_commits.py [--old REV] [--new REV | --new-tree DIR] [--repeats N] [--compile-repeats N]
+                                         [--quick] [--out benchmarks/results/compare_commits.json]
 
 Defaults: old = ee0f86c (the release before the core restructure), new = the tree this script is run from. A REV
 is checked out with ``git worktree add --detach`` and removed afterwards.
@@ -16,7 +16,8 @@ this script is run from (the same case parameters go to both trees). The parent 
 1. compile  first-call time from an empty numba cache (NUMBA_CACHE_DIR = a new empty directory; the kernels use
             cache=True and numba then writes there, not into sweep/__pycache__): ``import sweep``, then the first
             and second call of a workload; compile_s = first - second. Families: the default scene (model
-            "auto": everything it needs), quasi-static relaxed slip, time-resolved stop, driven, inertial stop.
+            "auto": everything it needs), quasi-static relaxed slip, time-resolved stop, driven, inertial stop;
+            --compile-repeats runs per tree (default 1), alternated, the smallest compile_s kept.
 2. numbers  xi_inf (and status, steps) at rtol 1e-6 on the default scene (model quasistatic and auto) and on
             every case of tests/cases.py (solve_point as tests/test_accuracy.py calls it, model auto and
             quasistatic; and quasi-static with t50/t90, the per-point path), saved per tree as .npz and
@@ -31,7 +32,7 @@ checked out at a fixed path with its files' mtimes set to the commit time, so nu
 warm-ups load kernels instead of compiling them. Compile measurements never use it.
 
 Writes --out (JSON: machine, versions, the exact worker commands, every timing) and prints a summary.
---quick: tiny grids, one repeat, only the default-scene compile family: checks that the script works.
+--quick: tiny grids, one repeat, only the driven compile family (the cheapest): checks that the script works.
 """
 
 from __future__ import annotations
@@ -87,14 +88,16 @@ COMPILE_FAMILIES = {  # family -> workload whose first call compiles it (the qui
     "driven": ("driven_quasistatic", True),
     "inertial_stop": ("inertial_stop", True),
 }
-QUICK_COMPILE_FAMILIES = ("default_auto",)
+QUICK_COMPILE_FAMILIES = ("driven",)
+"""--quick measures the cheapest family to compile (~10-20 s a tree), only to check that the step works."""
 NUMBER_SETS = ("default_quasistatic", "default_auto", "cases_auto", "cases_quasistatic", "cases_time_resolved")
 
 
 # ================================================================================ worker side (imports sweep)
 
-def make_workload(name: str, quick: bool) -> Callable[[], object]:
-    """The call of workload ``name`` (see WORKLOADS); quick: every grid axis and velocity list 4x shorter."""
+def make_workload(name: str, quick: bool) -> tuple[Callable[[], object], dict]:
+    """The call of workload ``name`` (see WORKLOADS) and its inputs (:func:`describe`d, for checking that both
+    trees ran the same scene); quick: every grid axis and velocity list 4x shorter."""
     import sweep
 
     def n(size: int) -> int:
@@ -103,9 +106,12 @@ def make_workload(name: str, quick: bool) -> Callable[[], object]:
     def grid(nk: int, nv: int, k: tuple[float, float] = (3, 6), v: tuple[float, float] = (-7, -4)) -> dict:
         return {"K_over_M": np.logspace(*k, n(nk)), "V": np.logspace(*v, n(nv))}
 
-    def run(**changes: object) -> Callable[[], object]:
+    def run(**changes: object) -> tuple[Callable[[], object], dict]:
         scene = derive_scene(sweep.default_scene(), changes)
-        return lambda: sweep.run_sweep(scene, progress=False)
+        return (lambda: sweep.run_sweep(scene, progress=False)), describe(scene)
+
+    def hopf(params, v: np.ndarray, **kw: object) -> tuple[Callable[[], object], dict]:
+        return (lambda: sweep.locate_hopf(params, v, **kw)), describe({"params": params, "V": v, **kw})
 
     qs = {"model": "quasistatic"}
     driven = {"protocol": "driven", "observables": None, **grid(24, 24, k=(4, 6), v=(-7, -5))}
@@ -127,12 +133,23 @@ def make_workload(name: str, quick: bool) -> Callable[[], object]:
         return run(**{**driven, **grid(8, 8, k=(4, 6), v=(-7, -5))}, model="inertial")
     if name == "hopf_quasistatic":
         v = np.logspace(-7, np.log10(5e-6), n(20))
-        return lambda: sweep.locate_hopf(p2, v, model="quasistatic")
+        return hopf(p2, v, model="quasistatic")
     if name == "hopf_inertial":
         p = dataclasses.replace(p2, m2=0.0)
         v = np.sqrt(np.logspace(-3, 1, n(20)) * p.g * p.D0 * p.A)
-        return lambda: sweep.locate_hopf(p, v, model="inertial", bifurcation=False)
+        return hopf(p, v, model="inertial", bifurcation=False)
     raise ValueError(f"unknown workload {name!r}; known: {list(WORKLOADS)}")
+
+
+def describe(value: object) -> object:
+    """A JSON-able copy of a workload's inputs (Scene, FrictionParams, arrays, mappings, sequences)."""
+    if dataclasses.is_dataclass(value):
+        return {f.name: describe(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, dict) or hasattr(value, "keys"):
+        return {str(k): describe(value[k]) for k in value.keys()}
+    if isinstance(value, (np.ndarray, tuple, list)):
+        return [describe(v) for v in value]
+    return value.item() if isinstance(value, np.generic) else value
 
 
 def derive_scene(base, changes: dict):
@@ -150,13 +167,16 @@ def status_names(ds) -> np.ndarray:
     return np.array([codes[int(v)] for v in np.ravel(ds["status"].values)])
 
 
-def number_set(name: str, quick: bool, cases_file: Path) -> dict[str, np.ndarray]:
-    """Arrays of one number set (NUMBER_SETS) at rtol 1e-6: xi_inf, status (names), steps (and t50, t90)."""
+def number_set(name: str, quick: bool, cases_file: Path) -> tuple[dict[str, np.ndarray], dict]:
+    """Arrays of one number set (NUMBER_SETS) at rtol 1e-6: xi_inf, status (names), steps (and t50, t90); and
+    the inputs."""
     import sweep
 
     if name.startswith("default_"):
-        ds = make_workload(name, quick)()
-        return {"xi_inf": ds["xi_inf"].values.ravel(), "status": status_names(ds), "steps": ds["steps"].values.ravel()}
+        call, inputs = make_workload(name, quick)
+        ds = call()
+        return {"xi_inf": ds["xi_inf"].values.ravel(), "status": status_names(ds),
+                "steps": ds["steps"].values.ravel()}, inputs
     cases = load_cases(cases_file)
     kwargs = {"cases_auto": {"observables": ("xi_inf",)},
               "cases_quasistatic": {"observables": ("xi_inf",), "model": "quasistatic"},
@@ -171,7 +191,7 @@ def number_set(name: str, quick: bool, cases_file: Path) -> dict[str, np.ndarray
     for var in ("xi_inf", "steps", "t50", "t90"):
         if var in points[0]:
             out[var] = np.array([p[var].values for p in points])
-    return out
+    return out, {"solve_point": describe(kwargs), "rtol": RTOL}
 
 
 def load_cases(path: Path):
@@ -199,16 +219,20 @@ def worker(spec: dict) -> dict:
     out = {"sweep_file": str(where), "sweep_version": getattr(sweep, "__version__", None),
            "numba_cache_dir": numba.config.CACHE_DIR, "numba_threads": numba.get_num_threads()}
     if spec["kind"] == "numbers":
-        arrays = {f"{s}__{k}": v for s in NUMBER_SETS
-                  for k, v in number_set(s, spec["quick"], Path(spec["cases_file"])).items()}
+        arrays, inputs = {}, {}
+        for s in NUMBER_SETS:
+            values, inputs[s] = number_set(s, spec["quick"], Path(spec["cases_file"]))
+            arrays.update({f"{s}__{k}": v for k, v in values.items()})
         np.savez(spec["npz"], **arrays)
-        return out
-    call = make_workload(spec["workload"], spec["quick"])
-    walls = []
+        return {**out, "inputs": inputs}
+    call, inputs = make_workload(spec["workload"], spec["quick"])
+    walls, cpus = [], []
     for _ in range(2 if spec["kind"] == "compile" else 1 + spec["timed_calls"]):
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         call()
         walls.append(time.perf_counter() - t)
+        cpus.append(time.process_time() - c)
+    out["inputs"] = inputs
     if spec["kind"] == "compile":
         files = sum(len(f) for _, _, f in os.walk(numba.config.CACHE_DIR))
         return {**out, "import_s": import_s, "first_call_s": walls[0], "second_call_s": walls[1],
@@ -217,7 +241,7 @@ def worker(spec: dict) -> dict:
         layer = numba.threading_layer()
     except ValueError:  # no parallel kernel ran
         layer = None
-    return {**out, "warmup_s": walls[0], "timed_s": walls[1:], "threading_layer": layer}
+    return {**out, "warmup_s": walls[0], "timed_s": walls[1:], "timed_cpu_s": cpus[1:], "threading_layer": layer}
 
 
 # ================================================================================ parent side (no sweep import)
@@ -258,6 +282,8 @@ def checkout(label: str, rev: str) -> Iterator[Tree]:
         for f in path.rglob("*"):
             if f.is_file():
                 os.utime(f, (stamp, stamp))
+        # byte-compile now, as a used tree is: else the first import in a worker pays for it
+        subprocess.run([sys.executable, "-m", "compileall", "-q", str(path / "sweep")], check=True)
         yield Tree(label, path, sha, False, CACHE_ROOT / f"numba-{sha}-{hashlib.sha1(bytes(path)).hexdigest()[:10]}")
     finally:
         subprocess.run(["git", "worktree", "remove", "--force", str(path)], cwd=ROOT, capture_output=True)
@@ -298,25 +324,44 @@ class Runner:
         return json.loads(result.read_text())
 
 
+def same_inputs(old: dict, new: dict) -> dict:
+    """Which inputs (top-level fields of the scene or call) the two trees ran differently ("same" judges only the
+    fields both have: a field one tree added, at its default, is listed under only_old / only_new)."""
+    differ = sorted(k for k in old.keys() & new.keys() if old[k] != new[k])
+    only_old, only_new = sorted(old.keys() - new.keys()), sorted(new.keys() - old.keys())
+    return {"same": not differ, "differ": differ, "only_old": only_old, "only_new": only_new}
+
+
+def pop_inputs(runs: dict[str, list[dict]]) -> dict:
+    """Remove the inputs from every run (they are the same run after run) and compare old's with new's."""
+    inputs = {label: [r.pop("inputs") for r in rs][0] for label, rs in runs.items()}
+    return same_inputs(inputs["old"], inputs["new"])
+
+
 def alternate(trees: list[Tree], repeats: int) -> Iterator[Tree]:
     """old, new, old, new, ... (``repeats`` rounds)."""
     for _ in range(repeats):
         yield from trees
 
 
-def measure_compile(runner: Runner, trees: list[Tree], families: list[str]) -> dict:
-    """First-call times from an empty numba cache, per family and tree (one run each, trees alternated)."""
+def measure_compile(runner: Runner, trees: list[Tree], families: list[str], repeats: int) -> dict:
+    """First-call times from an empty numba cache, per family and tree: ``repeats`` runs per tree, trees
+    alternated, each in a new empty cache; per tree the run with the smallest compile_s is kept (all under runs)."""
     out = {}
     for family in families:
         workload, small = COMPILE_FAMILIES[family]
-        rows = {"workload": workload, "quick_size": small, "loadavg_before": loadavg()}
-        for tree in trees:
+        rows = {"workload": workload, "quick_size": small or runner.quick, "loadavg_before": loadavg(),
+                "runs": {t.label: [] for t in trees}}
+        for tree in alternate(trees, repeats):
             cache = Path(tempfile.mkdtemp(prefix="numba-empty-", dir=runner.scratch))
-            rows[tree.label] = runner.run(tree, "compile", family, cache, workload=workload,
-                                          quick=small or runner.quick)
-            print(f"  compile {family:20s} {tree.label}: import {rows[tree.label]['import_s']:.2f} s, compile "
-                  f"{rows[tree.label]['compile_s']:.1f} s", flush=True)
+            run = runner.run(tree, "compile", family, cache, workload=workload, quick=small or runner.quick)
+            rows["runs"][tree.label].append(run)
+            print(f"  compile {family:20s} {tree.label}: import {run['import_s']:.2f} s, compile "
+                  f"{run['compile_s']:.1f} s", flush=True)
         rows["loadavg_after"] = loadavg()
+        rows["inputs"] = pop_inputs(rows["runs"])
+        for label, runs in rows["runs"].items():
+            rows[label] = min(runs, key=lambda r: r["compile_s"])
         rows["ratio_compile_new_over_old"] = rows["new"]["compile_s"] / rows["old"]["compile_s"]
         out[family] = rows
     return out
@@ -330,9 +375,12 @@ def measure_speed(runner: Runner, trees: list[Tree], repeats: int) -> dict:
         for tree in alternate(trees, repeats):
             row["runs"][tree.label].append(runner.run(tree, "time", name, tree.timing_cache, workload=name))
         row["loadavg_after"] = loadavg()
+        row["inputs"] = pop_inputs(row["runs"])
         for label, runs in row["runs"].items():
             row[f"{label}_min_s"] = min(t for r in runs for t in r["timed_s"])
+            row[f"{label}_min_cpu_s"] = min(t for r in runs for t in r["timed_cpu_s"])
         row["ratio_new_over_old"] = row["new_min_s"] / row["old_min_s"]
+        row["ratio_cpu_new_over_old"] = row["new_min_cpu_s"] / row["old_min_cpu_s"]
         row["result"] = "PASS" if row["ratio_new_over_old"] <= SPEED_LIMIT else "MISS"
         print(f"  {name:20s} old {row['old_min_s']:.3f} s  new {row['new_min_s']:.3f} s  "
               f"x{row['ratio_new_over_old']:.3f} {row['result']}", flush=True)
@@ -370,12 +418,15 @@ def compare_numbers(old: Path, new: Path) -> dict:
 
 def measure_numbers(runner: Runner, trees: list[Tree]) -> dict:
     """Each tree writes its arrays to an .npz in the scratch dir; then compared old vs new."""
-    paths = {}
+    paths, inputs = {}, {}
     for tree in trees:
         paths[tree.label] = runner.scratch / f"numbers-{tree.label}.npz"
-        runner.run(tree, "numbers", "all", tree.timing_cache, npz=str(paths[tree.label]),
-                   cases_file=str(HERE.parent / "tests" / "cases.py"))
-    return compare_numbers(paths["old"], paths["new"])
+        inputs[tree.label] = runner.run(tree, "numbers", "all", tree.timing_cache, npz=str(paths[tree.label]),
+                                        cases_file=str(HERE.parent / "tests" / "cases.py"))["inputs"]
+    out = compare_numbers(paths["old"], paths["new"])
+    for name, row in out.items():
+        row["inputs"] = same_inputs(inputs["old"][name], inputs["new"][name])
+    return out
 
 
 def machine() -> dict:
@@ -385,7 +436,8 @@ def machine() -> dict:
     return {"cpu": cpu_model(), "logical_cpus": os.cpu_count(), "usable_cpus": usable_cpus(),
             "platform": platform.platform(), "python": platform.python_version(), "python_executable": sys.executable,
             "numpy": np.__version__, "numba": numba.__version__,
-            "NUMBA_NUM_THREADS": os.environ.get("NUMBA_NUM_THREADS"), "numba_default_threads": numba.config.NUMBA_NUM_THREADS}
+            "NUMBA_NUM_THREADS": os.environ.get("NUMBA_NUM_THREADS"),
+            "numba_default_threads": numba.config.NUMBA_NUM_THREADS}
 
 
 def print_summary(r: dict) -> None:
@@ -399,18 +451,28 @@ def print_summary(r: dict) -> None:
     for family, row in r["compile"].items():
         print(f"  {family + ' compile':40s}{row['old']['compile_s']:8.1f}{row['new']['compile_s']:8.1f}"
               f"{row['ratio_compile_new_over_old']:9.3f}")
-        if family == "default_auto":
+        if family == next(iter(r["compile"])):
             print(f"  {'import sweep':40s}{row['old']['import_s']:8.2f}{row['new']['import_s']:8.2f}"
                   f"{row['new']['import_s'] / row['old']['import_s']:9.3f}")
-    print(f"\nwall time, min of {r['repeats']} alternated runs [s]    {'old':>8s}{'new':>8s}{'new/old':>9s}")
+    print(f"\nwall time, min of {r['repeats']} alternated runs [s]    {'old':>8s}{'new':>8s}{'new/old':>9s}"
+          f"{'':7s}{'cpu new/old':>12s}")
     for name, row in r["speed"].items():
         print(f"  {name:40s}{row['old_min_s']:8.3f}{row['new_min_s']:8.3f}{row['ratio_new_over_old']:9.3f}  "
-              f"{row['result']}   load {row['loadavg_before'][0]:.1f}->{row['loadavg_after'][0]:.1f}")
+              f"{row['result']}{row['ratio_cpu_new_over_old']:12.3f}   load {row['loadavg_before'][0]:.1f}->"
+              f"{row['loadavg_after'][0]:.1f}")
     print(f"\nnumbers at rtol 1e-6                     {'points':>7s}{'max rel diff':>14s}{'status':>8s}{'steps':>7s}")
     for name, row in r["numbers"].items():
         worst = max(v for k, v in row.items() if k.startswith("max_rel_diff_"))
         print(f"  {name:38s}{row['points']:7d}{worst:14.2e}{row['status_differs']:8d}{row['steps_differ']:7d}  "
               f"{row['result']}")
+    rows = [(f"{part}/{name}", row["inputs"]) for part in ("compile", "numbers", "speed")
+            for name, row in r[part].items()]
+    for where, inputs in rows:
+        if not inputs["same"]:
+            print(f"WARNING: {where}: the trees ran different values of {inputs['differ']}")
+    only = {f"{k}: {v}" for _, inputs in rows for k in ("only_old", "only_new") for v in inputs[k]}
+    if only:
+        print(f"note: input fields of one tree only (left at their defaults): {', '.join(sorted(only))}")
     print(f"\nverdict: speed {r['verdict']['speed']}, numbers {r['verdict']['numbers']} "
           f"(compile new/old: {', '.join(f'{k} {v:.2f}' for k, v in r['verdict']['compile_ratio'].items())})")
 
@@ -421,8 +483,11 @@ def main() -> None:
     new = ap.add_mutually_exclusive_group()
     new.add_argument("--new", help="new revision (checked out in a temporary worktree)")
     new.add_argument("--new-tree", type=Path, default=ROOT, help="new tree as it is (default: this script's tree)")
-    ap.add_argument("--repeats", type=int, default=None, help="alternated runs per tree and workload (default 3)")
-    ap.add_argument("--quick", action="store_true", help="tiny grids, 1 repeat, default-scene compile only")
+    ap.add_argument("--repeats", type=int, default=None,
+                    help="alternated timed runs per tree and workload (default 3; 1 with --quick)")
+    ap.add_argument("--compile-repeats", type=int, default=1,
+                    help="alternated first-call runs per tree and compile family (default 1; a compile takes 10-60 s)")
+    ap.add_argument("--quick", action="store_true", help="tiny grids, 1 repeat, only the driven compile family")
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     ap.add_argument("--result", type=Path, help=argparse.SUPPRESS)
@@ -441,7 +506,7 @@ def main() -> None:
         families = list(QUICK_COMPILE_FAMILIES if args.quick else COMPILE_FAMILIES)
         print(f"old {old.commit[:10]} ({old.root}), new {new.commit[:10]} ({new.root}); repeats {repeats}", flush=True)
         print("[1/3] first-call compile time, empty numba caches", flush=True)
-        compile_ = measure_compile(runner, trees, families)
+        compile_ = measure_compile(runner, trees, families, args.compile_repeats)
         print("[2/3] numbers at rtol 1e-6", flush=True)
         numbers = measure_numbers(runner, trees)
         print("[3/3] speed, old and new alternated", flush=True)
@@ -449,6 +514,7 @@ def main() -> None:
     result = {
         "benchmark": "benchmarks/compare_commits.py", "argv": sys.argv[1:], "quick": args.quick,
         "date": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"), "machine": machine(), "repeats": repeats,
+        "compile_repeats": args.compile_repeats,
         "trees": {t.label: {"root": str(t.root), "commit": t.commit, "dirty": t.dirty,
                             "timing_numba_cache": str(t.timing_cache)} for t in trees},
         "limits": {"speed_ratio_max": SPEED_LIMIT, "numbers_max_rel_diff": NUMBERS_LIMIT, "rtol": RTOL},
