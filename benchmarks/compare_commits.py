@@ -512,7 +512,9 @@ def main() -> None:
         print("[3/3] speed, old and new alternated", flush=True)
         speed = measure_speed(runner, trees, repeats)
     result = {
-        "benchmark": "benchmarks/compare_commits.py", "argv": sys.argv[1:], "quick": args.quick,
+        "benchmark": "benchmarks/compare_commits.py" + (" --quick (tiny grids: a check of the script, not a result)"
+                                                        if args.quick else ""),
+        "command": shlex.join([sys.executable, *sys.argv]), "quick": args.quick,
         "date": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"), "machine": machine(), "repeats": repeats,
         "compile_repeats": args.compile_repeats,
         "trees": {t.label: {"root": str(t.root), "commit": t.commit, "dirty": t.dirty,
