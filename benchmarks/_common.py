@@ -23,6 +23,7 @@ from pathlib import Path
 import numba
 import numpy as np
 import scipy
+from _machine import cpu_model, loadavg, usable_cpus  # noqa: F401 (re-exported)
 from scipy.integrate import BDF, LSODA, Radau
 
 import sweep
@@ -32,21 +33,6 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 
 # ------------------------------------------------------------------------------------ machine, versions
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
-def usable_cpus() -> int | None:
-    """CPUs this process may run on (None where the OS does not say)."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None
 
 
 def threading_layer() -> str | None:
@@ -94,13 +80,6 @@ def machine_info() -> dict:
             "numba_threading_layer": threading_layer(), "NUMBA_NUM_THREADS": numba.config.NUMBA_NUM_THREADS,
             "platform": platform.platform(),
             "versions": {**versions(), "git_commit": git_commit(), "sweep_tree_dirty": sweep_tree_dirty()}}
-
-
-def loadavg() -> list[float] | None:
-    try:
-        return [float(x) for x in Path("/proc/loadavg").read_text().split()[:3]]
-    except OSError:
-        return None
 
 
 # ---------------------------------------------------------------------------------------------- timing
