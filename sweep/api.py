@@ -78,10 +78,12 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
 
 
 def warm_up_kernels(scene: Scene, plan) -> None:
-    """Compile (or load from numba's disk cache) every kernel the scene's chunks use, on one point each."""
+    """Compile (or load from numba's disk cache) every kernel the scene's chunks use, on one point each (the
+    inertial stop kernels only where the model policy can use them)."""
     if plan.protocol == "stop":
         warm_up(scene, plan)
-        warm_up_models()
+        if scene.model != "quasistatic":
+            warm_up_models()
     else:
         chunk_task(scene, plan.take(np.arange(1)), np.arange(1))
 
