@@ -52,11 +52,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from .plot import plot_file
 
     t_warm = time.perf_counter()
-    with timed("kernels"):  # says so before a first compile (empty numba cache) and when it takes long
-        warm_up_kernels(scene, plan)
-        with warnings.catch_warnings():  # the scene's axes were checked above; this is one of its velocities
-            warnings.simplefilter("ignore", PlausibilityWarning)
-            locate_hopf(scene.params, scene.V[:1], bifurcation=False)  # compile / load the simulated line's kernel
+    if args.workers is None and args.scheduler is None:  # (a dask run connects first, then warms up: run_sweep)
+        with timed("kernels"):  # says so before a first compile (empty numba cache) and when it takes long
+            warm_up_kernels(scene, plan)
+            with warnings.catch_warnings():  # the scene's axes were checked above; this is one of its velocities
+                warnings.simplefilter("ignore", PlausibilityWarning)
+                locate_hopf(scene.params, scene.V[:1], bifurcation=False)  # the simulated line's kernel
     compile_s = time.perf_counter() - t_warm
     t0 = time.perf_counter()
     ds = _run_to_file(scene, args)
