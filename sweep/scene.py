@@ -250,14 +250,7 @@ class Scene:
         object.__setattr__(self, "model_tol", tol)
         self._check_state_law()
         if self.protocol == "stop" and self.model == "inertial":
-            if self.observables != ("xi_inf",):
-                raise InputError(f"model 'inertial' computes the relaxed slip only (observables = ['xi_inf']), got "
-                                 f"observables={list(self.observables)}")
-            for name, value, default in (("method", self.method, "auto"), ("step", self.step, None),
-                                         ("precision", self.precision, "float64")):
-                if value != default:
-                    raise InputError(f"{name} is not used by model 'inertial' (its stepper is the adaptive "
-                                     f"Rosenbrock rodas3; leave {name} at {default!r}), got {value!r}")
+            self._require_relaxed_slip_only("model 'inertial'", "the adaptive Rosenbrock rodas3")
 
     def _check_state_law(self) -> None:
         if self.state_law not in STATE_LAWS:
@@ -269,15 +262,20 @@ class Scene:
         if self.state_law == "aging":
             return
         if self.protocol == "stop":
-            if self.observables != ("xi_inf",):
-                raise InputError(f"state_law {self.state_law!r} computes the relaxed slip only (observables = "
-                                 f"['xi_inf']), got observables={list(self.observables)}")
-            for name, value, default in (("method", self.method, "auto"), ("step", self.step, None),
-                                         ("precision", self.precision, "float64")):
-                if value != default:
-                    raise InputError(f"{name} is not used with state_law {self.state_law!r} (its stepper is the "
-                                     f"adaptive dp5 of the general two-state path; leave {name} at {default!r}), "
-                                     f"got {value!r}")
+            self._require_relaxed_slip_only(f"state_law {self.state_law!r}",
+                                            "the adaptive dp5 of the general two-state path")
+
+    def _require_relaxed_slip_only(self, what: str, stepper: str) -> None:
+        """InputError unless the stop scene asks for the relaxed slip alone, with the default method, step and
+        precision (``what`` computes xi_inf only, with its own ``stepper``)."""
+        if self.observables != ("xi_inf",):
+            raise InputError(f"{what} computes the relaxed slip only (observables = ['xi_inf']), got "
+                             f"observables={list(self.observables)}")
+        for name, value, default in (("method", self.method, "auto"), ("step", self.step, None),
+                                     ("precision", self.precision, "float64")):
+            if value != default:
+                raise InputError(f"{name} is not used by {what} (its stepper is {stepper}; leave {name} at "
+                                 f"{default!r}), got {value!r}")
 
     def _check_trajectory_tau(self) -> None:
         try:
