@@ -149,14 +149,6 @@ def derivatives(xi, s, p):
     return dxi, w, w * exp_f64(u) if p.with_tau else 0.0, E
 
 
-@njit(cache=True, fastmath=FAST, error_model="numpy")
-def stop_rhs(y, p, dy):
-    """The right-hand side d(xi, s, tau)/dsigma at y = (xi, s, tau) in the form of sweep/solvers/explicit.py;
-    returns E."""
-    dy[0], dy[1], dy[2], E = derivatives(y[0], y[1], p)
-    return E
-
-
 @njit(cache=True, fastmath=FAST)
 def continue_in_closed_form(k, a, b, xi_inf, u_e, tau_e, tau_targets, xi_at, u_at):
     """xi and u = ln psi at reduced times beyond a state (u_e, tau_e) where E is already negligible.
