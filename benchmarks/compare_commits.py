@@ -297,8 +297,12 @@ def working_tree(label: str, root: Path) -> Tree:
     root = root.resolve()
     commit = git("rev-parse", "HEAD", cwd=root)
     dirty = bool(git("status", "--porcelain", "sweep", cwd=root))
-    key = hashlib.sha1(bytes(root)).hexdigest()[:10]
-    return Tree(label, root, commit, dirty, CACHE_ROOT / f"numba-tree-{key}")
+    # keyed by the sources too: numba checks only the timestamp of the file that defines each cached kernel, so a
+    # cache kept across edits of a module that a cached kernel calls into would run the old code
+    digest = hashlib.sha1(bytes(root))
+    for source in sorted((root / "sweep").rglob("*.py")):
+        digest.update(source.read_bytes())
+    return Tree(label, root, commit, dirty, CACHE_ROOT / f"numba-tree-{digest.hexdigest()[:10]}")
 
 
 class Runner:
