@@ -14,7 +14,7 @@ import numpy as np
 
 from ._version import __version__
 from .errors import InputError
-from .log import configure as configure_logging
+from .log import configured as logging_configured
 
 DEFAULT_OUT = Path("sweep-out") / "landscape.nc"
 FIGURES_OUT = Path("sweep-out") / "figures"
@@ -304,11 +304,11 @@ _python_show_warning = warnings.showwarning
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code: 0 done, 1 finished with failures (a summary says which), 2 a
     user mistake (one line on stderr, no traceback), 130 interrupted (Ctrl-C)."""
-    warnings.showwarning = _show_warning
+    previous_show_warning, warnings.showwarning = warnings.showwarning, _show_warning
     try:
         args = build_parser().parse_args(argv)
-        configure_logging(verbose=args.verbose, quiet=args.quiet)
-        return args.func(args)
+        with logging_configured(verbose=args.verbose, quiet=args.quiet):
+            return args.func(args)
     except InputError as exc:
         return _fail(f"error: {exc}", 2)
     except (FileNotFoundError, PermissionError, IsADirectoryError, NotADirectoryError) as exc:
@@ -321,6 +321,8 @@ def main(argv: list[str] | None = None) -> int:
         if isinstance(exc, Interrupted):  # Ctrl-C during a journaled run: nothing finished is lost
             return _fail(str(exc), 130)
         raise
+    finally:  # called from Python (a notebook, a test), main leaves the warning and logging set-up as it found it
+        warnings.showwarning = previous_show_warning
 
 
 def _fail(message: str, code: int) -> int:

@@ -8,10 +8,12 @@ configures the logger with :func:`configure` (``-q``: warnings and errors only, 
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import sys
+from collections.abc import Iterator
 
-__all__ = ["LOGGER", "configure"]
+__all__ = ["LOGGER", "configure", "configured"]
 
 LOGGER = logging.getLogger("sweep")
 LOGGER.addHandler(logging.NullHandler())
@@ -29,3 +31,18 @@ def configure(verbose: bool = False, quiet: bool = False, stream=None) -> None:
     LOGGER.addHandler(handler)
     LOGGER.setLevel(logging.DEBUG if verbose else logging.WARNING if quiet else logging.INFO)
     LOGGER.propagate = False
+
+
+@contextlib.contextmanager
+def configured(verbose: bool = False, quiet: bool = False, stream=None) -> Iterator[None]:
+    """:func:`configure` for the duration of a ``with`` block, then the logger's handlers, level and propagation as
+    they were: ``sweep.cli.main`` called from Python (a notebook, a test) leaves no handler bound to a stream that
+    may be closed later, and the caller's own logging set-up sees the package's messages again afterwards."""
+    saved = (list(LOGGER.handlers), LOGGER.level, LOGGER.propagate)
+    configure(verbose=verbose, quiet=quiet, stream=stream)
+    try:
+        yield
+    finally:
+        LOGGER.handlers[:] = saved[0]
+        LOGGER.setLevel(saved[1])
+        LOGGER.propagate = saved[2]

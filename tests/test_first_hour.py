@@ -236,6 +236,20 @@ def test_the_compile_notice_is_logged_from_python(monkeypatch, caplog):
     assert any(r.name == "sweep" and "compiling numba kernels" in r.getMessage() for r in caplog.records)
 
 
+def test_the_cli_called_from_python_leaves_logging_and_warnings_as_it_found_them(tmp_path, capsys):
+    """``main`` in a notebook or a test binds a handler to the stderr of that moment; left behind, it would write to
+    a closed stream later and hide the package's messages from the caller's own logging (propagate off)."""
+    import logging
+    import warnings
+
+    from sweep.cli import main
+
+    logger = logging.getLogger("sweep")
+    before = (list(logger.handlers), logger.level, logger.propagate, warnings.showwarning)
+    assert main(["info", str(tmp_path / "missing.nc")]) == 2
+    assert (list(logger.handlers), logger.level, logger.propagate, warnings.showwarning) == before
+
+
 def test_cache_is_cold_follows_numba_cache_dir(tmp_path, monkeypatch):
     from sweep.compile_notice import cache_is_cold
 
