@@ -18,6 +18,8 @@ this script is run from (the same case parameters go to both trees). The parent 
             and second call of a workload; compile_s = first - second. Families: the default scene (model
             "auto": everything it needs), quasi-static relaxed slip, time-resolved stop, driven, inertial stop;
             --compile-repeats runs per tree (default 1), alternated, the smallest compile_s kept.
+            Trees whose Scene has ``simulated_hopf_line`` (off by default there) run with it on, as the older trees
+            always did, so that both compile and run the same work.
 2. numbers  xi_inf (and status, steps) at rtol 1e-6 on the default scene (model quasistatic and auto) and on
             every case of tests/cases.py (solve_point as tests/test_accuracy.py calls it, model auto and
             quasistatic; and quasi-static with t50/t90, the per-point path), saved per tree as .npz and
@@ -107,7 +109,10 @@ def make_workload(name: str, quick: bool) -> tuple[Callable[[], object], dict]:
         return {"K_over_M": np.logspace(*k, n(nk)), "V": np.logspace(*v, n(nv))}
 
     def run(**changes: object) -> tuple[Callable[[], object], dict]:
-        scene = derive_scene(sweep.default_scene(), changes)
+        base = sweep.default_scene()
+        if "simulated_hopf_line" in type(base).__dataclass_fields__:  # like for like: older trees always located it
+            base = dataclasses.replace(base, simulated_hopf_line=True)
+        scene = derive_scene(base, changes)
         return (lambda: sweep.run_sweep(scene, progress=False)), describe(scene)
 
     def hopf(params, v: np.ndarray, **kw: object) -> tuple[Callable[[], object], dict]:

@@ -83,7 +83,7 @@ def main() -> None:
                                        "mean_cycles": float(ds["cycles"].values[sel].mean())}
         return out
 
-    scene = sweep.Scene(protocol="driven", params=PARAMS, model="quasistatic", **GRID)
+    scene = sweep.Scene(protocol="driven", params=PARAMS, model="quasistatic", simulated_hopf_line=True, **GRID)
     sweep.run_sweep(scene, progress=False)
     driven = {}
     for threads in (1, 2):

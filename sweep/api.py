@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -18,7 +19,7 @@ from .journal import Journal
 from .model_choice import warm_up_models
 from .params import FrictionParams
 from .plan import make_plan
-from .plausibility import warn_implausible, warn_not_ok
+from .plausibility import PlausibilityWarning, warn_implausible, warn_not_ok
 from .runner import JOURNAL_FORMAT, chunk_task, run_chunks, sampled_blocks, stop_outputs, warm_up
 from .scene import Scene
 
@@ -69,7 +70,8 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     # the Dataset holds what it needs; the plan's and the unused outputs' per-point arrays (~100 bytes per point)
     # go before the netCDF write, whose copies are the peak of a large run's memory
     del plan, flat
-    ds = with_simulated_line(ds, scene.params, scene.model, scene.model_tol, scene.state_law)
+    if scene.simulated_hopf_line:  # asked for: the driven kernel is compiled only then
+        ds = with_simulated_line(ds, scene.params, scene.model, scene.model_tol, scene.state_law)
     if journal is None:
         return ds
     save(ds, output, blocks=blocks)
@@ -78,14 +80,20 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
 
 
 def warm_up_kernels(scene: Scene, plan) -> None:
-    """Compile (or load from numba's disk cache) every kernel the scene's chunks use, on one point each (the
-    inertial stop kernels only where the model policy can use them)."""
+    """Compile (or load from numba's disk cache) every kernel the scene uses, on one point each: the stop scene's
+    chunks (the inertial stop kernels only where the model policy can use them) or the driven scene's, and the
+    driven kernel of the simulated Hopf line only where the scene asks for that line."""
     if plan.protocol == "stop":
         warm_up(scene, plan)
         if scene.model != "quasistatic":
             warm_up_models()
     else:
         chunk_task(scene, plan.take(np.arange(1)), np.arange(1))
+    if scene.simulated_hopf_line:
+        with warnings.catch_warnings():  # the scene's axes were checked; this is one of its velocities
+            warnings.simplefilter("ignore", PlausibilityWarning)
+            with_simulated_line(xr.Dataset(coords={"V": scene.V[:1]}), scene.params, scene.model, scene.model_tol,
+                                scene.state_law)
 
 
 def solve_point(params: FrictionParams, K_over_M: float, V: float, rtol: float = 1e-6,

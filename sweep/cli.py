@@ -24,7 +24,7 @@ FIGURE_NAMES = ("fig2", "fig3a", "fig3b", "fig4a", "fig4b")
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from .compile_notice import announce_if_cold
-    from .plausibility import PlausibilityWarning, warn_implausible
+    from .plausibility import warn_implausible
     from .scene import default_scene, load_scene
 
     scene = load_scene(args.config) if args.config else default_scene()
@@ -48,16 +48,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
         return 0
     from .api import warm_up_kernels
     from .compile_notice import SLOW_S, timed
-    from .hopf import locate_hopf
     from .plot import plot_file
 
     t_warm = time.perf_counter()
     if args.workers is None and args.scheduler is None:  # (a dask run connects first, then warms up: run_sweep)
         with timed("kernels"):  # says so before a first compile (empty numba cache) and when it takes long
             warm_up_kernels(scene, plan)
-            with warnings.catch_warnings():  # the scene's axes were checked above; this is one of its velocities
-                warnings.simplefilter("ignore", PlausibilityWarning)
-                locate_hopf(scene.params, scene.V[:1], bifurcation=False)  # the simulated line's kernel
     compile_s = time.perf_counter() - t_warm
     t0 = time.perf_counter()
     ds = _run_to_file(scene, args)

@@ -21,11 +21,15 @@ def driven_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, n
     one simulation per point with the plan's model, and with model="auto" a second one with inertia where the
     quasi-static run broke down (regime runaway)."""
     settings = DrivenSettings(scene.perturbation, driven_stepper_rtol(scene.rtol), scene.max_cycles, scene.max_steps)
-    run = driven_batch(scene.state_law)
 
     def simulate(points: np.ndarray, inertial: np.ndarray) -> dict[str, np.ndarray]:
         out = DrivenOutputs.empty(points.size)
-        run(plan.k[points], plan.a[points], plan.b[points], plan.G[points] * inertial, settings, out)
+        g = plan.G[points] * inertial
+        for with_inertia in (False, True):  # each kernel variant compiled only where a point needs it
+            where = np.flatnonzero((g > 0.0) == with_inertia)
+            if where.size:
+                driven_batch(scene.state_law, with_inertia)(where, plan.k[points], plan.a[points], plan.b[points], g,
+                                                            settings, out)
         return out._asdict()
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:

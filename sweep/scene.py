@@ -133,6 +133,11 @@ class Scene:
         psi' = -xi' psi ln(xi' psi). The slip law runs with model="quasistatic"; its stop scene computes the
         relaxed slip only (observables = ("xi_inf",), finite only for m2 > 0), through the general two-state
         formulation (the fast paths of the aging law rest on its identity xi + ln psi = s).
+    simulated_hopf_line : bool
+        Also locate the Hopf line of the scene's model by simulation at each V (coordinate
+        ``K_over_M_c_simulated``, drawn on the maps next to the analytic line; sweep.hopf.with_simulated_line).
+        Default False: the analytic line ``chi_c`` answers where the line is, and the simulation compiles and runs
+        the driven kernel (~7 s to compile on first use, ~2 ms per velocity); True checks the analytic line.
     """
 
     protocol: str
@@ -153,6 +158,7 @@ class Scene:
     model: str = "auto"
     model_tol: float = 1e-2
     state_law: str = "aging"
+    simulated_hopf_line: bool = False
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen dataclass)
@@ -192,6 +198,9 @@ class Scene:
         self._check_driven()
         if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, (int, np.integer)) or self.max_steps < 1:
             raise InputError(f"max_steps must be an integer >= 1, got {_plain(self.max_steps)!r}")
+        if not isinstance(self.simulated_hopf_line, (bool, np.bool_)):
+            raise InputError(f"simulated_hopf_line must be true or false, got {self.simulated_hopf_line!r}")
+        set_("simulated_hopf_line", bool(self.simulated_hopf_line))
 
     def _check_method(self) -> None:
         if self.method != "auto" and self.method not in METHODS:
@@ -328,6 +337,7 @@ class Scene:
         lines.append(f'model = "{self.model}"')
         lines.append(f"model_tol = {self.model_tol!r}")
         lines.append(f'state_law = "{self.state_law}"')
+        lines.append(f"simulated_hopf_line = {str(self.simulated_hopf_line).lower()}")
         lines.append("[atol]")
         lines += [f"{k} = {v!r}" for k, v in sorted(self.atol.items())]
         lines.append("[params]")

@@ -327,7 +327,7 @@ def test_the_simulated_line_over_200_velocities_is_thinned():
     import matplotlib.pyplot as plt
     import numpy as np
 
-    ds = _stop(np.logspace(3, 6, 3), np.logspace(-7, -5, 200))
+    ds = _stop(np.logspace(3, 6, 3), np.logspace(-7, -5, 200), simulated_hopf_line=True)
     fig, ax = _map(ds)
     (line,) = [ln for ln in ax.lines if ln.get_label().startswith("Hopf line located by simulation")]
     assert len(line.get_xdata()) <= 25 and "markers at" in line.get_label()
@@ -360,3 +360,33 @@ def test_readme_numbers_are_those_of_the_benchmark_results():
     proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "readme_numbers.py"), "--check"],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
+
+
+KERNELS_USED = """
+import gc, sys
+import numpy as np
+from numba.core.dispatcher import Dispatcher
+import sweep
+scene = sweep.Scene(protocol="stop", params=sweep.presets["sample2"], K_over_M=np.logspace(3, 6, 4),
+                    V=np.logspace(-7, -4, 3), model=sys.argv[1])
+sweep.run_sweep(scene, progress=False)
+for d in gc.get_objects():
+    if isinstance(d, Dispatcher) and d.overloads and d.py_func.__module__.startswith("sweep."):
+        print(d.py_func.__module__ + "." + d.py_func.__qualname__)
+"""
+
+
+@pytest.mark.parametrize("model", ["quasistatic", "auto"])
+def test_a_stop_scene_compiles_only_the_kernels_its_model_needs(model):
+    """Every kernel compiled (or loaded from numba's cache) in a fresh process after a stop scene: the quasi-static
+    model uses the relaxed-slip lanes and none of the driven or inertial kernels; "auto" adds the inertial stop
+    kernels (its model choice), never the driven one."""
+    proc = subprocess.run([sys.executable, "-c", KERNELS_USED, model], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    used = set(proc.stdout.split())
+    assert any(name.startswith("sweep.integrate.batch.lanes_batch") for name in used), used  # the check sees kernels
+    inertial_batches = ("sweep.integrate.batch.relax_batch", "sweep.integrate.batch.relax_points")
+    inertial = {name for name in used if name in inertial_batches or "stop_inertial" in name or "rosenbrock" in name}
+    assert not any(name.startswith(("sweep.integrate.driven", "sweep.models.driven")) or "driven_batch" in name
+                   for name in used), used
+    assert bool(inertial) == (model == "auto"), used

@@ -4,6 +4,8 @@ mu1(V) <= 0, and the CLI."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -62,9 +64,11 @@ def test_cli_hopf_writes_file_and_picture(tmp_path, capsys):
     assert ds.sizes["V"] == 5 and out.with_suffix(".png").stat().st_size > 10_000
 
 
-def test_sweep_files_carry_the_simulated_line_next_to_the_analytic_one():
+def test_sweep_files_carry_the_simulated_line_next_to_the_analytic_one_when_asked():
     scene = sweep.Scene(protocol="stop", params=SAMPLE2, K_over_M=[1e4, 1e5], V=[1e-6, 3e-6, 1e-5])
-    ds = sweep.run_sweep(scene, progress=False)
+    assert "K_over_M_c_simulated" not in sweep.run_sweep(scene, progress=False).coords  # not asked: not computed
+    ds = sweep.run_sweep(dataclasses.replace(scene, simulated_hopf_line=True), progress=False)
+    assert sweep.load_scene(ds.attrs["scene"]).simulated_hopf_line  # the file says that it was asked for
     analytic = ds["chi_c"].values * ds["K_over_M"].values[0] / ds["chi"].values[0]
     simulated = ds["K_over_M_c_simulated"].values
     np.testing.assert_allclose(simulated[:2], analytic[:2], rtol=6e-4)

@@ -46,7 +46,7 @@ def line(ax, start: str):
 @pytest.fixture(scope="module")
 def stop_file(tmp_path_factory):
     ds = sweep.run_sweep(sweep.Scene(protocol="stop", params=SAMPLE2, K_over_M=np.logspace(3, 6, 10),
-                                     V=np.logspace(-7, -4, 8)), progress=False)
+                                     V=np.logspace(-7, -4, 8), simulated_hopf_line=True), progress=False)
     ds["status"][2:4, 0] = sweep.Status.ERROR_ABOVE_TOL  # two failed points to mark
     return sweep.save(ds, tmp_path_factory.mktemp("plot") / "stop.nc")
 

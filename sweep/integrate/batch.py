@@ -106,18 +106,20 @@ def _store(i, r, out):
 
 
 @functools.cache
-def driven_batch(law: str = "aging"):
-    """batch(k, a, b, g, settings: DrivenSettings, out: DrivenOutputs): every point of the flat arrays k, a, b, g
-    in parallel (one thread per point at a time; a point's arithmetic does not depend on the others). The batch loop
-    is where a target other than the CPU threads would plug in."""
-    point = point_kernel(law)
+def driven_batch(law: str = "aging", inertia: bool = False):
+    """batch(points, k, a, b, g, settings: DrivenSettings, out: DrivenOutputs): the points ``points`` (indices into
+    the flat arrays k, a, b, g and ``out``) in parallel, one thread per point at a time (a point's arithmetic does
+    not depend on the others), with the quasi-static variant of the driven kernel (g = 0) or the one with
+    ``inertia``. The batch loop is where a target other than the CPU threads would plug in."""
+    point = point_kernel(law, inertia)
 
     @njit(parallel=True, cache=True)
-    def batch(k, a, b, g, settings, out):
-        for i in prange(k.size):
+    def batch(points, k, a, b, g, settings, out):
+        for j in prange(points.size):
+            i = points[j]
             _store(i, point(DrivenParams(k[i], a[i], b[i], g[i]), settings), out)
 
-    return pin(batch, law)
+    return pin(batch, law, "inertial" if inertia else "quasistatic")
 
 
 def lanes_batch(relax_runs, lanes: int):
