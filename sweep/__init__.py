@@ -17,7 +17,7 @@ from .presets import presets, provenance  # eager: the name would otherwise be t
 
 _PUBLIC = {
     "run_sweep": "api", "solve_point": "api", "local_cluster": "backends", "locate_hopf": "hopf",
-    "open": ("io", "open_dataset"), "save": "io", "Plan": "plan", "make_plan": "plan", "Scene": "scene",
+    "open": ("files", "open_sweep_file"), "save": "io", "Plan": "plan", "make_plan": "plan", "Scene": "scene",
     "default_scene": "scene", "load_scene": "scene", "Status": "status",
 }
 """Public name -> module of the package (or (module, name in it))."""

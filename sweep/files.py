@@ -15,7 +15,7 @@ import xarray as xr
 
 from .errors import InputError
 
-__all__ = ["KINDS", "file_kind", "read_sweep_file"]
+__all__ = ["KINDS", "file_kind", "open_sweep_file", "read_sweep_file"]
 
 KINDS = ("stop", "driven", "hopf")
 
@@ -33,24 +33,37 @@ def file_kind(ds: xr.Dataset) -> str:
                      f"line); found {sorted(ds.data_vars)}")
 
 
-def read_sweep_file(path: str | os.PathLike, load: bool = True) -> tuple[xr.Dataset, str]:
-    """(Dataset, kind) of a file written by sweep (kind as :func:`file_kind`). ``load``: read it whole into memory
-    and close it (default) or open it lazily. Raises :class:`InputError` (one line, naming the path) for a missing
-    file, a file that is not netCDF or a netCDF file that sweep did not write."""
+def open_sweep_file(path: str | os.PathLike, load: bool = True) -> xr.Dataset:
+    """The Dataset of a file written by sweep (``sweep.open``): read whole into memory and the file closed
+    (default), or opened lazily with ``load=False`` (each variable read when used; for files too large to hold
+    whole). Raises FileNotFoundError for a missing path and :class:`InputError` (one line, naming the path) for a
+    file that is not netCDF or a netCDF file that sweep did not write."""
     from .io import open_dataset
 
     path = Path(path)
     if not path.is_file():
-        raise InputError(f"no such file: {str(path)!r}" if not path.exists() else f"{str(path)!r} is not a file")
+        raise FileNotFoundError(f"no such file: {str(path)!r}" if not path.exists() else f"{str(path)!r} is not a file")
     try:
         ds = open_dataset(path, load=load)
     except (OSError, ValueError, TypeError) as exc:  # netCDF4's "Unknown file format", HDF errors, xarray decoding
         raise InputError(f"{str(path)!r} is not a netCDF file written by sweep ({_first_line(exc)})") from None
     try:
-        kind = file_kind(ds)
+        file_kind(ds)
     except InputError as exc:
         ds.close()
         raise InputError(f"{str(path)!r} is {exc}") from None
+    return ds
+
+
+def read_sweep_file(path: str | os.PathLike, load: bool = True) -> tuple[xr.Dataset, str]:
+    """(Dataset, kind) of a file written by sweep (kind as :func:`file_kind`; a single point saved as 0-d gets
+    its two axes of length 1), opened as :func:`open_sweep_file`, a missing path an :class:`InputError` too (the
+    command line's one-line message)."""
+    try:
+        ds = open_sweep_file(path, load=load)
+    except FileNotFoundError as exc:
+        raise InputError(str(exc)) from None
+    kind = file_kind(ds)
     if kind != "hopf" and not {"K_over_M", "V"} <= set(ds.dims):  # one point (sweep.solve_point) saved as 0-d
         ds = ds.expand_dims(("K_over_M", "V"))
     return ds, kind

@@ -95,6 +95,18 @@ def test_anything_else_is_refused_in_one_line(tmp_path, command, what, message):
     assert err.startswith("sweep: error:") and message in err and "x.nc" in err
 
 
+@pytest.mark.parametrize("what, error, message", [
+    ("missing", FileNotFoundError, "no such file"), ("text", sweep.InputError, "is not a netCDF file"),
+    ("other netCDF", sweep.InputError, "is not a sweep file"), ("directory", FileNotFoundError, "is not a file")])
+def test_sweep_open_refuses_anything_else_with_one_line_naming_the_path(tmp_path, what, error, message):
+    path = _not_a_sweep_file(what, tmp_path)
+    with pytest.raises(error) as caught:
+        sweep.open(path)
+    text = str(caught.value)
+    assert message in text and "x.nc" in text and "\n" not in text, text
+    assert caught.value.__context__ is None or caught.value.__suppress_context__  # no netCDF traceback chained
+
+
 @pytest.mark.parametrize("command", ["run", "hopf"])
 def test_a_netcdf_file_given_as_scene_is_refused_in_one_line(tmp_path, command):
     path = _write_kind("hopf", tmp_path)
