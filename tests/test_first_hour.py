@@ -402,3 +402,39 @@ def test_a_stop_scene_compiles_only_the_kernels_its_model_needs(model):
     assert not any(name.startswith(("sweep.integrate.driven", "sweep.models.driven")) or "driven_batch" in name
                    for name in used), used
     assert bool(inertial) == (model == "auto"), used
+
+
+KERNELS_COMPILED = """
+import numpy as np
+from numba.core import event
+import sweep
+
+compiled = []
+class Listener(event.Listener):
+    def on_start(self, ev):
+        pass
+    def on_end(self, ev):
+        func = ev.data["dispatcher"].py_func
+        if str(func.__module__).startswith("sweep."):
+            compiled.append(func.__module__ + "." + func.__qualname__)
+event.register("numba:compile", Listener())
+p, km, v = sweep.presets["sample2"], np.logspace(4, 6, 3), np.logspace(-7, -5, 3)
+for kw in ({"model": "quasistatic"}, {"model": "auto"}, {"model": "inertial"},
+           {"model": "quasistatic", "observables": ("xi_inf", "t50")}, {"model": "quasistatic", "state_law": "slip"},
+           {"protocol": "driven", "model": "quasistatic"}, {"protocol": "driven", "model": "inertial"}):
+    sweep.run_sweep(sweep.Scene(**{"protocol": "stop", **kw}, params=p, K_over_M=km, V=v), progress=False)
+print(" ".join(sorted(set(compiled))))
+"""
+
+
+def test_a_second_process_loads_every_kernel_from_numba_cache():
+    """A kernel whose cache key changes from process to process (a factory-built kernel holding a dispatcher of
+    random identity, sweep/jitcache.py) compiles again in every new process: seconds lost on every run. The first
+    process may compile (an empty cache); the second must load everything."""
+    run = lambda: subprocess.run([sys.executable, "-W", "ignore", "-c", KERNELS_COMPILED], capture_output=True,  # noqa: E731
+                                 text=True, timeout=900)
+    first = run()
+    assert first.returncode == 0, first.stderr
+    second = run()
+    assert second.returncode == 0, second.stderr
+    assert second.stdout.split() == [], f"compiled again in a new process: {second.stdout}"

@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..jitcache import pin
+from ..jitcache import pin, pin_module
 from ..solvers.controllers import accepted_factor, rejected_factor
 from ..solvers.explicit import make_erk_step
 from ..solvers.fastmath import FAST
@@ -68,3 +68,6 @@ def make_march(rhs, n: int, tableau, controller):
         return OK, steps, h
 
     return pin(march, rhs.py_func.__module__, rhs.py_func.__qualname__, n, tableau.name)
+
+
+pin_module(__name__)

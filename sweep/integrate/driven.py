@@ -53,7 +53,7 @@ from ..accuracy import (
     STIFF_SWITCH,
     W_RUNAWAY,
 )
-from ..jitcache import pin
+from ..jitcache import pin, pin_module
 from ..models.driven import DrivenParams, inertial_system, log_velocity_rate, make_driven_rhs, stiffness
 from ..models.state_laws import STATE_LAWS
 from ..solvers import DP5, RODAS3
@@ -137,11 +137,12 @@ class DrivenOutputs(NamedTuple):
 _stiff_step = make_rodas3_step(inertial_system)
 
 
-def _make_advance(rhs, with_inertia: bool):
+def _make_advance(rhs, with_inertia: bool, variant: tuple[str, str]):
     """advance(stiff, y, h, p, K, ys, y_new, err, work) -> (done, ln xi' at y_new or NaN): one step of size h from
     y (rates in K[0]): Dormand-Prince (FSAL: its last stage is the rates at y_new, kept in K[-1]), or RODAS3 where
-    ``stiff``."""
-    erk_step = make_erk_step(rhs, 3, DP5)
+    ``stiff`` (inertial variant only). Every kernel a factory builds is pinned to its ``variant`` (state law,
+    model): one whose closure holds an unpinned dispatcher misses numba's disk cache in every new process."""
+    erk_step = make_erk_step(rhs, _size(with_inertia), DP5)
 
     @njit(inline="always", fastmath=FAST, error_model="numpy")
     def advance(stiff, y, h, p, K, ys, y_new, err, work):
@@ -152,10 +153,10 @@ def _make_advance(rhs, with_inertia: bool):
             return _stiff_step(0.0, y, h, p, y_new, err, Kr, M, piv, f, ft, ysr), math.nan
         return True, erk_step(K, ys, y, h, p, y_new, err)
 
-    return advance
+    return pin(advance, *variant)
 
 
-def _make_extremum(rhs, advance):
+def _make_extremum(rhs, advance, variant: tuple[str, str]):
     """extremum(stiff, y0, h, dz0, dz1, p, K, ys, yt, err, work, dy) -> (theta h, z there): the extremum of z inside
     a step of size h from y0 where z' changes sign (dz0 at the start, dz1 at the end): linear interpolation of z' as
     a first guess, then Newton on exact partial steps of size theta h with the step's own method
@@ -179,7 +180,7 @@ def _make_extremum(rhs, advance):
         advance(stiff, y0, theta * h, p, K, ys, yt, err, work)
         return theta * h, yt[0]
 
-    return extremum
+    return pin(extremum, *variant)
 
 
 @njit(cache=True)
@@ -221,20 +222,37 @@ def _decide(amp, grow, perturbation, amp_first, a_start, cycles):
     return Regime.UNDECIDED
 
 
+def _size(with_inertia: bool) -> int:
+    """Components of the state: (z, u) quasi-static, (z, u, w) with inertia."""
+    return 3 if with_inertia else 2
+
+
+@njit(inline="always")
+def _largest(size, v):
+    """max(size, |v_0|, |v_1|, ...), NaN if any of them is NaN (a step that produced one is then rejected)."""
+    for m in range(v.size):
+        a = abs(v[m])
+        if a > size or a != a:
+            size = a
+    return size
+
+
 def _make_simulate(law: str, with_inertia: bool):
     """simulate(p, settings) -> DrivenResult for one state law, compiled for the quasi-static model only
     (``with_inertia`` False: the stiff stepper is not compiled into the loop, which was 18 % slower with it, and
     compiling takes half the time) or for both."""
-    rhs = make_driven_rhs(STATE_LAWS[law])
-    advance = _make_advance(rhs, with_inertia)
-    extremum = _make_extremum(rhs, advance)
+    rhs = make_driven_rhs(STATE_LAWS[law], with_inertia)
+    n = _size(with_inertia)
+    variant = (law, "inertial" if with_inertia else "quasistatic")
+    advance = _make_advance(rhs, with_inertia, variant)
+    extremum = _make_extremum(rhs, advance, variant)
 
     @njit(cache=True, fastmath=FAST, error_model="numpy")
     def simulate(p, settings):
         perturbation, rtol = settings.perturbation, settings.rtol
-        K, ys = np.empty((_STAGES, 3)), np.empty(3)
-        y, y_new, err_v, dy = np.zeros(3), np.empty(3), np.empty(3), np.empty(3)
-        yt, dyt = np.empty(3), np.empty(3)  # the extremum search's own
+        K, ys = np.empty((_STAGES, n)), np.empty(n)
+        y, y_new, err_v, dy = np.zeros(n), np.empty(n), np.empty(n), np.empty(n)
+        yt, dyt = np.empty(n), np.empty(n)  # the extremum search's own
         y[0] = perturbation
         tau = 0.0
         size = perturbation  # largest |z| met: the error scale of both states (they oscillate about 0)
@@ -249,18 +267,18 @@ def _make_simulate(law: str, with_inertia: bool):
         cycles, steps = 0, 0
         w_peak = -math.inf
         err_prev, rejected = 1e-4, False
-        work = scratch(3)
+        work = scratch(n)
         rhs(y, p, dy)
         dz = dy[0]
         while steps < settings.max_steps:
-            K[0, 0], K[0, 1], K[0, 2] = dy[0], dy[1], dy[2]
+            K[0, :] = dy
             # explicit where it is stable, RODAS3 where the inertial mode's rate would hold the explicit step down
             stiff = with_inertia and p.g > 0.0 and h * stiffness(y, p) > STIFF_SWITCH
             q = RODAS3_ORDER if stiff else DP5_ORDER
             done, lw_fsal = advance(stiff, y, h, p, K, ys, y_new, err_v, work)
             steps += 1
-            scale = rtol * max(size, abs(y_new[0]), abs(y_new[1]), abs(y_new[2]))
-            err = max(abs(err_v[0]), abs(err_v[1]), abs(err_v[2])) / scale if done else math.nan
+            scale = rtol * _largest(size, y_new)
+            err = _largest(0.0, err_v) / scale if done else math.nan
             if not err <= 1.0:  # rejected (NaN included: a stage beyond the exponent clamp, a singular matrix)
                 h *= rejected_factor(I_CONTROLLER, err, q)
                 rejected = True
@@ -272,12 +290,12 @@ def _make_simulate(law: str, with_inertia: bool):
                 lw1 = rhs(y_new, p, dy)
             else:  # FSAL: dp5's last stage is the rates at y_new
                 lw1 = lw_fsal
-                dy[0], dy[1], dy[2] = K[_STAGES - 1, 0], K[_STAGES - 1, 1], K[_STAGES - 1, 2]
+                dy[:] = K[_STAGES - 1]
             dz1 = dy[0]
             w_peak = max(w_peak, lw1)
             if lw1 > W_RUNAWAY:  # an accepted state: the slip velocity itself is past the threshold
                 return DrivenResult(Regime.RUNAWAY, BREAKDOWN, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
-            norm = max(abs(y_new[0]), abs(y_new[1]), abs(y_new[2]))
+            norm = _largest(0.0, y_new)
             if norm < DECAYED * perturbation:  # decayed (also without cycles: an overdamped return)
                 if not math.isfinite(grow[-1]):  # fewer than two cycles: the decay of the state since it was 0.1x
                     grow[-1] = math.log(norm / norm_tenth) / (tau + h - t_tenth)
@@ -304,7 +322,7 @@ def _make_simulate(law: str, with_inertia: bool):
                 t_max_prev = t_peak
             elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
                 z_min = extremum(stiff, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
-            y[0], y[1], y[2] = y_new[0], y_new[1], y_new[2]
+            y[:] = y_new
             tau += h
             dz = dz1
             size = max(size, abs(y[0]))
@@ -313,7 +331,7 @@ def _make_simulate(law: str, with_inertia: bool):
             rejected = False
         return DrivenResult(Regime.UNDECIDED, MAX_STEPS, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
 
-    return pin(simulate, law, "inertial" if with_inertia else "quasistatic")
+    return pin(simulate, *variant)
 
 
 @functools.cache
@@ -357,3 +375,6 @@ def simulate_driven(chi: float, mu1: float, m2: float, A: float, perturbation: f
     return {"regime": Regime(r.regime).name.lower(), "status": Status(r.status).name.lower(),
             "growth_rate": r.growth_rate, "period": r.period, "amplitude": r.amplitude, "cycles": int(r.cycles),
             "steps": int(r.steps), "peak_log_velocity": r.peak_w}
+
+
+pin_module(__name__)

@@ -42,6 +42,7 @@ import numpy as np
 from numba import njit
 
 from ..accuracy import COARSE_GAIN, TAIL_RTOL, TAIL_TIGHTENING
+from ..jitcache import pin_module
 from ..models.stop import (
     FAST,
     MAX_STEPS,
@@ -603,3 +604,6 @@ class StopOutputs(NamedTuple):
     tau_at_fraction: np.ndarray
     tau_at_fraction_err: np.ndarray
 
+
+
+pin_module(__name__)

@@ -18,6 +18,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..jitcache import pin_module
 from ..models.stop_slip import SlipStopParams, handover_u, inverse_rhs, phase_rhs
 from ..solvers import DP5
 from ..solvers.controllers import PI_CONTROLLER
@@ -50,3 +51,6 @@ def relax_slip(k, a, b, rtol, atol, max_steps):
     status2, steps2, _ = _inverse(z, SlipStopParams(k, a, b, t_e), 0.1 * t_e, 0, t_e, rtol, atol, max_steps - steps)
     return (z[1] if status2 == OK else math.nan), status2, steps + steps2
 
+
+
+pin_module(__name__)

@@ -44,31 +44,39 @@ class DrivenParams(NamedTuple):
     """gamma/A (0 for the quasi-static model)."""
 
 
-def make_driven_rhs(law):
-    """rhs(y, p, dy) -> ln xi' of the driven equations with the state law ``law`` (sweep/models/state_laws.py),
-    y = (z, u, w). Quasi-static (p.g = 0): ln xi' is the force balance k z - a u - b u^2 - u itself and the state w
-    is unused (w' = 0). Inertial: w = ln xi' is a state, w' = (balance - w) e^-w / g. Exponents are clamped at
-    EXP_MAX (an overflowing stage is rejected by the driver's error test instead)."""
+def make_driven_rhs(law, inertia: bool = False):
+    """rhs(y, p, dy) -> ln xi' of the driven equations with the state law ``law`` (sweep/models/state_laws.py).
+    Quasi-static (``inertia`` False, p.g = 0): the state is y = (z, u) and ln xi' is the force balance
+    k z - a u - b u^2 - u itself. Inertial (p.g > 0): y = (z, u, w), w = ln xi' a state with
+    w' = (balance - w) e^-w / g. Exponents are clamped at EXP_MAX (an overflowing stage is rejected by the driver's
+    error test instead)."""
+    if inertia:
 
-    @njit(fastmath=FAST, error_model="numpy")
-    def rhs(y, p, dy):
-        z, u, w = y[0], y[1], y[2]
-        balance = p.k * z - u * (p.a + p.b * u) - u
-        if p.g == 0.0:
-            lw, dw = balance, 0.0
-        else:
-            lw, dw = w, (balance - w) * math.exp(min(-w, EXP_MAX)) / p.g
-        e = math.exp(min(lw, EXP_MAX))
-        dy[0], dy[1], dy[2] = 1.0 - e, law(e, u, lw + u), dw
-        return lw
+        @njit(fastmath=FAST, error_model="numpy")
+        def rhs(y, p, dy):
+            z, u, w = y[0], y[1], y[2]
+            balance = p.k * z - u * (p.a + p.b * u) - u
+            e = math.exp(min(w, EXP_MAX))
+            dy[0], dy[1], dy[2] = 1.0 - e, law(e, u, w + u), (balance - w) * math.exp(min(-w, EXP_MAX)) / p.g
+            return w
 
-    return pin(rhs, law.py_func.__name__)
+    else:
+
+        @njit(fastmath=FAST, error_model="numpy")
+        def rhs(y, p, dy):
+            z, u = y[0], y[1]
+            lw = p.k * z - u * (p.a + p.b * u) - u
+            e = math.exp(min(lw, EXP_MAX))
+            dy[0], dy[1] = 1.0 - e, law(e, u, lw + u)
+            return lw
+
+    return pin(rhs, law.py_func.__name__, "inertial" if inertia else "quasistatic")
 
 
 @njit(inline="always", fastmath=FAST, error_model="numpy")
 def log_velocity_rate(y, dy, p):
-    """d(ln xi')/dtau at state y with rates dy: the balance's rate k z' - (a + 2 b u) u' - u' (quasi-static), the
-    state's own rate w' (inertial)."""
+    """d(ln xi')/dtau at state y with rates dy: the balance's rate k z' - (a + 2 b u) u' - u' (quasi-static, p.g = 0),
+    the state's own rate w' (inertial)."""
     if p.g == 0.0:
         return p.k * dy[0] - (p.a + 2.0 * p.b * y[1]) * dy[1] - dy[1]
     return dy[2]

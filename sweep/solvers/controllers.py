@@ -23,6 +23,7 @@ from typing import NamedTuple
 
 from numba import njit
 
+from ..jitcache import pin_module
 from .fastmath import FAST
 
 __all__ = ["Controller", "I_CONTROLLER", "PI_CONTROLLER", "accepted_factor", "rejected_factor"]
@@ -77,3 +78,6 @@ def rejected_factor(ctrl, err, q):
     if not math.isfinite(err):
         return ctrl.nonfinite_factor
     return min(1.0, max(ctrl.min_factor, ctrl.safety * err ** (-1.0 / (q + 1))))
+
+
+pin_module(__name__)
