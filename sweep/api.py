@@ -46,7 +46,7 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     """
     history = history or "sweep.run_sweep"
     warn_implausible(scene.K_over_M, scene.V)  # likely unit mistakes, before any work
-    announce_if_cold()  # logs (logger "sweep") that the kernels compile now, on a machine without numba's cache
+    announce_if_cold(scene)  # logs (logger "sweep") that the kernels compile now, on a machine without numba's cache
     plan = make_plan(scene)
     size = chunk_size or plan.chunk_size
     check_backend(backend, workers, scheduler)

@@ -30,7 +30,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     scene = load_scene(args.config) if args.config else default_scene()
     warn_implausible(scene.K_over_M, scene.V)  # before any work, the dry run included
     if not args.dry_run:
-        announce_if_cold()  # within a second of the start, before the plan imports and compiles anything
+        announce_if_cold(scene)  # within a second of the start, before the plan imports and compiles anything
     if scene.protocol == "driven":
         return _run_driven(scene, args)
     from .plan import make_plan

@@ -20,10 +20,11 @@ from pathlib import Path
 
 from .log import LOGGER
 
-__all__ = ["COLD_COMPILE_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "timed"]
+__all__ = ["COLD_COMPILE_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "kernel_families", "timed"]
 
 
-COLD_COMPILE_S = {"relaxed-slip engine": 17, "inertial stop": 38, "driven / Hopf line": 22}
+COLD_COMPILE_S = {"relaxed-slip engine": 17, "time-resolved stop": 21, "inertial stop": 38, "slip-law stop": 8,
+                  "driven quasi-static": 6, "driven inertial": 12}
 """Seconds to compile each kernel family from an empty cache on the 2-core development machine (module docstring)."""
 SLOW_S = 3.0
 """A warm-up still running after this many seconds is compiling, not loading: say so."""
@@ -48,13 +49,35 @@ def _has_index(folder: Path, must_contain: str = "") -> bool:
     return folder.is_dir() and any(must_contain in str(p) for p in folder.rglob("*.nbi"))
 
 
-def _total() -> int:
-    return sum(COLD_COMPILE_S.values())
+def kernel_families(scene=None) -> list[str]:
+    """The kernel families (keys of :data:`COLD_COMPILE_S`) a scene compiles on first use; every family without a
+    scene. The stop scene: the relaxed-slip engine, or the per-point path for time-resolved observables, the
+    slip law's own march, the inertial kernels where the model can be inertial; the driven scene: the quasi-static
+    and/or inertial variant; the simulated Hopf line adds the driven variant of the scene's model."""
+    if scene is None:
+        return list(COLD_COMPILE_S)
+    inertial = scene.model != "quasistatic"
+    quasistatic = scene.model != "inertial"
+    families = []
+    if scene.protocol == "stop":
+        if scene.state_law == "slip":
+            families.append("slip-law stop")
+        elif quasistatic:
+            families.append("relaxed-slip engine" if scene.observables == ("xi_inf",) else "time-resolved stop")
+        if inertial:
+            families.append("inertial stop")
+    if scene.protocol == "driven" or scene.simulated_hopf_line:
+        families += [f"driven {m}" for m, used in (("quasi-static", quasistatic), ("inertial", inertial)) if used]
+    return families
 
 
-def announce_if_cold() -> bool:
-    """Log, once per process, that the kernels are about to be compiled, if numba's cache is empty; True if it
-    logged."""
+def _total(families: list[str]) -> int:
+    return sum(COLD_COMPILE_S[f] for f in families)
+
+
+def announce_if_cold(scene=None, families: list[str] | None = None) -> bool:
+    """Log, once per process, that the kernels are about to be compiled, if numba's cache is empty, with the
+    seconds it takes for ``families`` or those of ``scene`` (all families without either); True if it logged."""
     global _checked, _compiling_announced
     if _checked:
         return False
@@ -62,9 +85,10 @@ def announce_if_cold() -> bool:
     if not cache_is_cold():
         return False
     _compiling_announced = True
+    families = families or kernel_families(scene)
     LOGGER.info("compiling numba kernels, first run on this machine only: up to ~%d s on 2 cores (%s); later runs "
-                "load them from numba's cache in ~1.5 s", _total(),
-                ", ".join(f"{k} ~{v} s" for k, v in COLD_COMPILE_S.items()))
+                "load them from numba's cache in ~1.5 s", _total(families),
+                ", ".join(f"{k} ~{COLD_COMPILE_S[k]} s" for k in families))
     return True
 
 
@@ -78,7 +102,7 @@ def timed(what: str = "kernels") -> Iterator[None]:
     def notice() -> None:
         if not done.wait(SLOW_S) and not _compiling_announced:
             LOGGER.info("compiling %s not yet in numba's cache (first use only, up to ~%d s on 2 cores)", what,
-                        _total())
+                        _total(kernel_families()))
 
     t0 = time.perf_counter()
     thread = threading.Thread(target=notice, daemon=True)

@@ -163,7 +163,7 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
     if not (math.isfinite(rtol) and 1e-8 <= rtol <= 0.1):
         raise InputError(f"rtol must be in [1e-8, 0.1] (relative width of the located bracket), got {rtol!r}")
     warn_implausible(V=v)
-    announce_if_cold()
+    announce_if_cold(families=["driven quasi-static"] + (["driven inertial"] if model != "quasistatic" else []))
     p = params
     mu1 = np.asarray(physics.mu1(v, p.m1, p.m2, p.V0), dtype=float)
     inertial = line_uses_inertia(np.asarray(physics.inertia_number(v, p.D0, p.g)) / p.A, model, model_tol)

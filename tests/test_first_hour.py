@@ -262,6 +262,25 @@ def test_the_cli_called_from_python_leaves_logging_and_warnings_as_it_found_them
     assert (list(logger.handlers), logger.level, logger.propagate, warnings.showwarning) == before
 
 
+def test_the_compile_notice_names_only_the_kernel_families_of_the_scene(monkeypatch, caplog):
+    import dataclasses
+    import logging
+
+    import sweep.compile_notice as notice
+
+    quasistatic = dataclasses.replace(sweep.default_scene(), model="quasistatic")
+    monkeypatch.setattr(notice, "cache_is_cold", lambda: True)
+    for scene, families in ((quasistatic, ["relaxed-slip engine"]),
+                            (sweep.default_scene(), ["relaxed-slip engine", "inertial stop"])):
+        monkeypatch.setattr(notice, "_checked", False)
+        caplog.clear()
+        with caplog.at_level(logging.INFO, logger="sweep"):
+            assert notice.announce_if_cold(scene)
+        (message,) = [r.getMessage() for r in caplog.records if r.name == "sweep"]
+        assert f"up to ~{sum(notice.COLD_COMPILE_S[f] for f in families)} s" in message, message
+        assert all(f in message for f in families) and "driven" not in message, message
+
+
 def test_cache_is_cold_follows_numba_cache_dir(tmp_path, monkeypatch):
     from sweep.compile_notice import cache_is_cold
 
