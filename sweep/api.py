@@ -87,8 +87,10 @@ def warm_up_kernels(scene: Scene, plan) -> None:
         warm_up(scene, plan)
         if scene.model != "quasistatic":
             warm_up_models()
-    else:
-        chunk_task(scene, plan.take(np.arange(1)), np.arange(1))
+    else:  # one point per variant of the driven kernel the plan uses (quasi-static, inertial)
+        inertial = plan.inertial & (plan.G > 0.0)
+        firsts = np.unique([int(np.argmax(inertial == used)) for used in (False, True) if (inertial == used).any()])
+        chunk_task(scene, plan.take(firsts), firsts)
     if scene.simulated_hopf_line:
         with warnings.catch_warnings():  # the scene's axes were checked; this is one of its velocities
             warnings.simplefilter("ignore", PlausibilityWarning)
