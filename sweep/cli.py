@@ -81,7 +81,10 @@ def _plan_text(scene, plan) -> str:
         "where the estimated error of the quasi-static one is larger" if scene.model == "auto" else "")
     lines = plan.text().splitlines()
     keep = [line for line in lines if line.split(":")[0].strip() != "model"]
-    return "\n".join([model, *keep])
+    hopf = f"{'hopf_line':>28}: " + ("analytic chi_c and the line located by simulation (driven kernel)"
+                                     if scene.simulated_hopf_line else
+                                     "analytic chi_c (simulated_hopf_line = true adds the line located by simulation)")
+    return "\n".join([model, *keep, hopf])
 
 
 def _run_driven(scene, args: argparse.Namespace) -> int:
