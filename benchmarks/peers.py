@@ -559,13 +559,15 @@ def main(argv=None):
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
     ap.add_argument("--no-png", action="store_true")
     ap.add_argument("--no-corner", action="store_true", help="the default scene only")
+    ap.add_argument("--tols", type=lambda x: tuple(sorted((float(v) for v in x.split(",")), reverse=True)),
+                    help="comma-separated rtols instead of 1e-3..1e-10 (--quick: 1e-3,1e-6,1e-9)")
     args = ap.parse_args(argv)
     quick = args.quick
     warnings.simplefilter("ignore", RuntimeWarning)
     t_start = time.perf_counter()
     load0, digest0 = common.loadavg(), common.sweep_digest()
     n_all = numba.config.NUMBA_NUM_THREADS
-    tols = TOLS_QUICK if quick else TOLS
+    tols = args.tols or (TOLS_QUICK if quick else TOLS)
     repeats = REPEATS_QUICK if quick else REPEATS
 
     tools = engine_tools(n_all)
