@@ -202,7 +202,7 @@ def numbalsoda_tools(n_all):
         y0 = np.zeros(1)
         t = np.empty(OUT_PER_SEGMENT + 1)
         s0, lo, hi = 0.0, math.log(s_c), math.log(S_FIRST)
-        for seg in range(MAX_SEGMENTS):
+        for _ in range(MAX_SEGMENTS):
             t[0] = s0
             for j in range(OUT_PER_SEGMENT):
                 t[j + 1] = math.exp(lo + (hi - lo) * (j + 1.0) / OUT_PER_SEGMENT)
@@ -491,11 +491,11 @@ def plot(result, path):
     except ImportError:
         return None
     scenes = [s for s in ("default", "corner") if s in result["scenes"]]
-    fig, axes = plt.subplots(1, len(scenes), figsize=(6.2 * len(scenes), 4.8), squeeze=False)
+    fig, axes = plt.subplots(1, len(scenes), figsize=(6.2 * len(scenes), 6.4), squeeze=False)
     styles = {"engine": "-", "numbalsoda": "--", "diffrax": "-.", "scipy": ":"}
     for ax, sname in zip(axes[0], scenes):
         sc = result["scenes"][sname]
-        for name, t in sc["tools"].items():
+        for t in sc["tools"].values():
             if not t["scopes"]:
                 continue
             scope = "grid" if "grid" in t["scopes"] else "sub"
@@ -503,7 +503,7 @@ def plot(result, path):
             if not rows:
                 continue
             ax.loglog([r["max_rel_err"] for r in rows], [r["us_per_traj_per_core"] for r in rows],
-                      styles.get(t["family"], "-"), marker="o", ms=3,
+                      styles.get(t["family"], "-"), marker="o", ms=3, lw=2.2 if t["family"] == "engine" else 1.2,
                       label=f"{t['label']} [{scope}: {rows[0]['points']} pts]")
         ax.axvspan(1e-17, sc["reference"]["error_floor"], color="0.9", zorder=0)
         ax.set_xlim(left=max(1e-13, 0.3 * sc["reference"]["error_floor"]))
@@ -512,7 +512,7 @@ def plot(result, path):
         ax.set_title(f"{sname}: {sc['shape'][0]} x {sc['shape'][1]}, rtol {result['settings']['tols'][0]:g}.."
                      f"{result['settings']['tols'][-1]:g}", fontsize=9)
         ax.grid(True, which="major", alpha=0.3)
-        ax.legend(fontsize=6)
+        ax.legend(fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2)
     fig.suptitle(f"sweep vs peers, {result['machine']['cpu']} ({result['date']}); JIT compile excluded",
                  fontsize=8)
     fig.tight_layout()
@@ -535,7 +535,7 @@ def print_table(result):
         for name, t in sc["tools"].items():
             if "failed" in t:
                 print(f"{name:24s} failed: {t['failed']}")
-            for scope, rows in t["scopes"].items():
+            for rows in t["scopes"].values():
                 cells = []
                 for r in rows:
                     e = "ref" if r.get("is_reference") else ("-" if r["max_rel_err"] is None
