@@ -33,10 +33,12 @@ def _sci(x: float) -> str:
 
 
 def _compile_seconds() -> int:
+    """Seconds to compile the default scene's kernel families from an empty cache (sweep/compile_notice.py)."""
     sys.path.insert(0, str(ROOT))
-    from sweep.compile_notice import COLD_COMPILE_S
+    from sweep.compile_notice import COLD_COMPILE_S, kernel_families
+    from sweep.scene import default_scene
 
-    return sum(COLD_COMPILE_S.values())
+    return sum(COLD_COMPILE_S[f] for f in kernel_families(default_scene()))
 
 
 def _auto() -> dict:

@@ -1,12 +1,15 @@
 """Say so before numba compiles sweep's kernels: on a machine whose numba cache holds none of them, the first run
-compiles for about a minute, with nothing else to show for it.
+compiles for 5-30 s per kernel family, with nothing else to show for it.
 
 :func:`announce_if_cold` logs one INFO line (logger ``sweep``) at once when numba's on-disk cache holds no index
-file (``*.nbi``) of the package, checked once per process; :func:`timed` wraps an explicit warm-up and logs a line
-if it is still running after :data:`SLOW_S` (a cache that holds some kernels but not the ones a scene needs), then
-how long it took. Measured on the 2-core development machine with an empty cache (NUMBA_CACHE_DIR set to an empty
-folder, 2026-11-24): the relaxed-slip engine (lanes, rk4/ros4) 17 s, the inertial stop 38 s, the driven kernel and
-the Hopf line 22 s; loading all of them from the cache takes ~1.5 s.
+file (``*.nbi``) of the package, checked once per process, with the seconds of the kernel families the scene
+needs (:func:`kernel_families`); :func:`timed` wraps an explicit warm-up and logs a line if it is still running
+after :data:`SLOW_S` (a cache that holds some kernels but not the ones a scene needs), then how long it took.
+Measured on the 2-core development machine, each family alone in a new process with an empty cache
+(NUMBA_CACHE_DIR set to an empty folder; a 3 x 3 scene of each kind, 2026-11-25, load average 0.5-1.1): relaxed
+slip (lanes, rk4 and ros4) 5.6 s (6.4 s on the default grid, whose stiff corner uses ros4), time-resolved stop
+(per-point path) 30 s, inertial stop 17 s, slip-law stop 5.5 s, driven quasi-static 7.4 s, driven inertial 16 s;
+the default scene (relaxed slip + inertial stop) 22 s in all. Loading all of them from the cache takes ~1.5 s.
 """
 
 from __future__ import annotations
@@ -23,8 +26,8 @@ from .log import LOGGER
 __all__ = ["COLD_COMPILE_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "kernel_families", "timed"]
 
 
-COLD_COMPILE_S = {"relaxed-slip engine": 17, "time-resolved stop": 21, "inertial stop": 38, "slip-law stop": 8,
-                  "driven quasi-static": 6, "driven inertial": 12}
+COLD_COMPILE_S = {"relaxed-slip engine": 7, "time-resolved stop": 30, "inertial stop": 16, "slip-law stop": 6,
+                  "driven quasi-static": 8, "driven inertial": 16}
 """Seconds to compile each kernel family from an empty cache on the 2-core development machine (module docstring)."""
 SLOW_S = 3.0
 """A warm-up still running after this many seconds is compiling, not loading: say so."""
