@@ -77,8 +77,12 @@ NO_LIMIT = "[params]\nm2 = -0.001\n"
                                   NO_LIMIT + "[K_over_M]\nvalues = [1e3, 1e5]\n[V]\nvalues = [1e-6]\n",
                                   NO_LIMIT + "[K_over_M]\nvalues = [1e3, 1e5]\n[V]\nvalues = [1e-6, 1e-5]\n"])
 def test_run_on_a_line_a_point_or_without_finite_values_draws_a_picture(tmp_path, axes):
+    """`sweep run` through sweep.cli.main in this process: what is checked is the picture drawn for degenerate
+    grids; the command as a separate process is test_run_plot_info's (a subprocess here only added ~2.5 s of
+    start-up per case)."""
+    from sweep.cli import main
+
     config = tmp_path / "line.toml"
     config.write_text('preset = "sample2"\n' + axes)
-    proc = sweep_cli("run", str(config), "-o", str(tmp_path / "line.nc"), cwd=tmp_path)
-    assert proc.returncode == 0, proc.stderr
+    assert main(["run", str(config), "-o", str(tmp_path / "line.nc")]) == 0
     assert (tmp_path / "line.png").stat().st_size > 10_000
