@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 import os
 import shlex
+import signal
 import sys
+import threading
 import time
 import warnings
 from pathlib import Path
@@ -304,6 +306,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code: 0 done, 1 finished with failures (a summary says which), 2 a
     user mistake (one line on stderr, no traceback), 130 interrupted (Ctrl-C)."""
     previous_show_warning, warnings.showwarning = warnings.showwarning, _show_warning
+    previous_sigint = _exit_on_ctrl_c_while_compiling()
     try:
         args = build_parser().parse_args(argv)
         with logging_configured(verbose=args.verbose, quiet=args.quiet):
@@ -320,8 +323,29 @@ def main(argv: list[str] | None = None) -> int:
         if isinstance(exc, Interrupted):  # Ctrl-C during a journaled run: nothing finished is lost
             return _fail(str(exc), 130)
         raise
-    finally:  # called from Python (a notebook, a test), main leaves the warning and logging set-up as it found it
+    finally:  # called from Python (a notebook, a test), main leaves the warning, signal and logging set-up as found
         warnings.showwarning = previous_show_warning
+        if previous_sigint is not None:
+            signal.signal(signal.SIGINT, previous_sigint)
+
+
+def _exit_on_ctrl_c_while_compiling():
+    """Install a SIGINT handler for the command (main thread only; returns the previous handler, or None): Ctrl-C
+    raises KeyboardInterrupt as usual, except while numba compiles, where the interrupt would be lost inside LLVM's
+    code generation (sweep.jitcache.compiling): then the one-line message and exit 130 at once. Nothing is lost:
+    numba writes its cache files and sweep its journal chunks atomically."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+
+    def on_sigint(signum, frame):
+        jitcache = sys.modules.get("sweep.jitcache")
+        if jitcache is not None and jitcache.compiling():
+            sys.stdout.flush()
+            print("sweep: interrupted (Ctrl-C)", file=sys.stderr, flush=True)
+            os._exit(130)
+        raise KeyboardInterrupt
+
+    return signal.signal(signal.SIGINT, on_sigint)
 
 
 def _fail(message: str, code: int) -> int:

@@ -13,10 +13,35 @@ from __future__ import annotations
 
 import sys
 
+from numba.core import event
 from numba.core.dispatcher import Dispatcher
 from numba.core.extending import _Intrinsic
 
-__all__ = ["pin", "pin_module"]
+__all__ = ["compiling", "pin", "pin_module"]
+
+
+class _CompileDepth(event.Listener):
+    """Counts the numba compilations in progress in this process (nested ones included)."""
+
+    depth = 0
+
+    def on_start(self, ev: event.Event) -> None:
+        self.depth += 1
+
+    def on_end(self, ev: event.Event) -> None:
+        self.depth -= 1
+
+
+_COMPILE_DEPTH = _CompileDepth()
+event.register("numba:compile", _COMPILE_DEPTH)
+
+
+def compiling() -> bool:
+    """Whether numba is compiling a function in this process now. A KeyboardInterrupt raised then can land in a
+    callback of LLVM's code generation, where it is printed and lost, and the compilation fails later with an
+    unrelated RuntimeError ("no compiled object yet"); the command line ends the process at once instead
+    (sweep/cli.py)."""
+    return _COMPILE_DEPTH.depth > 0
 
 
 def pin(dispatcher: Dispatcher | _Intrinsic, *variant: object) -> Dispatcher | _Intrinsic:
