@@ -271,7 +271,8 @@ def _make_simulate(law: str, with_inertia: bool):
         rhs(y, p, dy)
         dz = dy[0]
         while steps < settings.max_steps:
-            K[0, :] = dy
+            for m in range(n):  # (element loops: a slice assignment compiles numba's shape-mismatch error path, ~2 s)
+                K[0, m] = dy[m]
             # explicit where it is stable, RODAS3 where the inertial mode's rate would hold the explicit step down
             stiff = with_inertia and p.g > 0.0 and h * stiffness(y, p) > STIFF_SWITCH
             q = RODAS3_ORDER if stiff else DP5_ORDER
@@ -290,7 +291,8 @@ def _make_simulate(law: str, with_inertia: bool):
                 lw1 = rhs(y_new, p, dy)
             else:  # FSAL: dp5's last stage is the rates at y_new
                 lw1 = lw_fsal
-                dy[:] = K[_STAGES - 1]
+                for m in range(n):
+                    dy[m] = K[_STAGES - 1, m]
             dz1 = dy[0]
             w_peak = max(w_peak, lw1)
             if lw1 > W_RUNAWAY:  # an accepted state: the slip velocity itself is past the threshold
@@ -322,7 +324,8 @@ def _make_simulate(law: str, with_inertia: bool):
                 t_max_prev = t_peak
             elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
                 z_min = extremum(stiff, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
-            y[:] = y_new
+            for m in range(n):
+                y[m] = y_new[m]
             tau += h
             dz = dz1
             size = max(size, abs(y[0]))
