@@ -113,7 +113,7 @@ def driven_batch(law: str = "aging", inertia: bool = False):
     ``inertia``. The batch loop is where a target other than the CPU threads would plug in."""
     point = point_kernel(law, inertia)
 
-    @njit(parallel=True, cache=True)
+    @njit(parallel=True, cache=not inertia)  # the inertial variant is never cached (driven.INERTIAL_NOT_CACHED)
     def batch(points, k, a, b, g, settings, out):
         for j in prange(points.size):
             i = points[j]
