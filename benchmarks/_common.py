@@ -13,6 +13,7 @@ Import it from a script in this folder as ``from _common import ...`` (a script'
 from __future__ import annotations
 
 import hashlib
+import json
 import math
 import os
 import platform
@@ -164,3 +165,16 @@ def scipy_point(cls, k, a, b, rtol, atol, tail_tol_rel, tail_tol_abs):
         E = math.exp(min(-(k * xi + u * (a + b * u)), EXP_MAX))
         if tail_ok(k, a, b, u, E, tail_tol_rel * xi + tail_tol_abs):
             return xi + tail_slip(k, a, b, u, E), steps, solver.nfev
+
+
+def write_result(result: dict, out: Path, t_start: float, plot=None, print_table=None) -> None:
+    """End a benchmark run: its wall time into ``result``, the picture (``plot(result, png_path)`` unless None),
+    the JSON at ``out``, the table (``print_table(result)``) and the line naming what was written."""
+    result["benchmark_wall_s"] = time.perf_counter() - t_start
+    out.parent.mkdir(parents=True, exist_ok=True)
+    if plot is not None:
+        result["png"] = plot(result, out.with_suffix(".png"))
+    out.write_text(json.dumps(result, indent=1) + "\n")
+    if print_table is not None:
+        print_table(result)
+    print(f"\nwrote {out}" + (f" and {result['png']}" if result.get("png") else ""))

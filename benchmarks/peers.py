@@ -47,7 +47,6 @@ import argparse
 import dataclasses
 import datetime as _dt
 import importlib.metadata
-import json
 import math
 import os
 import sys
@@ -621,13 +620,7 @@ def main(argv=None):
         "scenes": out_scenes,
         "benchmark_wall_s": None,
     }
-    result["benchmark_wall_s"] = time.perf_counter() - t_start
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    if not args.no_png:
-        result["png"] = plot(result, args.out.with_suffix(".png"))
-    args.out.write_text(json.dumps(result, indent=1) + "\n")
-    print_table(result)
-    print(f"\nwrote {args.out}" + (f" and {result['png']}" if result.get("png") else ""))
+    common.write_result(result, args.out, t_start, None if args.no_png else plot, print_table)
 
 
 if __name__ == "__main__":
