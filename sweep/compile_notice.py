@@ -23,7 +23,8 @@ from pathlib import Path
 
 from .log import LOGGER
 
-__all__ = ["COLD_COMPILE_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "kernel_families", "timed"]
+__all__ = ["COLD_COMPILE_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "kernel_families",
+           "inertial_stop_compiled_aside", "timed"]
 
 
 COLD_COMPILE_S = {"relaxed-slip engine": 7, "time-resolved stop": 30, "inertial stop": 16, "slip-law stop": 6,
@@ -93,6 +94,34 @@ def announce_if_cold(scene=None, families: list[str] | None = None) -> bool:
                 "load them from numba's cache in ~1.5 s", _total(families),
                 ", ".join(f"{k} ~{COLD_COMPILE_S[k]} s" for k in families))
     return True
+
+
+@contextmanager
+def inertial_stop_compiled_aside(scene) -> Iterator[None]:
+    """On a cold cache, compile the inertial stop kernels in a second process while this one compiles the rest
+    (the default scene: lanes ~6 s beside inertial ~13 s, on 2 cores); on leaving, wait for it, so that this
+    process then loads them from numba's cache. Nothing happens where the cache is warm, the scene needs no inertial
+    stop kernels or no other family, or the helper cannot start; a helper that fails only means this process
+    compiles them itself, as without it."""
+    families = kernel_families(scene)
+    if "inertial stop" not in families or len(families) < 2 or not cache_is_cold():
+        yield
+        return
+    import subprocess
+    import sys
+
+    code = "from sweep.model_choice import warm_up_models; warm_up_models()"
+    try:
+        helper = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:
+        yield
+        return
+    try:
+        yield
+        helper.wait()
+    finally:
+        if helper.poll() is None:  # interrupted or failed here: the helper's work is not needed any more
+            helper.kill()
 
 
 @contextmanager
