@@ -10,7 +10,7 @@ import numpy as np
 import xarray as xr
 
 from .backends import check_backend, open_backend
-from .compile_notice import announce_if_cold
+from .compile_notice import announce_if_cold, inertial_stop_compiled_aside
 from .dataset import build_dataset, build_driven_dataset
 from .engine import n_samples
 from .hopf import with_simulated_line
@@ -84,7 +84,8 @@ def warm_up_kernels(scene: Scene, plan) -> None:
     chunks (the inertial stop kernels only where the model policy can use them) or the driven scene's, and the
     driven kernel of the simulated Hopf line only where the scene asks for that line."""
     if plan.protocol == "stop":
-        warm_up(scene, plan)
+        with inertial_stop_compiled_aside(scene):  # a cold cache: two kernel families compile on two cores
+            warm_up(scene, plan)
         if scene.model != "quasistatic":
             warm_up_models()
     else:  # one point per variant of the driven kernel the plan uses (quasi-static, inertial)

@@ -49,15 +49,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"{'estimated time':>28}: {seconds:.1f} s on this machine")
         return 0
     from .api import warm_up_kernels
-    from .compile_notice import SLOW_S, inertial_stop_compiled_aside, timed
+    from .compile_notice import SLOW_S, timed
     from .plot import plot_file
-    from .runner import warm_up
 
     t_warm = time.perf_counter()
     if args.workers is None and args.scheduler is None:  # (a dask run connects first, then warms up: run_sweep)
         with timed("kernels"):  # says so before a first compile (empty numba cache) and when it takes long
-            with inertial_stop_compiled_aside(scene):  # a cold cache: two families compile on two cores
-                warm_up(scene, plan)
             warm_up_kernels(scene, plan)
     compile_s = time.perf_counter() - t_warm
     t0 = time.perf_counter()

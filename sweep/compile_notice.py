@@ -23,8 +23,8 @@ from pathlib import Path
 
 from .log import LOGGER
 
-__all__ = ["COLD_COMPILE_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "kernel_families",
-           "inertial_stop_compiled_aside", "timed"]
+__all__ = ["COLD_COMPILE_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "driven_families",
+           "inertial_stop_compiled_aside", "kernel_families", "timed"]
 
 
 COLD_COMPILE_S = {"relaxed-slip engine": 7, "time-resolved stop": 30, "inertial stop": 16, "slip-law stop": 6,
@@ -60,19 +60,23 @@ def kernel_families(scene=None) -> list[str]:
     and/or inertial variant; the simulated Hopf line adds the driven variant of the scene's model."""
     if scene is None:
         return list(COLD_COMPILE_S)
-    inertial = scene.model != "quasistatic"
-    quasistatic = scene.model != "inertial"
     families = []
     if scene.protocol == "stop":
         if scene.state_law == "slip":
             families.append("slip-law stop")
-        elif quasistatic:
+        elif scene.model != "inertial":
             families.append("relaxed-slip engine" if scene.observables == ("xi_inf",) else "time-resolved stop")
-        if inertial:
+        if scene.model != "quasistatic":
             families.append("inertial stop")
     if scene.protocol == "driven" or scene.simulated_hopf_line:
-        families += [f"driven {m}" for m, used in (("quasi-static", quasistatic), ("inertial", inertial)) if used]
+        families += driven_families(scene.model)
     return families
+
+
+def driven_families(model: str) -> list[str]:
+    """The driven kernel's variants a driven scene or a Hopf line of ``model`` compiles."""
+    return [f"driven {m}" for m, used in (("quasi-static", model != "inertial"), ("inertial", model != "quasistatic"))
+            if used]
 
 
 def _total(families: list[str]) -> int:

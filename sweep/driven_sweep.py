@@ -24,12 +24,11 @@ def driven_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, n
 
     def simulate(points: np.ndarray, inertial: np.ndarray) -> dict[str, np.ndarray]:
         out = DrivenOutputs.empty(points.size)
-        g = plan.G[points] * inertial
+        k, a, b, g = plan.k[points], plan.a[points], plan.b[points], plan.G[points] * inertial
         for with_inertia in (False, True):  # each kernel variant compiled only where a point needs it
             where = np.flatnonzero((g > 0.0) == with_inertia)
             if where.size:
-                driven_batch(scene.state_law, with_inertia)(where, plan.k[points], plan.a[points], plan.b[points], g,
-                                                            settings, out)
+                driven_batch(scene.state_law, with_inertia)(where, k, a, b, g, settings, out)
         return out._asdict()
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:

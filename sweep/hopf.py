@@ -43,7 +43,7 @@ from .accuracy import (
     TYPE_CYCLES,
     TYPE_DISTANCE,
 )
-from .compile_notice import announce_if_cold
+from .compile_notice import announce_if_cold, driven_families
 from .dataset import REFERENCES, versions
 from .errors import InputError
 from .integrate.driven import DrivenParams, DrivenSettings, Regime, simulate_point
@@ -163,7 +163,7 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
     if not (math.isfinite(rtol) and 1e-8 <= rtol <= 0.1):
         raise InputError(f"rtol must be in [1e-8, 0.1] (relative width of the located bracket), got {rtol!r}")
     warn_implausible(V=v)
-    announce_if_cold(families=["driven quasi-static"] + (["driven inertial"] if model != "quasistatic" else []))
+    announce_if_cold(families=driven_families(model))
     p = params
     mu1 = np.asarray(physics.mu1(v, p.m1, p.m2, p.V0), dtype=float)
     inertial = line_uses_inertia(np.asarray(physics.inertia_number(v, p.D0, p.g)) / p.A, model, model_tol)

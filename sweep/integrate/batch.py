@@ -23,7 +23,7 @@ from ..jitcache import pin, pin_module
 from ..models.stop import StopParams
 from ..solvers.fastmath import FAST
 from ..status import Status
-from .driven import DrivenParams, point_kernel
+from .driven import DrivenParams, cached, point_kernel
 from .stop_inertial import RELAX_KEYS, relax
 from .stop_point import FractionTimes, StopOutputs, TimeSamples, solve_stop_point
 from .stop_slip import relax_slip
@@ -113,7 +113,7 @@ def driven_batch(law: str = "aging", inertia: bool = False):
     ``inertia``. The batch loop is where a target other than the CPU threads would plug in."""
     point = point_kernel(law, inertia)
 
-    @njit(parallel=True, cache=not inertia)  # the inertial variant is never cached (driven.INERTIAL_NOT_CACHED)
+    @njit(parallel=True, cache=cached(inertia))
     def batch(points, k, a, b, g, settings, out):
         for j in prange(points.size):
             i = points[j]

@@ -230,6 +230,11 @@ process compiles). A resumed or distributed run must give exactly the numbers of
 variant pays its compile time (~6 s) in each process until the cause is understood."""
 
 
+def cached(with_inertia: bool) -> bool:
+    """Whether a driven kernel of this variant uses numba's disk cache (:data:`INERTIAL_NOT_CACHED`)."""
+    return not (with_inertia and INERTIAL_NOT_CACHED)
+
+
 def _size(with_inertia: bool) -> int:
     """Components of the state: (z, u) quasi-static, (z, u, w) with inertia."""
     return 3 if with_inertia else 2
@@ -255,7 +260,7 @@ def _make_simulate(law: str, with_inertia: bool):
     advance = _make_advance(rhs, with_inertia, variant)
     extremum = _make_extremum(rhs, advance, variant)
 
-    @njit(cache=not with_inertia, fastmath=FAST, error_model="numpy")  # (INERTIAL_NOT_CACHED)
+    @njit(cache=cached(with_inertia), fastmath=FAST, error_model="numpy")
     def simulate(p, settings):
         perturbation, rtol = settings.perturbation, settings.rtol
         K, ys = np.empty((_STAGES, n)), np.empty(n)
