@@ -25,7 +25,7 @@ this script is run from (the same case parameters go to both trees). The parent 
             quasistatic; and quasi-static with t50/t90, the per-point path), saved per tree as .npz and
             compared: max relative difference (NaN == NaN), statuses that differ (PASS: <= 1e-12, none), steps
             that differ (reported only).
-3. speed    per workload, one warm-up call then one timed call in each subprocess; old and new alternate
+3. speed    per workload, one warm-up call then --timed-calls timed calls in each subprocess; old and new alternate
             (old, new, old, new, ...) --repeats times; min wall per tree; ratio new/old (PASS: <= 1.05). The
             load average is recorded before and after each figure.
 
@@ -496,6 +496,9 @@ def main() -> None:
                     help="alternated timed runs per tree and workload (default 3; 1 with --quick)")
     ap.add_argument("--compile-repeats", type=int, default=1,
                     help="alternated first-call runs per tree and compile family (default 1; a compile takes 10-60 s)")
+    ap.add_argument("--timed-calls", type=int, default=3,
+                    help="timed calls per run after its warm-up (default 3; the smallest counts): a single call per "
+                         "process left dp5 at 1.077 on one run and 1.03 on the next")
     ap.add_argument("--quick", action="store_true", help="tiny grids, 1 repeat, only the driven compile family")
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
     ap.add_argument("--worker", help=argparse.SUPPRESS)
@@ -511,7 +514,7 @@ def main() -> None:
         old = stack.enter_context(checkout("old", args.old))
         new = stack.enter_context(checkout("new", args.new)) if args.new else working_tree("new", args.new_tree)
         trees = [old, new]
-        runner = Runner(args.quick, timed_calls=1, scratch=scratch)
+        runner = Runner(args.quick, timed_calls=1 if args.quick else args.timed_calls, scratch=scratch)
         families = list(QUICK_COMPILE_FAMILIES if args.quick else COMPILE_FAMILIES)
         print(f"old {old.commit[:10]} ({old.root}), new {new.commit[:10]} ({new.root}); repeats {repeats}", flush=True)
         print("[1/3] first-call compile time, empty numba caches", flush=True)
