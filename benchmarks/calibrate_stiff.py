@@ -32,8 +32,8 @@ def run(method, h, k, a, b, rtol=1e-11):
     n = k.size
     xi, tail = np.full(n, np.nan), np.full(n, np.nan)
     status, steps = np.zeros(n, np.int8), np.zeros(n, np.int32)
-    relax_batch(k, a, b, time_scale(k, a), np.arange(n), np.full(n, h), 2_000_000, rtol, 1e-12, 2, xi, tail,
-                status, steps)
+    relax_batch(k, a, b, time_scale(k, a), np.zeros(n), np.arange(n), np.full(n, h), 2_000_000, rtol, 1e-12, 2, xi,
+                tail, np.empty(0), status, steps)
     return xi, steps, status
 
 

@@ -178,17 +178,30 @@ TAIL_TIGHTENING = 0.01
 ESTIMATE_RTOL = 1e-3
 """Tolerance of the first-order correction's integration (the estimate is needed to a few %, not to rtol): over
 117 points where it is trusted, estimate/true gap spans the same 0.946..1.106 at 1e-3 as at 1e-4, in half the steps
-(37 vs 74)."""
+(37 vs 74). In the lanes it is the tail test's tolerance; the steps are ESTIMATE_STEP."""
+ESTIMATE_STEP = H_MAX
+"""Fixed RK4 step in sigma of the lane run that carries the first-order correction (sweep/model_choice.py). Against
+the correction at rtol 1e-7 (per-point RODAS3), |y/xi_inf| where it exceeds 1e-4: within 0.41 % on the default grid
+(9,329 points, 24 steps per point) and 0.88 % over chi/A 1e2..1e7 x V 1e-8..1e-3 (724 points; 42 steps); at half
+the step 0.25 % in twice the steps, at twice the step 12-26 %; the per-point RODAS3 at ESTIMATE_RTOL was within
+2.3 %. No lane run failed at this step on either grid (a failed one falls back to the per-point module)."""
 ESTIMATE_MARGIN = 1.5
-"""A point keeps the quasi-static model only where ESTIMATE_MARGIN x its estimate is within model_tol: where the
-estimate is trusted the true gap is at most 1.33x it (below)."""
-FIRST_ORDER_TRUST = 2.0
-"""The first-order estimate is trusted where gamma/A (1 + (chi + |mu1|)/A) <= FIRST_ORDER_TRUST: the inertial time
-gamma/A short against the fastest time of the quasi-static stop, its stiff start A/(chi + |mu1|). Measured against
-the inertial model over chi/A 0.1..1e3, mu1/A -4..10, m2/A 0..2 (230 points per value): true gap / estimate spans
-0.80..1.17 at 1, 0.70..1.33 at 2, 0.63..1.49 at 3, 0.58..1.66 at 4, and the expansion fails outright beyond (down
-to 1e-6 at chi/A = 1e3, gamma/A = 1, where the slider rebounds inertially); there the gap is measured by solving
-the point with inertia."""
+"""A point keeps the quasi-static model only where ESTIMATE_MARGIN x its estimate is within model_tol, where the
+expansion is well trusted (tau <= CLOSE_TRUST below): there the true gap is at most 1.33x the estimate."""
+CLOSE_TRUST = 2.0
+"""tau = gamma/A (1 + (chi + |mu1|)/A) up to which ESTIMATE_MARGIN applies (WIDE_MARGIN beyond)."""
+WIDE_MARGIN = 2.0
+"""The routing margin for CLOSE_TRUST < tau <= FIRST_ORDER_TRUST, where the true gap is up to 1.66x the estimate."""
+FIRST_ORDER_TRUST = 4.0
+"""The first-order estimate is trusted where tau = gamma/A (1 + (chi + |mu1|)/A) <= FIRST_ORDER_TRUST: the inertial
+time gamma/A short against the fastest time of the quasi-static stop, its stiff start A/(chi + |mu1|). Measured
+against the inertial model over chi/A 0.1..1e3, mu1/A -4..10, m2/A 0..2 (true gap / estimate; both at rtol 1e-9):
+0.81..1.33 at tau = 2, 0.75..1.49 at 3, 0.70..1.66 at 4, 0.66..1.83 at 5 (47 points per value,
+tests/test_stop_inertial.py); an earlier sweep of 230 points per value gave 0.80..1.17 at 1, 0.70..1.33 at 2,
+0.63..1.49 at 3, 0.58..1.66 at 4. The expansion fails outright far beyond (down to 1e-6 at chi/A = 1e3,
+gamma/A = 1, tau = 1e3, where the slider rebounds inertially); there the gap is measured by solving the point with
+inertia. (Trusted only up to tau = 2 before, the default scene solved 27 points with inertia, tau 2.03..2.86, all
+with measured gaps ~3e-4 against model_tol 1e-2, at more cost than its 20,000 quasi-static points.)"""
 
 # ---------------------------------------------------------------------------------------------------------------
 # The Hopf line located by simulation (sweep/hopf.py)

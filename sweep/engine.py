@@ -28,7 +28,7 @@ from .scene import Scene
 from .solvers import METHODS
 from .status import Status
 
-__all__ = ["SAMPLED", "RawResult", "chunk_points", "mark_error_above_tol", "n_samples", "run_points"]
+__all__ = ["SAMPLED", "RawResult", "chunk_points", "lane_runs", "mark_error_above_tol", "n_samples", "run_points"]
 
 FRACTIONS = np.array([0.5, 0.9])
 """Fractions of the relaxed slip whose times are reported as t50 and t90."""
@@ -85,16 +85,25 @@ def n_samples(scene: Scene, plan: Plan) -> int:
     return plan.tau_samples.size + (len(scene.t_obs) if "slip_at" in scene.observables else 0)
 
 
+def lane_runs(plan: Plan, method: str, points: np.ndarray, steps: np.ndarray, rtol: float, atol: float,
+              correction: bool = False, dtype: np.dtype | None = None) -> tuple[np.ndarray, ...]:
+    """One fixed-step run per entry of ``points`` (plan points) at ``steps`` in the lane kernels of ``method``:
+    (xi_inf, tail bound, first-order inertial correction (NaN unless ``correction``), status, steps taken)."""
+    relax_batch = lane_kernels(plan.dtype if dtype is None else dtype, method, correction)[1]
+    n = points.size
+    xi, tail, corr = np.full(n, np.nan), np.full(n, np.nan), np.full(n if correction else 0, np.nan)
+    status, taken = np.zeros(n, np.int8), np.zeros(n, np.int32)
+    relax_batch(plan.k, plan.a, plan.b, plan.s_c, plan.G, points, steps, plan.max_steps, rtol, atol,
+                4 * numba.get_num_threads(), xi, tail, corr, status, taken)
+    return xi, tail, corr if correction else np.full(n, np.nan), status, taken
+
+
 def _lane_runner(scene: Scene, plan: Plan, method: str):
     """run(points, steps) -> (xi_inf, tail bound, status, steps taken): one fixed-step run per entry, in lanes."""
-    relax_batch = lane_kernels(plan.dtype, method)[1]
 
     def run(points, steps):
-        r_xi, r_tail = np.full(points.size, np.nan), np.full(points.size, np.nan)
-        r_status, r_steps = np.zeros(points.size, np.int8), np.zeros(points.size, np.int32)
-        relax_batch(plan.k, plan.a, plan.b, plan.s_c, points, steps, plan.max_steps, scene.rtol,
-                    scene.atol["xi_inf"], 4 * numba.get_num_threads(), r_xi, r_tail, r_status, r_steps)
-        return r_xi, r_tail, r_status, r_steps
+        xi, tail, _, status, taken = lane_runs(plan, method, points, steps, scene.rtol, scene.atol["xi_inf"])
+        return xi, tail, status, taken
 
     return run
 

@@ -3,10 +3,12 @@
 The model error (of neglecting inertia) is kept apart from the numerical error (rtol). With model="auto":
 
 * stop scene, per point: the quasi-static model's relative error on xi_inf is estimated by its first-order
-  inertial correction, integrated along the point's own quasi-static solution (sweep/models/stop_inertial.py, at
-  ESTIMATE_RTOL): a measurement per point, not a coefficient (the gap per unit gamma/A ranges from ~1e-3 where
-  mu1 < 0 to several where mu1/A is large). Where the expansion is trusted (FIRST_ORDER_TRUST) the true gap is
-  0.70..1.33x the estimate; a point keeps the quasi-static result where ESTIMATE_MARGIN x estimate <= model_tol.
+  inertial correction, integrated along the point's own quasi-static solution (sweep/models/stop_inertial.py; in
+  the RK4 lanes beside the quasi-static state, the stiff points in the per-point RODAS3 module): a measurement per
+  point, not a coefficient (the gap per unit gamma/A ranges from ~1e-3 where mu1 < 0 to several where mu1/A is
+  large). Where the expansion is trusted (tau = gamma/A (1 + (chi + |mu1|)/A)
+  <= FIRST_ORDER_TRUST) the true gap is within a factor of the estimate that grows with tau (sweep/accuracy.py); a
+  point keeps the quasi-static result where that factor (:func:`routing_margin`) x estimate <= model_tol.
   Every other point (estimate above the tolerance, not trusted, or failed) is solved with inertia, and its
   ``model_error`` is then the gap measured between the two models. With time-resolved observables (which the
   inertial stop does not compute) such a point keeps its quasi-static values, with status model_error_above_tol
@@ -22,16 +24,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .accuracy import ESTIMATE_MARGIN, ESTIMATE_RTOL, FIRST_ORDER_TRUST, TIGHTER
-from .engine import ORDER_SEED, RawResult
+from .accuracy import (
+    CLOSE_TRUST,
+    ESTIMATE_MARGIN,
+    ESTIMATE_RTOL,
+    ESTIMATE_STEP,
+    FIRST_ORDER_TRUST,
+    TIGHTER,
+    WIDE_MARGIN,
+)
+from .engine import ORDER_SEED, RawResult, lane_runs
 from .integrate.batch import relax_points
 from .integrate.stop_inertial import RELAX_KEYS
-from .plan import Plan
+from .plan import Plan, stiff_points
 from .progress import Progress
 from .scene import Scene
 from .status import Status
 
-__all__ = ["ModelChoice", "MODEL_FLAG", "choose_stop_models", "solve_inertial", "warm_up_models"]
+__all__ = ["ModelChoice", "MODEL_FLAG", "choose_stop_models", "routing_margin", "solve_inertial", "warm_up_models"]
 
 MODEL_FLAG = {"flag_values": np.array([0, 1], np.int8), "flag_meanings": "quasistatic inertial"}
 QUASISTATIC, INERTIAL = 0, 1
@@ -63,6 +73,30 @@ def _relax(scene: Scene, plan: Plan, pts: np.ndarray, inertial: bool, rtols: tup
     return [{key: out[key][back] for key in RELAX_KEYS} for out in outs]
 
 
+def _estimate(scene: Scene, plan: Plan, pts: np.ndarray, progress: bool | None) -> dict[str, np.ndarray]:
+    """Relaxed slip and its first-order inertial correction for the plan's points ``pts``: one RK4 run per point
+    at ESTIMATE_STEP in the lanes, the correction riding in the same run (float64 whatever the scene's type);
+    the per-point Rosenbrock module (:func:`_relax`) for the stiff points (whose explicit steps are limited by
+    stability, as in the plan's choice of the ros4 lanes) and wherever a lane run failed."""
+    out = {key: np.zeros(pts.size, np.int8 if key == "status" else float) for key in ("xi_inf", "correction", "status")}
+    lanes = ~stiff_points(plan.k[pts], plan.a[pts], plan.b[pts])
+    if lanes.any():
+        p = pts[lanes]
+        steps = np.full(p.size, ESTIMATE_STEP)
+        with Progress(p.size, enabled=progress, label="model error") as bar:
+            xi, _, corr, status, _ = lane_runs(plan, "rk4", p, steps, ESTIMATE_RTOL,
+                                               scene.atol["xi_inf"] * ESTIMATE_RTOL / scene.rtol, correction=True,
+                                               dtype=np.dtype(np.float64))
+            bar.update(p.size)
+        out["xi_inf"][lanes], out["correction"][lanes], out["status"][lanes] = xi, corr, status
+    rest = np.flatnonzero(~lanes | (out["status"] != Status.OK))
+    if rest.size:
+        per_point = _relax(scene, plan, pts[rest], False, (ESTIMATE_RTOL,), progress, "model error")[0]
+        for key in out:
+            out[key][rest] = per_point[key]
+    return out
+
+
 def solve_inertial(scene: Scene, plan: Plan, raw: RawResult, rows: np.ndarray, idx: np.ndarray,
                    progress: bool | None = False) -> None:
     """Replace the relaxed slip of the rows ``rows`` of ``raw`` (whose rows are the plan's points ``idx``; points
@@ -91,13 +125,13 @@ def choose_stop_models(scene: Scene, plan: Plan, raw: RawResult, idx: np.ndarray
         return ModelChoice(np.full(n, scene.model == "inertial") & plan.finite[idx], None)
     pts = idx[finite]
     G = plan.G[pts]
-    estimate = _relax(scene, plan, pts, False, (ESTIMATE_RTOL,), progress, "model error")[0]
+    estimate = _estimate(scene, plan, pts, progress)
     model_error = np.full(n, np.nan)
     ok = estimate["status"] == Status.OK
     model_error[finite[ok]] = np.abs(estimate["correction"][ok] / estimate["xi_inf"][ok])
-    trusted = G * (1.0 + plan.k[pts] + np.abs(plan.a[pts])) <= FIRST_ORDER_TRUST
+    margin = routing_margin(G * (1.0 + plan.k[pts] + np.abs(plan.a[pts])))
     measure = np.zeros(n, bool)
-    measure[finite] = ~ok | ~trusted | (ESTIMATE_MARGIN * model_error[finite] > scene.model_tol)
+    measure[finite] = ~ok | ~(margin * model_error[finite] <= scene.model_tol)
     rows = np.flatnonzero(measure)
     quasistatic = raw.xi_inf[rows].copy()
     if scene.time_resolved:  # keep the quasi-static values; the inertial xi_inf only measures the gap
@@ -115,6 +149,13 @@ def choose_stop_models(scene: Scene, plan: Plan, raw: RawResult, idx: np.ndarray
         raw.status[over[raw.status[over] == Status.OK]] = Status.MODEL_ERROR_ABOVE_TOL
         return ModelChoice(np.zeros(n, bool), model_error)
     return ModelChoice(measure, model_error)
+
+
+def routing_margin(tau: np.ndarray) -> np.ndarray:
+    """Factor on the first-order estimate that bounds the true model gap, by tau = gamma/A (1 + (chi + |mu1|)/A):
+    ESTIMATE_MARGIN up to CLOSE_TRUST, WIDE_MARGIN up to FIRST_ORDER_TRUST, inf beyond (not trusted: the point is
+    solved with inertia)."""
+    return np.where(tau <= CLOSE_TRUST, ESTIMATE_MARGIN, np.where(tau <= FIRST_ORDER_TRUST, WIDE_MARGIN, np.inf))
 
 
 def warm_up_models() -> None:

@@ -136,12 +136,12 @@ def test_rounding_bound_covers_the_amplified_scatter(chi_over_A, mu1_over_A):
     s_c = 1.0 / (1.0 + k + np.abs(a))
     values, steps = [], []
     for j in range(16):
-        out = [np.zeros(1), np.zeros(1), np.zeros(1, np.int8), np.zeros(1, np.int32)]
-        relax_runs(k, a, b, s_c, np.array([0]), np.array([0.02 * (1.0 + 1e-7 * j)]), np.array([0]), 10**6, 1e-10,
-                   1e-16, *out)
-        assert out[2][0] == sweep.Status.OK
-        values.append(out[0][0])
-        steps.append(out[3][0])
+        xi, tail, status, taken = np.zeros(1), np.zeros(1), np.zeros(1, np.int8), np.zeros(1, np.int32)
+        relax_runs(k, a, b, s_c, np.zeros(1), np.array([0]), np.array([0.02 * (1.0 + 1e-7 * j)]), np.array([0]),
+                   10**6, 1e-10, 1e-16, xi, tail, np.empty(0), status, taken)
+        assert status[0] == sweep.Status.OK
+        values.append(xi[0])
+        steps.append(taken[0])
     x = np.array(values)
     assert abs(x.mean() / (math.log(mu1_over_A / chi_over_A) / (mu1_over_A - chi_over_A)) - 1) < 1e-5
     scatter = np.ptp(x)

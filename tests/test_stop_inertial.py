@@ -137,31 +137,77 @@ def test_model_tol_is_checked_before_any_work():
             stop(params, [1e3], [1e-6], model_tol=bad)
 
 
-def test_first_order_estimate_where_trusted_is_within_the_routing_margin_of_the_true_gap():
-    """Where model="auto" trusts the first-order estimate (gamma/A (1 + (chi + |mu1|)/A) <= FIRST_ORDER_TRUST), the
-    true gap (inertial vs quasi-static model, both solved tightly) is within [1/ESTIMATE_MARGIN, ESTIMATE_MARGIN]
-    of the estimate, so routing on ESTIMATE_MARGIN x estimate <= model_tol keeps the true error within model_tol,
-    over chi/A 0.1..1e3, mu1/A -4..10 and m2/A 0..2; and well beyond the trusted range it is not (the expansion
-    fails where the slider rebounds inertially), which is why such points are measured instead."""
+def lane_estimate(k: float, a: float, b: float, G: float) -> tuple[float, float, int]:
+    """(xi_inf, first-order correction, status) as model="auto" estimates them for one point: the RK4 lane run at
+    ESTIMATE_STEP carrying the correction, or the per-point RODAS3 at ESTIMATE_RTOL for the stiff points."""
+    from sweep.accuracy import ESTIMATE_RTOL, ESTIMATE_STEP
+    from sweep.integrate.lanes import lane_kernels
     from sweep.integrate.stop_inertial import relax
-    from sweep.model_choice import ESTIMATE_MARGIN, ESTIMATE_RTOL, FIRST_ORDER_TRUST
+    from sweep.plan import stiff_points, time_scale
 
-    def ratio(k, a, b, G):
-        inertial = relax(k, a, b, G, True, 1e-9, 1e-15, 10**7)
-        quasi = relax(k, a, b, G, False, 1e-9, 1e-15, 10**7)
-        estimate = relax(k, a, b, G, False, ESTIMATE_RTOL, 1e-12, 10**7)
-        assert inertial[2] == quasi[2] == estimate[2] == sweep.Status.OK
-        return (inertial[0] / quasi[0] - 1.0) / abs(estimate[1] / estimate[0])
+    if stiff_points(np.array(k), np.array(a), np.array(b)):
+        xi, correction, status, _, _ = relax(k, a, b, G, False, ESTIMATE_RTOL, 1e-12, 10**7)
+        return xi, correction, status
+    relax_runs = lane_kernels(np.dtype(np.float64), "rk4", True)[0]
+    one = lambda x: np.array([float(x)])  # noqa: E731
+    xi, tail, correction = one(np.nan), one(np.nan), one(np.nan)
+    status, steps = np.zeros(1, np.int8), np.zeros(1, np.int32)
+    relax_runs(one(k), one(a), one(b), one(time_scale(k, a)), one(G), np.zeros(1, np.int64), one(ESTIMATE_STEP),
+               np.arange(1), 10**7, ESTIMATE_RTOL, 1e-12, xi, tail, correction, status, steps)
+    return xi[0], correction[0], int(status[0])
 
-    ratios = []
+
+def test_lane_estimate_of_the_first_order_correction_matches_a_tight_integration():
+    """The correction riding in the RK4 lanes at ESTIMATE_STEP agrees with the per-point RODAS3 integration of the
+    same equation at rtol 1e-10 to a small fraction of itself (it only routes points, with margins >= 1.5), over
+    chi/A 0.1..1e3, mu1/A -4..10, m2/A 0..2 and gamma/A up to the trusted range."""
+    from sweep.integrate.stop_inertial import relax
+    from sweep.model_choice import FIRST_ORDER_TRUST
+
+    errors = []
     for k in np.logspace(-1, 3, 5):
         for a in (-4.0, -1.0, 0.1, 1.0, 10.0):
             for b in (0.0, 0.5, 2.0):
                 if (b == 0.0 and a <= 0.0) or k <= a:
                     continue
-                for trust in (0.5 * FIRST_ORDER_TRUST, FIRST_ORDER_TRUST):
-                    ratios.append(ratio(k, a, b, trust / (1.0 + k + abs(a))))
-    ratios = np.array(ratios)
-    assert ratios.size > 40
-    assert np.all((ratios >= 1.0 / ESTIMATE_MARGIN) & (ratios <= ESTIMATE_MARGIN)), (ratios.min(), ratios.max())
+                for tau in (0.1, FIRST_ORDER_TRUST):
+                    G = tau / (1.0 + k + abs(a))
+                    xi, correction, status = lane_estimate(k, a, b, G)
+                    tight = relax(k, a, b, G, False, 1e-10, 1e-16, 10**7)
+                    assert status == tight[2] == sweep.Status.OK
+                    errors.append(abs(correction / xi / (tight[1] / tight[0]) - 1.0))
+    assert len(errors) > 40
+    assert max(errors) < 0.03, max(errors)
+
+
+def test_first_order_estimate_where_trusted_is_within_the_routing_margin_of_the_true_gap():
+    """Where model="auto" trusts the first-order estimate (tau = gamma/A (1 + (chi + |mu1|)/A) <= FIRST_ORDER_TRUST),
+    the true gap (inertial vs quasi-static model, both solved tightly) is within [1/margin, margin] of the estimate,
+    margin = routing_margin(tau) (1.5 up to tau = 2, 2 up to 4), so routing on margin x estimate <= model_tol keeps
+    the true error within model_tol, over chi/A 0.1..1e3, mu1/A -4..10 and m2/A 0..2; and well beyond the trusted
+    range it is not (the expansion fails where the slider rebounds inertially), which is why such points are
+    measured instead. The estimate is the one auto computes: the lanes' RK4 run at ESTIMATE_STEP."""
+    from sweep.integrate.stop_inertial import relax
+    from sweep.model_choice import CLOSE_TRUST, FIRST_ORDER_TRUST, routing_margin
+
+    def ratio(k, a, b, G):
+        inertial = relax(k, a, b, G, True, 1e-9, 1e-15, 10**7)
+        quasi = relax(k, a, b, G, False, 1e-9, 1e-15, 10**7)
+        xi, correction, status = lane_estimate(k, a, b, G)
+        assert inertial[2] == quasi[2] == status == sweep.Status.OK
+        return (inertial[0] / quasi[0] - 1.0) / abs(correction / xi)
+
+    ratios, margins = [], []
+    for k in np.logspace(-1, 3, 5):
+        for a in (-4.0, -1.0, 0.1, 1.0, 10.0):
+            for b in (0.0, 0.5, 2.0):
+                if (b == 0.0 and a <= 0.0) or k <= a:
+                    continue
+                for tau in (0.5 * CLOSE_TRUST, CLOSE_TRUST, 0.5 * (CLOSE_TRUST + FIRST_ORDER_TRUST), FIRST_ORDER_TRUST):
+                    ratios.append(ratio(k, a, b, tau / (1.0 + k + abs(a))))
+                    margins.append(routing_margin(np.array(tau)))
+    ratios, margins = np.array(ratios), np.array(margins)
+    assert ratios.size > 80
+    assert np.all((ratios >= 1.0 / margins) & (ratios <= margins)), (ratios / margins).max()
+    assert routing_margin(np.array(1.01 * FIRST_ORDER_TRUST)) == np.inf
     assert ratio(1e3, 2.0, 0.0, 1.0) > 10.0  # a rebound: gamma/A (1 + (chi + |mu1|)/A) = 1e3

@@ -123,17 +123,17 @@ def driven_batch(law: str = "aging", inertia: bool = False):
 
 
 def lanes_batch(relax_runs, lanes: int):
-    """relax_batch(k, a, b, s_c, run_point, run_h, max_steps, rtol, atol, groups, xi_inf, tail_err, status, steps):
-    all runs of the lanes kernel ``relax_runs`` (sweep/integrate/lanes.py), in ``groups`` strided groups, each
-    stepped in lanes by one thread."""
+    """relax_batch(k, a, b, s_c, G, run_point, run_h, max_steps, rtol, atol, groups, xi_inf, tail_err, correction,
+    status, steps): all runs of the lanes kernel ``relax_runs`` (sweep/integrate/lanes.py), in ``groups`` strided
+    groups, each stepped in lanes by one thread."""
 
     @njit(parallel=True, cache=True)
-    def relax_batch(k, a, bb, s_c, run_point, run_h, max_steps, rtol, atol, groups, xi_inf, tail_err,
+    def relax_batch(k, a, bb, s_c, G, run_point, run_h, max_steps, rtol, atol, groups, xi_inf, tail_err, correction,
                     status, steps):
         groups = max(1, min(groups, run_point.size // lanes))
         for g in prange(groups):
-            relax_runs(k, a, bb, s_c, run_point, run_h, np.arange(g, run_point.size, groups), max_steps,
-                       rtol, atol, xi_inf, tail_err, status, steps)
+            relax_runs(k, a, bb, s_c, G, run_point, run_h, np.arange(g, run_point.size, groups), max_steps,
+                       rtol, atol, xi_inf, tail_err, correction, status, steps)
 
     return relax_batch
 pin_module(__name__)

@@ -23,6 +23,7 @@ from numba import njit
 
 from ..jitcache import pin, pin_module
 from ..models.stop import EXP_MAX, FAST, MAX_STEPS, NONFINITE, OK, TAIL_SAFETY, make_rate, tail_error, tail_slip
+from ..models.stop_inertial import make_correction_rate, tail_correction
 from ..models.stop_stiff import make_stiff_rate
 from ..solvers import METHODS, RosenbrockTableau
 from .batch import lanes_batch
@@ -37,37 +38,66 @@ _P = 5  # per-lane parameters k, a, b, s_c, h
 _X, _S = 5, 6  # state xi, s
 _E, _EXPO = 7, 8  # E at the step's end, and the largest exponent met since the run was loaded
 _STAGE = 9  # the derivative at the step's start: dxi, ds
+_G, _Y, _DY = 11, 12, 13  # with the first-order inertial correction: G = gamma/A, the correction y, dy at the start
 
 
-def _explicit_step(f, tableau):
+def _explicit_step(f, tableau, correction: bool = False):
     """step_all(st) for a four-stage explicit tableau whose stage i uses stage i-1 only (a_ij = 0 for
     j != i-1, e.g. classical RK4), with the coefficients as compile-time constants: a loop over stages with
     run-time offsets into the lane arrays defeats LLVM's vectoriser (measured 22 ns per evaluation instead of 4.5).
-    Other explicit tableaux run through the per-point kernel (integrate/stop_point.py)."""
+    Other explicit tableaux run through the per-point kernel (integrate/stop_point.py). With ``correction`` the
+    first-order inertial correction y (:func:`sweep.models.stop_inertial.make_correction_rate`) is a third
+    component of the same step (:func:`_step_source`: the plain kernel is unchanged)."""
     rate = make_rate(f)
+    correction_rate = make_correction_rate(f)
     W = LANES
     c, A, b, _ = tableau.arrays()
     if b.size != 4 or np.any(np.tril(A, -2) != 0):
         raise ValueError(f"{tableau.name}: the lane kernel needs a four-stage tableau with a_ij = 0 for j < i - 1")
     a21, a32, a43 = f(A[1, 0]), f(A[2, 1]), f(A[3, 2])
     b1, b2, b3, b4 = (f(x) for x in b)
+    namespace = {"rate": rate, "correction_rate": correction_rate, "a21": a21, "a32": a32, "a43": a43, "b1": b1,
+                 "b2": b2, "b3": b3, "b4": b4, "W": W, "__name__": __name__}
+    exec(compile(_step_source(correction), f"<sweep.integrate.lanes: {tableau.name}>", "exec"), namespace)
+    # not cached itself (generated source has no file): compiled into relax_runs, which is
+    step_all = njit(fastmath=FAST, error_model="numpy")(namespace["step_all"])
+    return pin(step_all, f.__name__, tableau.name, correction)
 
-    @njit(cache=True, fastmath=FAST, error_model="numpy")
-    def step_all(st):
-        """One step of every lane; the derivative at the step's start is in the _STAGE fields."""
-        for l in range(W):
-            k, a, bb, s_c, h = st[l], st[W + l], st[2 * W + l], st[3 * W + l], st[4 * W + l]
-            x0, s0, d1x, d1s = st[_X * W + l], st[_S * W + l], st[_STAGE * W + l], st[(_STAGE + 1) * W + l]
-            d2x, d2s, _, o2 = rate(x0 + a21 * h * d1x, s0 + a21 * h * d1s, k, a, bb, s_c)
-            d3x, d3s, _, o3 = rate(x0 + a32 * h * d2x, s0 + a32 * h * d2s, k, a, bb, s_c)
-            d4x, d4s, _, o4 = rate(x0 + a43 * h * d3x, s0 + a43 * h * d3s, k, a, bb, s_c)
-            x1 = x0 + h * (b1 * d1x + b2 * d2x + b3 * d3x + b4 * d4x)
-            s1 = s0 + h * (b1 * d1s + b2 * d2s + b3 * d3s + b4 * d4s)
-            d5x, d5s, E, o5 = rate(x1, s1, k, a, bb, s_c)
-            st[_X * W + l], st[_S * W + l], st[_STAGE * W + l], st[(_STAGE + 1) * W + l] = x1, s1, d5x, d5s
-            st[_E * W + l], st[_EXPO * W + l] = E, max(max(max(o2, o3), max(o4, o5)), st[_EXPO * W + l])
 
-    return pin(step_all, f.__name__, tableau.name)
+_STEP = f"""
+def step_all(st):
+    \"\"\"One step of every lane; the derivative at the step's start is in the _STAGE fields.\"\"\"
+    for l in range(W):
+        k, a, bb, s_c, h = st[l], st[W + l], st[2 * W + l], st[3 * W + l], st[4 * W + l]
+        x0, s0, d1x, d1s = st[{_X} * W + l], st[{_S} * W + l], st[{_STAGE} * W + l], st[{_STAGE + 1} * W + l]
+        x2, s2 = x0 + a21 * h * d1x, s0 + a21 * h * d1s
+        d2x, d2s, E2, o2 = rate(x2, s2, k, a, bb, s_c)
+        x3, s3 = x0 + a32 * h * d2x, s0 + a32 * h * d2s
+        d3x, d3s, E3, o3 = rate(x3, s3, k, a, bb, s_c)
+        x4, s4 = x0 + a43 * h * d3x, s0 + a43 * h * d3s
+        d4x, d4s, E4, o4 = rate(x4, s4, k, a, bb, s_c)
+        x1 = x0 + h * (b1 * d1x + b2 * d2x + b3 * d3x + b4 * d4x)
+        s1 = s0 + h * (b1 * d1s + b2 * d2s + b3 * d3s + b4 * d4s)
+        d5x, d5s, E, o5 = rate(x1, s1, k, a, bb, s_c)
+        st[{_X} * W + l], st[{_S} * W + l], st[{_STAGE} * W + l], st[{_STAGE + 1} * W + l] = x1, s1, d5x, d5s
+        st[{_E} * W + l], st[{_EXPO} * W + l] = E, max(max(max(o2, o3), max(o4, o5)), st[{_EXPO} * W + l])
+"""
+_CORRECTION = f"""
+        G, y0, d1y = st[{_G} * W + l], st[{_Y} * W + l], st[{_DY} * W + l]
+        d2y = correction_rate(x2, s2, y0 + a21 * h * d1y, k, a, bb, G, d2s, E2, o2)
+        d3y = correction_rate(x3, s3, y0 + a32 * h * d2y, k, a, bb, G, d3s, E3, o3)
+        d4y = correction_rate(x4, s4, y0 + a43 * h * d3y, k, a, bb, G, d4s, E4, o4)
+        y1 = y0 + h * (b1 * d1y + b2 * d2y + b3 * d3y + b4 * d4y)
+        st[{_Y} * W + l], st[{_DY} * W + l] = y1, correction_rate(x1, s1, y1, k, a, bb, G, d5s, E, o5)
+"""
+
+
+def _step_source(correction: bool) -> str:
+    """Source of the explicit lanes' step_all, with the correction's stages written into the same lane loop when
+    asked for. Generated, not branched: a run-time branch in the lane loop, or the shared part moved into an inlined
+    function, defeats LLVM's vectoriser (measured: the plain default-scene sweep 3-4x slower), and written out
+    twice the stage loop would have two copies to keep in step."""
+    return _STEP + (_CORRECTION if correction else "")
 
 
 def _rosenbrock_step(f, tableau):
@@ -114,48 +144,58 @@ def _rosenbrock_step(f, tableau):
     return pin(step_all, f.__name__, tableau.name)
 
 
-def make_lane_kernels(dtype, tableau):
+def make_lane_kernels(dtype, tableau, correction: bool = False):
     """(relax_runs, relax_batch) compiled for ``dtype`` (np.float64 or np.float32) and a fixed-step tableau
-    (explicit: :func:`_explicit_step`; Rosenbrock: :func:`_rosenbrock_step`)."""
+    (explicit: :func:`_explicit_step`; Rosenbrock: :func:`_rosenbrock_step`); with ``correction`` (explicit only)
+    each run also carries the first-order inertial correction of its relaxed slip, written to ``correction``
+    (G = gamma/A per point; both arrays are ignored by the kernels without it)."""
+    if correction and isinstance(tableau, RosenbrockTableau):
+        raise ValueError(f"{tableau.name}: the first-order correction rides in the explicit lanes only")
     f = np.dtype(dtype).type
     rate = make_rate(f)
+    correction_rate = make_correction_rate(f)
     zero, one, exp_max = f(0.0), f(1.0), f(EXP_MAX)
     W = LANES
-    step_all = (_rosenbrock_step if isinstance(tableau, RosenbrockTableau) else _explicit_step)(f, tableau)
-    n_fields = _STAGE + 2
+    step_all = (_rosenbrock_step(f, tableau) if isinstance(tableau, RosenbrockTableau)
+                else _explicit_step(f, tableau, correction))
+    n_fields = _DY + 1 if correction else _STAGE + 2
 
     @njit(cache=True, fastmath=FAST, error_model="numpy")
-    def load(st, lane, k, a, b, s_c, h):
+    def load(st, lane, k, a, b, s_c, G, h):
         st[lane], st[W + lane], st[2 * W + lane], st[3 * W + lane], st[4 * W + lane] = k, a, b, s_c, h
         st[_X * W + lane], st[_S * W + lane] = zero, zero
         dxi, ds, E, expo = rate(zero, zero, k, a, b, s_c)
         st[_STAGE * W + lane], st[(_STAGE + 1) * W + lane], st[_E * W + lane] = dxi, ds, E
         st[_EXPO * W + lane] = expo
+        if correction:
+            st[_G * W + lane], st[_Y * W + lane] = G, zero
+            st[_DY * W + lane] = correction_rate(zero, zero, zero, k, a, b, G, ds, E, expo)
 
     @njit(cache=True, fastmath=FAST, error_model="numpy")
-    def take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c):
+    def take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c, G):
         """Load the next queued run into ``lane`` (or, with the queue exhausted, a harmless dummy point that the
         lane computes while idle, marked -1); returns the new queue position."""
         if queued < runs.size:
             r = runs[queued]
             p = run_point[r]
-            load(st, lane, f(k[p]), f(a[p]), f(bb[p]), f(s_c[p]), f(run_h[r]))
+            load(st, lane, f(k[p]), f(a[p]), f(bb[p]), f(s_c[p]), f(G[p]) if correction else zero, f(run_h[r]))
             lane_run[lane] = r
             return queued + 1
-        load(st, lane, one, one, zero, one, zero)
+        load(st, lane, one, one, zero, one, zero, zero)
         lane_run[lane] = -1
         return queued
 
     @njit(cache=True, fastmath=FAST, error_model="numpy")
-    def relax_runs(k, a, bb, s_c, run_point, run_h, runs, max_steps, rtol, atol, xi_inf, tail_err, status,
-                   steps):
-        """Solve the runs ``runs`` (indices into run_point/run_h, outputs per run) to their relaxed slip."""
+    def relax_runs(k, a, bb, s_c, G, run_point, run_h, runs, max_steps, rtol, atol, xi_inf, tail_err, correction_out,
+                   status, steps):
+        """Solve the runs ``runs`` (indices into run_point/run_h, outputs per run) to their relaxed slip (and, in
+        the kernels with the correction, its first-order inertial correction into ``correction_out``)."""
         st = np.zeros(n_fields * W, dtype=f)
         lane_run = np.full(W, -1, np.int64)
         n = np.zeros(W, np.int64)
         queued, busy = 0, 0
         for lane in range(W):
-            queued = take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c)
+            queued = take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c, G)
             busy += lane_run[lane] >= 0
         while busy > 0:
             step_all(st)
@@ -174,25 +214,29 @@ def make_lane_kernels(dtype, tableau):
                     xi_inf[r], status[r] = math.nan, NONFINITE
                 elif bound <= TAIL_SAFETY * (rtol * xi + atol):
                     xi_inf[r], tail_err[r], status[r] = xi + tail_slip(k[p], a[p], bb[p], u, E), bound, OK
+                    if correction:
+                        y = tail_correction(k[p], a[p], bb[p], G[p], u, E, float(st[_Y * W + lane]))
+                        correction_out[r], status[r] = y, (OK if math.isfinite(y) else NONFINITE)
                 elif n[lane] >= max_steps:
                     xi_inf[r], status[r] = math.nan, MAX_STEPS
                 else:
                     continue
                 steps[r] = n[lane]
                 n[lane] = 0
-                queued = take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c)
+                queued = take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c, G)
                 busy -= lane_run[lane] < 0
 
     for kernel in (load, take_next, relax_runs):
-        pin(kernel, f.__name__, tableau.name)
-    return relax_runs, pin(lanes_batch(relax_runs, W), f.__name__, tableau.name)
+        pin(kernel, f.__name__, tableau.name, correction)
+    return relax_runs, pin(lanes_batch(relax_runs, W), f.__name__, tableau.name, correction)
 
 
 @functools.cache
-def lane_kernels(dtype: np.dtype, method: str):
-    """(relax_runs, relax_batch) for a float type and a fixed-step method of :data:`sweep.solvers.METHODS`
-    (built once per process; numba compiles on first call and caches on disk)."""
-    return make_lane_kernels(np.dtype(dtype), METHODS[method])
+def lane_kernels(dtype: np.dtype, method: str, correction: bool = False):
+    """(relax_runs, relax_batch) for a float type and a fixed-step method of :data:`sweep.solvers.METHODS`, with
+    or without the first-order inertial correction (built once per process; numba compiles on first call and
+    caches on disk)."""
+    return make_lane_kernels(np.dtype(dtype), METHODS[method], correction)
 
 
 pin_module(__name__)

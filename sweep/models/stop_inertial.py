@@ -38,12 +38,15 @@ import math
 
 from numba import njit
 
-from ..jitcache import pin_module
+import numpy as np
+
+from ..jitcache import pin, pin_module
 from ..solvers.fastmath import FAST
-from ..solvers.vmath import EXP_MAX
+from ..solvers.vmath import EXP_MAX, exp_f32, exp_f64
 from .stop import tail_integral
 
-__all__ = ["LN_R_MAX", "inertia_negligible", "inertial_system", "quasistatic_system", "tail_correction"]
+__all__ = ["LN_R_MAX", "inertia_negligible", "inertial_system", "make_correction_rate", "quasistatic_system",
+           "tail_correction"]
 
 LN_R_MAX = 600.0
 """Cap of ln R in the right-hand side (comment there)."""
@@ -90,6 +93,26 @@ def quasistatic_system(s, y, p, f, J, ft, jacobian):
         J[0, 0], J[0, 1] = dE, 0.0
         J[1, 0], J[1, 1] = corr * ((g - k) * dE - 2.0 * b * E) + 2.0 * (g - k + 1.0) * S + w * dQ_dxi, dE
         ft[0], ft[1] = -g * E, corr * (-g * dE + 2.0 * b * E) - 2.0 * (g + 1.0) * S + w * dQ_ds
+
+
+def make_correction_rate(dtype):
+    """The first-order correction's equation in the lanes' time sigma (:mod:`sweep.models.stop`'s time map, ds/dsigma
+    = w), for one float type and vectorisable over lanes: correction_rate(xi, s, y, k, a, b, G, w, E, expo) ->
+    dy/dsigma = w (E (g - k) y + S), S = G E^2 e^(-2u) (k E + (g + 1)(1 - E)) (module docstring), from the state
+    (xi, s, y) and what the quasi-static rate already computed there (w, E and its exponent expo). E^2 e^(-2u) is
+    one more exponential, exp(2 (expo - u)): exact, where a third state e^(-u) would add its own truncation error."""
+    f = np.dtype(dtype).type
+    exp = exp_f32 if f is np.float32 else exp_f64
+    one, two = f(1.0), f(2.0)
+
+    @njit(inline="always", fastmath=FAST, error_model="numpy", cache=True)
+    def correction_rate(xi, s, y, k, a, b, G, w, E, expo):
+        u = s - xi
+        g = a + two * b * u
+        source = G * exp(two * (expo - u)) * (k * E + (g + one) * (one - E))
+        return w * (E * (g - k) * y + source)
+
+    return pin(correction_rate, f.__name__)
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
