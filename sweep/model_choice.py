@@ -35,6 +35,7 @@ from .accuracy import (
 )
 from .engine import ORDER_SEED, RawResult, lane_runs
 from .integrate.batch import relax_points
+from .integrate.lanes import lane_kernels
 from .integrate.stop_inertial import RELAX_KEYS
 from .plan import Plan, stiff_points
 from .progress import Progress
@@ -159,7 +160,11 @@ def routing_margin(tau: np.ndarray) -> np.ndarray:
 
 
 def warm_up_models() -> None:
-    """Compile (or load from numba's cache) the kernels of both models of the stop scene on one point."""
+    """Compile (or load from numba's cache) the kernels of both models of the stop scene on one point, and the RK4
+    lanes that carry the first-order correction (:func:`_estimate`)."""
     one = np.ones(1)
     for inertial in (False, True):
         relax_points(2.0 * one, one, 0.0 * one, 0.1 * one, inertial, 1e-3, 1e-12, 10_000)
+    lanes = lane_kernels(np.dtype(np.float64), "rk4", correction=True)[1]
+    lanes(2.0 * one, one, 0.0 * one, 0.3 * one, 0.1 * one, np.zeros(1, np.int64), ESTIMATE_STEP * one, 10_000,
+          ESTIMATE_RTOL, 1e-12, 1, np.empty(1), np.empty(1), np.empty(1), np.zeros(1, np.int8), np.zeros(1, np.int32))
