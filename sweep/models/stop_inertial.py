@@ -36,9 +36,8 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
 import numpy as np
+from numba import njit
 
 from ..jitcache import pin, pin_module
 from ..solvers.fastmath import FAST
