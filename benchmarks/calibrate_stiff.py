@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sweep.integrate.lanes import lane_kernels
+from sweep.integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
 from sweep.plan import time_scale
 
 HERE = Path(__file__).resolve().parent
@@ -30,11 +30,10 @@ def run(method, h, k, a, b, rtol=1e-11):
     """Relaxed slip, steps and status of every point with the lane kernel of ``method`` at fixed h."""
     relax_batch = lane_kernels(np.dtype(np.float64), method)[1]
     n = k.size
-    xi, tail = np.full(n, np.nan), np.full(n, np.nan)
-    status, steps = np.zeros(n, np.int8), np.zeros(n, np.int32)
-    relax_batch(k, a, b, time_scale(k, a), np.zeros(n), np.arange(n), np.full(n, h), 2_000_000, rtol, 1e-12, 2, xi,
-                tail, np.empty(0), status, steps)
-    return xi, steps, status
+    out = LaneOutputs(np.full(n, np.nan), np.full(n, np.nan), np.empty(0), np.zeros(n, np.int8), np.zeros(n, np.int32))
+    relax_batch(LanePoints(k, a, b, time_scale(k, a), np.zeros(n)), LaneRuns(np.arange(n), np.full(n, h), rtol, 1e-12,
+                2_000_000), 2, out)
+    return out.xi_inf, out.steps, out.status
 
 
 def main(argv=None):

@@ -19,7 +19,7 @@ import numpy as np
 
 from .integrate.batch import StopOutputs, slip_batch, stop_batch
 from .integrate.ladder import climb
-from .integrate.lanes import lane_kernels
+from .integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
 from .integrate.stop_point import Method, StopPoints, Tolerances
 from .models.stop import NO_FINITE_LIMIT, OK
 from .physics import perturbation_growth
@@ -86,24 +86,25 @@ def n_samples(scene: Scene, plan: Plan) -> int:
 
 
 def lane_runs(plan: Plan, method: str, points: np.ndarray, steps: np.ndarray, rtol: float, atol: float,
-              correction: bool = False, dtype: np.dtype | None = None) -> tuple[np.ndarray, ...]:
-    """One fixed-step run per entry of ``points`` (plan points) at ``steps`` in the lane kernels of ``method``:
-    (xi_inf, tail bound, first-order inertial correction (NaN unless ``correction``), status, steps taken)."""
+              correction: bool = False, dtype: np.dtype | None = None) -> LaneOutputs:
+    """One fixed-step run per entry of ``points`` (plan points) at ``steps`` in the lane kernels of ``method``, with
+    the first-order inertial correction if asked for (else its array is empty)."""
     relax_batch = lane_kernels(plan.dtype if dtype is None else dtype, method, correction)[1]
     n = points.size
-    xi, tail, corr = np.full(n, np.nan), np.full(n, np.nan), np.full(n if correction else 0, np.nan)
-    status, taken = np.zeros(n, np.int8), np.zeros(n, np.int32)
-    relax_batch(plan.k, plan.a, plan.b, plan.s_c, plan.G, points, steps, plan.max_steps, rtol, atol,
-                4 * numba.get_num_threads(), xi, tail, corr, status, taken)
-    return xi, tail, corr if correction else np.full(n, np.nan), status, taken
+    out = LaneOutputs(np.full(n, np.nan), np.full(n, np.nan), np.full(n if correction else 0, np.nan),
+                      np.zeros(n, np.int8), np.zeros(n, np.int32))
+    relax_batch(LanePoints(plan.k, plan.a, plan.b, plan.s_c, plan.G),
+                LaneRuns(points, np.ascontiguousarray(steps, dtype=float), rtol, atol, plan.max_steps),
+                4 * numba.get_num_threads(), out)
+    return out
 
 
 def _lane_runner(scene: Scene, plan: Plan, method: str):
     """run(points, steps) -> (xi_inf, tail bound, status, steps taken): one fixed-step run per entry, in lanes."""
 
     def run(points, steps):
-        xi, tail, _, status, taken = lane_runs(plan, method, points, steps, scene.rtol, scene.atol["xi_inf"])
-        return xi, tail, status, taken
+        out = lane_runs(plan, method, points, steps, scene.rtol, scene.atol["xi_inf"])
+        return out.xi_inf, out.tail_err, out.status, out.steps
 
     return run
 

@@ -35,7 +35,7 @@ from .accuracy import (
 )
 from .engine import ORDER_SEED, RawResult, lane_runs
 from .integrate.batch import relax_points
-from .integrate.lanes import lane_kernels
+from .integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
 from .integrate.stop_inertial import RELAX_KEYS
 from .plan import Plan, stiff_points
 from .progress import Progress
@@ -85,11 +85,10 @@ def _estimate(scene: Scene, plan: Plan, pts: np.ndarray, progress: bool | None) 
         p = pts[lanes]
         steps = np.full(p.size, ESTIMATE_STEP)
         with Progress(p.size, enabled=progress, label="model error") as bar:
-            xi, _, corr, status, _ = lane_runs(plan, "rk4", p, steps, ESTIMATE_RTOL,
-                                               scene.atol["xi_inf"] * ESTIMATE_RTOL / scene.rtol, correction=True,
-                                               dtype=np.dtype(np.float64))
+            run = lane_runs(plan, "rk4", p, steps, ESTIMATE_RTOL, scene.atol["xi_inf"] * ESTIMATE_RTOL / scene.rtol,
+                            correction=True, dtype=np.dtype(np.float64))
             bar.update(p.size)
-        out["xi_inf"][lanes], out["correction"][lanes], out["status"][lanes] = xi, corr, status
+        out["xi_inf"][lanes], out["correction"][lanes], out["status"][lanes] = run.xi_inf, run.correction, run.status
     rest = np.flatnonzero(~lanes | (out["status"] != Status.OK))
     if rest.size:
         per_point = _relax(scene, plan, pts[rest], False, (ESTIMATE_RTOL,), progress, "model error")[0]
@@ -166,5 +165,6 @@ def warm_up_models() -> None:
     for inertial in (False, True):
         relax_points(2.0 * one, one, 0.0 * one, 0.1 * one, inertial, 1e-3, 1e-12, 10_000)
     lanes = lane_kernels(np.dtype(np.float64), "rk4", correction=True)[1]
-    lanes(2.0 * one, one, 0.0 * one, 0.3 * one, 0.1 * one, np.zeros(1, np.int64), ESTIMATE_STEP * one, 10_000,
-          ESTIMATE_RTOL, 1e-12, 1, np.empty(1), np.empty(1), np.empty(1), np.zeros(1, np.int8), np.zeros(1, np.int32))
+    lanes(LanePoints(2.0 * one, one, 0.0 * one, 0.3 * one, 0.1 * one),
+          LaneRuns(np.zeros(1, np.int64), ESTIMATE_STEP * one, ESTIMATE_RTOL, 1e-12, 10_000), 1,
+          LaneOutputs(np.empty(1), np.empty(1), np.empty(1), np.zeros(1, np.int8), np.zeros(1, np.int32)))

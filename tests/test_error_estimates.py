@@ -128,7 +128,7 @@ def test_rounding_bound_covers_the_amplified_scatter(chi_over_A, mu1_over_A):
     steps 1e-7 apart (truncation errors equal to ~1e-7 relative of each other) scatter by the amplified rounding.
     The ladder's rounding term must cover that scatter, and not by more than 100x."""
     from sweep.integrate.ladder import rounding_error
-    from sweep.integrate.lanes import lane_kernels
+    from sweep.integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
     from sweep.plan import ROUNDOFF
 
     relax_runs = lane_kernels(np.dtype(np.float64), "rk4")[0]
@@ -136,12 +136,12 @@ def test_rounding_bound_covers_the_amplified_scatter(chi_over_A, mu1_over_A):
     s_c = 1.0 / (1.0 + k + np.abs(a))
     values, steps = [], []
     for j in range(16):
-        xi, tail, status, taken = np.zeros(1), np.zeros(1), np.zeros(1, np.int8), np.zeros(1, np.int32)
-        relax_runs(k, a, b, s_c, np.zeros(1), np.array([0]), np.array([0.02 * (1.0 + 1e-7 * j)]), np.array([0]),
-                   10**6, 1e-10, 1e-16, xi, tail, np.empty(0), status, taken)
-        assert status[0] == sweep.Status.OK
-        values.append(xi[0])
-        steps.append(taken[0])
+        out = LaneOutputs(np.zeros(1), np.zeros(1), np.empty(0), np.zeros(1, np.int8), np.zeros(1, np.int32))
+        runs = LaneRuns(np.array([0]), np.array([0.02 * (1.0 + 1e-7 * j)]), 1e-10, 1e-16, 10**6)
+        relax_runs(LanePoints(k, a, b, s_c, np.zeros(1)), runs, np.array([0]), out)
+        assert out.status[0] == sweep.Status.OK
+        values.append(out.xi_inf[0])
+        steps.append(out.steps[0])
     x = np.array(values)
     assert abs(x.mean() / (math.log(mu1_over_A / chi_over_A) / (mu1_over_A - chi_over_A)) - 1) < 1e-5
     scatter = np.ptp(x)

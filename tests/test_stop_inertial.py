@@ -141,7 +141,7 @@ def lane_estimate(k: float, a: float, b: float, G: float) -> tuple[float, float,
     """(xi_inf, first-order correction, status) as model="auto" estimates them for one point: the RK4 lane run at
     ESTIMATE_STEP carrying the correction, or the per-point RODAS3 at ESTIMATE_RTOL for the stiff points."""
     from sweep.accuracy import ESTIMATE_RTOL, ESTIMATE_STEP
-    from sweep.integrate.lanes import lane_kernels
+    from sweep.integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
     from sweep.integrate.stop_inertial import relax
     from sweep.plan import stiff_points, time_scale
 
@@ -150,11 +150,10 @@ def lane_estimate(k: float, a: float, b: float, G: float) -> tuple[float, float,
         return xi, correction, status
     relax_runs = lane_kernels(np.dtype(np.float64), "rk4", True)[0]
     one = lambda x: np.array([float(x)])  # noqa: E731
-    xi, tail, correction = one(np.nan), one(np.nan), one(np.nan)
-    status, steps = np.zeros(1, np.int8), np.zeros(1, np.int32)
-    relax_runs(one(k), one(a), one(b), one(time_scale(k, a)), one(G), np.zeros(1, np.int64), one(ESTIMATE_STEP),
-               np.arange(1), 10**7, ESTIMATE_RTOL, 1e-12, xi, tail, correction, status, steps)
-    return xi[0], correction[0], int(status[0])
+    out = LaneOutputs(one(np.nan), one(np.nan), one(np.nan), np.zeros(1, np.int8), np.zeros(1, np.int32))
+    relax_runs(LanePoints(one(k), one(a), one(b), one(time_scale(k, a)), one(G)),
+               LaneRuns(np.zeros(1, np.int64), one(ESTIMATE_STEP), ESTIMATE_RTOL, 1e-12, 10**7), np.arange(1), out)
+    return out.xi_inf[0], out.correction[0], int(out.status[0])
 
 
 def test_lane_estimate_of_the_first_order_correction_matches_a_tight_integration():

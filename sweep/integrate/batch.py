@@ -123,17 +123,15 @@ def driven_batch(law: str = "aging", inertia: bool = False):
 
 
 def lanes_batch(relax_runs, lanes: int):
-    """relax_batch(k, a, b, s_c, G, run_point, run_h, max_steps, rtol, atol, groups, xi_inf, tail_err, correction,
-    status, steps): all runs of the lanes kernel ``relax_runs`` (sweep/integrate/lanes.py), in ``groups`` strided
-    groups, each stepped in lanes by one thread."""
+    """relax_batch(pts, job, groups, out): all runs of ``job`` (sweep/integrate/lanes.py: LanePoints, LaneRuns,
+    LaneOutputs) through the lanes kernel ``relax_runs``, in ``groups`` strided groups, each stepped in lanes by one
+    thread."""
 
     @njit(parallel=True, cache=True)
-    def relax_batch(k, a, bb, s_c, G, run_point, run_h, max_steps, rtol, atol, groups, xi_inf, tail_err, correction,
-                    status, steps):
-        groups = max(1, min(groups, run_point.size // lanes))
+    def relax_batch(pts, job, groups, out):
+        groups = max(1, min(groups, job.point.size // lanes))
         for g in prange(groups):
-            relax_runs(k, a, bb, s_c, G, run_point, run_h, np.arange(g, run_point.size, groups), max_steps,
-                       rtol, atol, xi_inf, tail_err, correction, status, steps)
+            relax_runs(pts, job, np.arange(g, job.point.size, groups), out)
 
     return relax_batch
 pin_module(__name__)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -144,6 +145,39 @@ def _rosenbrock_step(f, tableau):
     return pin(step_all, f.__name__, tableau.name)
 
 
+class LanePoints(NamedTuple):
+    """Per-point arrays of the lane kernels (flat over the plan's points): reduced k = chi/A, a = mu1/A, b = m2/A,
+    the early time scale s_c and G = gamma/A (read only by the kernels with the correction)."""
+
+    k: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    s_c: np.ndarray
+    G: np.ndarray
+
+
+class LaneRuns(NamedTuple):
+    """The runs of one lane call: run r solves point ``point[r]`` at the fixed step ``h[r]`` in sigma; the tail test's
+    tolerances and the step limit are common to all."""
+
+    point: np.ndarray
+    h: np.ndarray
+    rtol: float
+    atol: float
+    max_steps: int
+
+
+class LaneOutputs(NamedTuple):
+    """Per-run outputs: relaxed slip, its closed-form tail's error bound, first-order inertial correction (empty for
+    the kernels without it), status and steps taken."""
+
+    xi_inf: np.ndarray
+    tail_err: np.ndarray
+    correction: np.ndarray
+    status: np.ndarray
+    steps: np.ndarray
+
+
 def make_lane_kernels(dtype, tableau, correction: bool = False):
     """(relax_runs, relax_batch) compiled for ``dtype`` (np.float64 or np.float32) and a fixed-step tableau
     (explicit: :func:`_explicit_step`; Rosenbrock: :func:`_rosenbrock_step`); with ``correction`` (explicit only)
@@ -172,13 +206,14 @@ def make_lane_kernels(dtype, tableau, correction: bool = False):
             st[_DY * W + lane] = correction_rate(zero, zero, zero, k, a, b, G, ds, E, expo)
 
     @njit(cache=True, fastmath=FAST, error_model="numpy")
-    def take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c, G):
+    def take_next(st, lane, lane_run, runs, queued, pts, job):
         """Load the next queued run into ``lane`` (or, with the queue exhausted, a harmless dummy point that the
         lane computes while idle, marked -1); returns the new queue position."""
         if queued < runs.size:
             r = runs[queued]
-            p = run_point[r]
-            load(st, lane, f(k[p]), f(a[p]), f(bb[p]), f(s_c[p]), f(G[p]) if correction else zero, f(run_h[r]))
+            p = job.point[r]
+            load(st, lane, f(pts.k[p]), f(pts.a[p]), f(pts.b[p]), f(pts.s_c[p]), f(pts.G[p]) if correction else zero,
+                 f(job.h[r]))
             lane_run[lane] = r
             return queued + 1
         load(st, lane, one, one, zero, one, zero, zero)
@@ -186,16 +221,17 @@ def make_lane_kernels(dtype, tableau, correction: bool = False):
         return queued
 
     @njit(cache=True, fastmath=FAST, error_model="numpy")
-    def relax_runs(k, a, bb, s_c, G, run_point, run_h, runs, max_steps, rtol, atol, xi_inf, tail_err, correction_out,
-                   status, steps):
-        """Solve the runs ``runs`` (indices into run_point/run_h, outputs per run) to their relaxed slip (and, in
-        the kernels with the correction, its first-order inertial correction into ``correction_out``)."""
+    def relax_runs(pts, job, runs, out):
+        """Solve the runs ``runs`` (indices into the :class:`LaneRuns` ``job``, whose points index the
+        :class:`LanePoints` ``pts``) to their relaxed slip, into the :class:`LaneOutputs` ``out`` (and, in the
+        kernels with the correction, its first-order inertial correction into ``out.correction``)."""
         st = np.zeros(n_fields * W, dtype=f)
         lane_run = np.full(W, -1, np.int64)
         n = np.zeros(W, np.int64)
         queued, busy = 0, 0
+        rtol, atol, max_steps = job.rtol, job.atol, job.max_steps
         for lane in range(W):
-            queued = take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c, G)
+            queued = take_next(st, lane, lane_run, runs, queued, pts, job)
             busy += lane_run[lane] >= 0
         while busy > 0:
             step_all(st)
@@ -206,24 +242,25 @@ def make_lane_kernels(dtype, tableau, correction: bool = False):
                 n[lane] += 1
                 if n[lane] % CHECK_EVERY != 0 and n[lane] < max_steps:
                     continue
-                p = run_point[r]
+                p = job.point[r]
+                k, a, bb = pts.k[p], pts.a[p], pts.b[p]
                 xi, u = float(st[_X * W + lane]), float(st[_S * W + lane] - st[_X * W + lane])
                 E = float(st[_E * W + lane])
-                bound = tail_error(k[p], a[p], bb[p], u, E)
+                bound = tail_error(k, a, bb, u, E)
                 if st[_EXPO * W + lane] > exp_max or not math.isfinite(xi):
-                    xi_inf[r], status[r] = math.nan, NONFINITE
+                    out.xi_inf[r], out.status[r] = math.nan, NONFINITE
                 elif bound <= TAIL_SAFETY * (rtol * xi + atol):
-                    xi_inf[r], tail_err[r], status[r] = xi + tail_slip(k[p], a[p], bb[p], u, E), bound, OK
+                    out.xi_inf[r], out.tail_err[r], out.status[r] = xi + tail_slip(k, a, bb, u, E), bound, OK
                     if correction:
-                        y = tail_correction(k[p], a[p], bb[p], G[p], u, E, float(st[_Y * W + lane]))
-                        correction_out[r], status[r] = y, (OK if math.isfinite(y) else NONFINITE)
+                        y = tail_correction(k, a, bb, pts.G[p], u, E, float(st[_Y * W + lane]))
+                        out.correction[r], out.status[r] = y, (OK if math.isfinite(y) else NONFINITE)
                 elif n[lane] >= max_steps:
-                    xi_inf[r], status[r] = math.nan, MAX_STEPS
+                    out.xi_inf[r], out.status[r] = math.nan, MAX_STEPS
                 else:
                     continue
-                steps[r] = n[lane]
+                out.steps[r] = n[lane]
                 n[lane] = 0
-                queued = take_next(st, lane, lane_run, runs, queued, run_point, run_h, k, a, bb, s_c, G)
+                queued = take_next(st, lane, lane_run, runs, queued, pts, job)
                 busy -= lane_run[lane] < 0
 
     for kernel in (load, take_next, relax_runs):
