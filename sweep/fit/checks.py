@@ -5,8 +5,7 @@
   the bound box lies at a corner: a data set whose (K/M, V) is on the stick-slip side at every corner cannot be
   fitted by any parameter set inside the bounds.
 * The fit uses the quasi-static model: inertia changes the relaxed slip by about gamma/A (docs/physics.md 3a,
-  gamma = V^2/(g D0)); where gamma/A exceeds INERTIA_TOL for some parameter set in the bounds a
-  PlausibilityWarning says so.
+  gamma = V^2/(g D0)); where gamma/A exceeds INERTIA_TOL at the starting values a PlausibilityWarning says so.
 """
 
 from __future__ import annotations
@@ -43,9 +42,8 @@ def check_problems(problems: list[Problem]) -> None:
                 raise InputError(f"{what}: K_over_M = {km[i]:g} s-2, V = {v[i]:g} m/s lies on the stick-slip side of "
                                  f"the Hopf line (chi <= mu1, eq. 3) for every parameter set inside the bounds: no "
                                  f"steady sliding before the stop; check K_over_M and V, or widen the bounds")
-            gamma_over_A = np.max(physics.inertia_number(v[None, :], full["D0"][:, None], sp.g)
-                                  / full["A"][:, None])
+            gamma_over_A = float(np.max(physics.inertia_number(v, sp.values["D0"], sp.g))) / sp.values["A"]
             if gamma_over_A > INERTIA_TOL:
-                warnings.warn(f"{what}: gamma/A up to {gamma_over_A:.3g} inside the bounds (V up to "
-                              f"{v.max():g} m/s): the fit's quasi-static model may be off by about that much",
+                warnings.warn(f"{what}: gamma/A = {gamma_over_A:.3g} at the starting values (V up to {v.max():g} "
+                              f"m/s): the fit's quasi-static model may be off by about that much",
                               PlausibilityWarning, stacklevel=3)

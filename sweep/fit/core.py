@@ -16,7 +16,6 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
@@ -26,39 +25,21 @@ from ..params import FrictionParams
 from ..presets import presets
 from .checks import check_problems
 from .data import Data
-from .globalstage import GlobalResult, grid_axes, search
-from .local import LocalFit, refine
+from .globalstage import grid_axes, search
+from .local import refine
 from .lockstep import Lockstep
-from .problem import Problem, make_problems
-from .profiles import Profile, profile_all
-from .space import ParamSpace, make_space
-from .uncertainty import Interval, covariance, interval, label, noise_variance, threshold
+from .outcome import FitOutcome
+from .problem import make_problems
+from .profiles import profile_all
+from .result import build_fit_dataset
+from .space import make_space
+from .uncertainty import covariance, interval, label, noise_variance, threshold
 
-__all__ = ["FitOutcome", "fit", "run_fit"]
+__all__ = ["fit", "run_fit"]
 
 log = logging.getLogger("sweep")
 
 RTOL_RANGE = (1e-10, 1e-4)
-
-
-@dataclass
-class FitOutcome:
-    """Everything a fit found, per problem (lists in the order of ``problems``); sweep.fit.result turns it into the
-    Dataset."""
-
-    problems: list[Problem]
-    space: ParamSpace
-    global_results: list[GlobalResult]
-    fits: list[LocalFit]
-    s2: list[float]
-    covariances: list[np.ndarray]
-    crit: list[float]
-    profiles: list[list[Profile]] | None
-    intervals: list[list[Interval]] | None
-    labels: list[list[str]] | None
-    rounds: dict[str, int]
-    seconds: dict[str, float]
-    settings: dict[str, object]
 
 
 def _params(params: FrictionParams | str) -> FrictionParams:
@@ -81,7 +62,7 @@ def _rtol(name: str, value: float) -> float:
 def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2"),
             params: FrictionParams | str = "sample2", bounds: Mapping[str, Sequence[float]] | None = None,
             start: Mapping[str, float] | None = None, per_data_set: bool = False, poor: float = 0.25,
-            rtol: float = 1e-8, global_rtol: float = 1e-5, profiles: bool = True,
+            rtol: float = 1e-6, global_rtol: float = 1e-4, profiles: bool = True,
             progress: Callable[[str], None] | None = None) -> FitOutcome:
     """The stages of :func:`fit`, returning the raw :class:`FitOutcome`."""
     say = progress or log.info
@@ -131,7 +112,7 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
 def fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2"),
         params: FrictionParams | str = "sample2", bounds: Mapping[str, Sequence[float]] | None = None,
         start: Mapping[str, float] | None = None, per_data_set: bool = False, poor: float = 0.25,
-        rtol: float = 1e-8, global_rtol: float = 1e-5, profiles: bool = True,
+        rtol: float = 1e-6, global_rtol: float = 1e-4, profiles: bool = True,
         progress: Callable[[str], None] | None = None, history: str = "sweep.fit") -> xr.Dataset:
     """Fit the friction parameters to measured stop data; returns a Dataset (docs/fit.md, "Output").
 
@@ -155,14 +136,12 @@ def fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2"),
         A parameter is "poorly constrained" where its 95 % interval reaches further than poor x |best| from the
         best value (default 0.25, i.e. +-25 %).
     rtol, global_rtol : float
-        Engine accuracy of the least-squares and profile stages (1e-8) and of the global stage (1e-5); both must
-        lie far below the data's relative noise.
+        Engine accuracy of the least-squares and profile stages (default 1e-6) and of the global stage (1e-4);
+        both must lie far below the data's relative noise (1e-10..1e-4).
     profiles : bool
         Compute the profile likelihoods, 95 % intervals and labels (default True).
     progress : callable(str)
         Receives a line per stage (default: the "sweep" logger at INFO).
     """
-    from .result import build_fit_dataset
-
     return build_fit_dataset(run_fit(data, free, params, bounds, start, per_data_set, poor, rtol, global_rtol,
                                      profiles, progress), history=history)

@@ -34,7 +34,7 @@ def _values(field: str, values, n: int | None = None) -> np.ndarray:
         raise InputError(f"{field} has {arr.size} values, expected {n} (one per sample)")
     bad = np.flatnonzero(~np.isfinite(arr))
     if bad.size:
-        raise InputError(f"{field}[{bad[0]}] = {arr[bad[0]]!r}: every value must be finite (no NaN or inf)")
+        raise InputError(f"{field}[{bad[0]}] = {float(arr[bad[0]])!r}: every value must be finite (no NaN or inf)")
     return arr
 
 
@@ -43,7 +43,7 @@ def _positive(field: str, values, n: int | None = None, allow_zero: bool = False
     bad = np.flatnonzero(arr < 0 if allow_zero else arr <= 0)
     if bad.size:
         rel = ">= 0" if allow_zero else "> 0"
-        raise InputError(f"{field}[{bad[0]}] = {arr[bad[0]]!r}: must be {rel}")
+        raise InputError(f"{field}[{bad[0]}] = {float(arr[bad[0]])!r}: must be {rel}")
     return arr
 
 
@@ -83,8 +83,8 @@ class Curve:
         step = np.flatnonzero(np.diff(t) <= 0)
         if step.size:
             i = int(step[0]) + 1
-            raise InputError(f"{where}t must be strictly increasing [s], but t[{i}] = {t[i]!r} follows "
-                             f"t[{i - 1}] = {t[i - 1]!r}")
+            raise InputError(f"{where}t must be strictly increasing [s], but t[{i}] = {float(t[i])!r} follows "
+                             f"t[{i - 1}] = {float(t[i - 1])!r}")
         set_("t", t)
         set_("x", _positive(where + "x", self.x, t.size, allow_zero=True))
         set_("K_over_M", _scalar(where + "K_over_M", self.K_over_M))

@@ -3,8 +3,8 @@
 The Jacobian is by central finite differences, d r/d theta_j = (r(theta + h_j) - r(theta - h_j))/(2 h_j) with
 h_j = FD_STEP x the parameter's scale (one-sided where a bound is closer), and it is computed speculatively:
 every function evaluation posts theta and its 2q perturbed sets as ONE batch, so an iteration costs one engine
-round. With the engine at rtol ~1e-8 the derivative carries a relative error ~rtol/FD_STEP ~ 1e-4, far below what
-the noise of any measured curve resolves.
+round. With the engine at rtol 1e-6 (the default) the derivative carries a relative error ~rtol/FD_STEP ~ 1e-3 and
+a truncation error ~FD_STEP^2 ~ 1e-6, far below what the noise of a measured curve (>~1e-3) resolves.
 
 Some parameters may be held fixed (``hold``): the profile likelihoods (sweep.fit.profiles) minimise over the
 others at fixed values of one.
@@ -23,10 +23,10 @@ from .problem import Problem
 
 __all__ = ["FD_STEP", "LocalFit", "refine"]
 
-FD_STEP = 1e-4
+FD_STEP = 1e-3
 """Finite-difference step relative to each parameter's scale (ParamSpace.scale)."""
 TOLERANCES = {"ftol": 1e-10, "xtol": 1e-9, "gtol": 1e-10}
-"""least_squares' stopping tolerances (relative; the engine's error at rtol 1e-8 lies below them)."""
+"""least_squares' stopping tolerances (relative)."""
 MAX_NFEV = 200
 
 Evaluate = Callable[[ForwardPoints], ForwardResult]

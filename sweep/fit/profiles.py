@@ -20,7 +20,7 @@ from .problem import Problem
 
 __all__ = ["EXTEND", "OFFSETS", "Profile", "profile_all"]
 
-OFFSETS = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
+OFFSETS = (0.75, 1.5, 2.25, 3.0)
 """First round, in standard errors either side of the best value."""
 EXTEND = (4.0, 6.0, 9.0, 14.0)
 """Second round, on the sides still below the threshold."""

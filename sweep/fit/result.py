@@ -16,9 +16,9 @@ import numpy as np
 import xarray as xr
 
 from ..dataset import REFERENCES, versions
-from .core import FitOutcome
 from .data import Curve
 from .globalstage import grid_axes
+from .outcome import FitOutcome
 from .space import UNITS
 from .uncertainty import LABELS
 
