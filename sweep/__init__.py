@@ -23,8 +23,8 @@ _PUBLIC = {
 # sweep.fit is a callable subpackage (sweep/fit/__init__.py): the submodule fallback of __getattr__ imports it
 """Public name -> module of the package (or (module, name in it))."""
 
-__all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "__version__", "default_scene", "fit", "load_scene",
-           "local_cluster", "locate_hopf", "make_plan", "open", "presets", "provenance", "run_sweep", "save",
+__all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "__version__", "default_scene", "fit",
+           "load_scene", "local_cluster", "locate_hopf", "make_plan", "open", "presets", "provenance", "run_sweep", "save",
            "solve_point"]
 
 
