@@ -24,8 +24,8 @@ _PUBLIC = {
 """Public name -> module of the package (or (module, name in it))."""
 
 __all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "__version__", "default_scene", "fit",
-           "load_scene", "local_cluster", "locate_hopf", "make_plan", "open", "presets", "provenance", "run_sweep", "save",
-           "solve_point"]
+           "load_scene", "local_cluster", "locate_hopf", "make_plan", "open", "presets", "provenance", "run_sweep",
+           "save", "solve_point"]
 
 
 def __getattr__(name: str):
