@@ -20,11 +20,12 @@ _PUBLIC = {
     "open": ("files", "open_sweep_file"), "save": "io", "Plan": "plan", "make_plan": "plan", "Scene": "scene",
     "default_scene": "scene", "load_scene": "scene", "Status": "status",
 }
+# sweep.fit is a callable subpackage (sweep/fit/__init__.py): the submodule fallback of __getattr__ imports it
 """Public name -> module of the package (or (module, name in it))."""
 
-__all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "__version__", "default_scene", "load_scene",
-           "local_cluster", "locate_hopf", "make_plan", "open", "presets", "provenance", "run_sweep", "save",
-           "solve_point"]
+__all__ = ["FrictionParams", "InputError", "Plan", "Scene", "Status", "__version__", "default_scene", "fit",
+           "load_scene", "local_cluster", "locate_hopf", "make_plan", "open", "presets", "provenance", "run_sweep",
+           "save", "solve_point"]
 
 
 def __getattr__(name: str):

@@ -286,6 +286,9 @@ def build_parser() -> argparse.ArgumentParser:
     info = add("info", help="summarise a sweep file")
     info.add_argument("file")
     info.set_defaults(func=_cmd_info)
+    from .fit.cli import add_fit_command  # sweep fit: its own module (sweep/fit/cli.py)
+
+    add_fit_command(add)
     return parser
 
 

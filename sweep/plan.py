@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -66,7 +67,8 @@ from .accuracy import (
 from .scene import Scene
 from .solvers import METHODS
 
-__all__ = ["CHUNK_POINTS", "Plan", "make_plan", "choose_method", "line_uses_inertia"]
+__all__ = ["CHUNK_POINTS", "Plan", "PointParams", "make_plan", "choose_method", "line_uses_inertia",
+           "stop_plan_for_points"]
 
 CHUNK_POINTS = {"stop": 4096, "driven": 1024}
 """Points per chunk by protocol (one compiled batch call, one progress update, one journal entry): a driven point
@@ -310,15 +312,35 @@ def _model_policy(protocol: str, model: str, model_tol: float) -> str:
             f"is larger (variable model)")
 
 
-def _axes(scene: Scene):
-    """(chi, mu1, k, a, b, G) flat over the grid."""
+class PointParams(NamedTuple):
+    """Per-point physical inputs of a stop or driven plan, flat arrays of one length (reduced where marked)."""
+
+    chi: np.ndarray
+    """Reduced stiffness chi = K D0/(M g) [1]."""
+    mu1: np.ndarray
+    """mu1(V) = m1 - 2 m2 ln(V/V0) [1]."""
+    A: np.ndarray
+    """Direct-effect coefficient [1]."""
+    m2: np.ndarray
+    """Curvature of mu_d [1]."""
+    G: np.ndarray
+    """gamma/A = V^2/(g D0 A) [1]."""
+
+    @property
+    def reduced(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(k, a, b) = (chi, mu1, m2)/A (docs/physics.md 2)."""
+        return self.chi / self.A, self.mu1 / self.A, self.m2 / self.A
+
+
+def _axes(scene: Scene) -> PointParams:
+    """The per-point inputs, flat over the (K_over_M, V) grid."""
     p = scene.params
     chi_axis = physics.reduced_stiffness(scene.K_over_M, p.D0, p.g)
     mu1_axis = physics.mu1(scene.V, p.m1, p.m2, p.V0)
     G_axis = physics.inertia_number(scene.V, p.D0, p.g) / p.A
     chi, mu1 = (x.ravel() for x in np.meshgrid(chi_axis, mu1_axis, indexing="ij"))
     G = np.broadcast_to(G_axis, (scene.K_over_M.size, scene.V.size)).ravel().copy()
-    return chi, mu1, chi / p.A, mu1 / p.A, np.full(chi.size, p.m2 / p.A), G
+    return PointParams(chi, mu1, np.full(chi.size, p.A), np.full(chi.size, p.m2), G)
 
 
 def _common(scene: Scene, chi, mu1, k, a, b, G, finite, inertial) -> dict:
@@ -330,7 +352,9 @@ def _common(scene: Scene, chi, mu1, k, a, b, G, finite, inertial) -> dict:
 
 def _driven_plan(scene: Scene) -> Plan:
     """The plan of a driven scene: one simulation per point (sweep/integrate/driven.py)."""
-    chi, mu1, k, a, b, G = _axes(scene)
+    pts = _axes(scene)
+    chi, mu1, G = pts.chi, pts.mu1, pts.G
+    k, a, b = pts.reduced
     inertial = line_uses_inertia(G, scene.model, scene.model_tol)
     n = k.size
     return Plan(method="dp5", method_reason="adaptive, PI control; rodas3 where the inertial mode is stiff",
@@ -390,8 +414,15 @@ def make_plan(scene: Scene) -> Plan:
     """Decide model policy, state, method, float type and per-point step parameters for ``scene`` (any protocol)."""
     if scene.protocol == "driven":
         return _driven_plan(scene)
-    p = scene.params
-    chi, mu1, k, a, b, G = _axes(scene)
+    return stop_plan_for_points(scene, _axes(scene))
+
+
+def stop_plan_for_points(scene: Scene, points: PointParams) -> Plan:
+    """The stop plan of ``scene``'s settings (rtol, method, observables, model, state law) for the flat per-point
+    inputs ``points`` instead of the scene's (K/M, V) grid: every point may have its own A, m2, chi and mu1 (the
+    forward model of sweep.fit). Only the per-point arrays come from ``points``; ``index`` is left None."""
+    chi, mu1, G = points.chi, points.mu1, points.G
+    k, a, b = points.reduced
     finite = finite_relaxed_slip(a, b, scene.state_law)
     if scene.state_law != "aging":
         return _general_plan(scene, chi, mu1, k, a, b, G, finite)
@@ -399,7 +430,7 @@ def make_plan(scene: Scene) -> Plan:
     tab = METHODS[method]
     ctrl_tol = scene.rtol * CTRL_TOL_FACTOR.get(method, 1.0)
     lanes = not tab.adaptive and not scene.time_resolved
-    stable = physics.stable_sliding(chi, mu1, p.A)
+    stable = physics.stable_sliding(chi, mu1, points.A)
     if tab.adaptive:
         step, source = np.full(k.size, min(0.5, ctrl_tol ** (1.0 / (tab.error_order + 1)))), "controller"
     elif scene.step is not None:

@@ -1,0 +1,61 @@
+"""``sweep fit FILE.toml -o fit.nc [--png fit.png]``: the command-line face of :func:`sweep.fit` (docs/fit.md).
+
+sweep/cli.py registers it with :func:`add_fit_command`; user mistakes raise InputError, which sweep.cli.main turns
+into one line ``sweep: error: ...`` and exit code 2. Progress lines go to stderr once the fit has run 2 s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+__all__ = ["add_fit_command"]
+
+DEFAULT_OUT = Path("sweep-out") / "fit.nc"
+PROGRESS_AFTER_S = 2.0
+
+
+def add_fit_command(add) -> None:
+    """Register ``fit`` through ``add(name, **kw)`` (the sub-parser factory of sweep.cli.build_parser)."""
+    fit = add("fit", help="fit the friction parameters to relaxation curves / relaxed slips (netCDF + PNG)")
+    fit.add_argument("config", help="fit TOML: preset/[params], free, [bounds], [start], [[data]] file = ...")
+    fit.add_argument("-o", "--output", type=Path, default=DEFAULT_OUT, help=f"netCDF output (default {DEFAULT_OUT})")
+    fit.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
+    fit.set_defaults(func=_cmd_fit)
+
+
+def _cmd_fit(args: argparse.Namespace) -> int:
+    from ..errors import InputError
+    from .config import load_fit_config
+    from .core import fit
+    from .plot import plot_fit
+    from .result import save_fit
+
+    kwargs = load_fit_config(args.config)
+    t0 = time.perf_counter()
+
+    def progress(line: str) -> None:
+        if not args.quiet and time.perf_counter() - t0 > PROGRESS_AFTER_S:
+            print(f"sweep fit: {line}", file=sys.stderr, flush=True)
+
+    history = "sweep " + " ".join(sys.argv[1:]) if sys.argv[1:] else "sweep fit"
+    try:
+        ds = fit(**kwargs, progress=progress, history=history)
+    except TypeError as exc:  # a wrongly typed TOML value
+        raise InputError(f"fit file {args.config!r}: {exc}") from None
+    save_fit(ds, args.output)
+    png = args.png or args.output.with_suffix(".png")
+    plot_fit(ds, png)
+    if not args.quiet:
+        for name in ds["parameter"].values.tolist():
+            for i, sample in enumerate(ds["sample"].values.tolist()):
+                lo, hi = (float(ds[f"{name}_{s}"][i]) for s in ("lower", "upper")) if f"{name}_lower" in ds \
+                    else (float("nan"),) * 2
+                lab = ds[f"{name}_label"].attrs["flag_meanings"].split()[int(ds[f"{name}_label"][i])] \
+                    if f"{name}_label" in ds else ""
+                print(f"{sample}: {name} = {float(ds[name][i]):.4g} (95 %: {lo:.4g} .. {hi:.4g}) "
+                      f"{lab.replace('_', ' ')}")
+        print(f"wrote {args.output} and {png}")
+    return 0

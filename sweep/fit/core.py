@@ -1,0 +1,147 @@
+"""sweep.fit(...): fit the friction parameters to relaxation curves and relaxed slips, with their uncertainty.
+
+Stages (docs/fit.md), each one lockstep round-set over every problem (a sample's data sets sharing one parameter
+set; sweep.fit.lockstep merges their engine runs):
+
+1. checks before any work (sweep.fit.data, .space, .problem, .checks);
+2. global stage: a coarse sweep of the free parameters over their bounds (sweep.fit.globalstage), engine at
+   ``global_rtol``;
+3. least squares from the best grid point (sweep.fit.local), engine at ``rtol``;
+4. covariance from the Jacobian, profile likelihoods, 95 % intervals and labels (sweep.fit.profiles,
+   sweep.fit.uncertainty).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+import xarray as xr
+
+from ..errors import InputError
+from ..params import FrictionParams
+from ..presets import presets
+from .checks import check_problems
+from .data import Data
+from .globalstage import grid_axes, search
+from .local import refine
+from .lockstep import Lockstep
+from .outcome import FitOutcome
+from .problem import make_problems
+from .profiles import profile_all
+from .result import build_fit_dataset
+from .space import make_space
+from .uncertainty import covariance, interval, label, noise_variance, threshold
+
+__all__ = ["fit", "run_fit"]
+
+log = logging.getLogger("sweep")
+
+RTOL_RANGE = (1e-10, 1e-4)
+
+
+def _params(params: FrictionParams | str) -> FrictionParams:
+    if isinstance(params, str):
+        if params not in presets:
+            raise InputError(f"params must be a sweep.FrictionParams or a preset name {sorted(presets)}, got "
+                             f"{params!r}")
+        return presets[params]
+    return params
+
+
+def _rtol(name: str, value: float) -> float:
+    v = float(value)
+    if not RTOL_RANGE[0] <= v <= RTOL_RANGE[1]:
+        raise InputError(f"{name} must be in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}] (engine accuracy, far below "
+                         f"the data's noise), got {value!r}")
+    return v
+
+
+def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2"),
+            params: FrictionParams | str = "sample2", bounds: Mapping[str, Sequence[float]] | None = None,
+            start: Mapping[str, float] | None = None, per_data_set: bool = False, poor: float = 0.25,
+            rtol: float = 1e-6, global_rtol: float = 1e-4, profiles: bool = True,
+            progress: Callable[[str], None] | None = None) -> FitOutcome:
+    """The stages of :func:`fit`, returning the raw :class:`FitOutcome`."""
+    say = progress or log.info
+    space = make_space(free, _params(params), bounds, start)
+    problems = make_problems(data, space, per_data_set)
+    rtol, global_rtol = _rtol("rtol", rtol), _rtol("global_rtol", global_rtol)
+    if not (isinstance(poor, (int, float)) and 0 < poor):
+        raise InputError(f"poor must be > 0 (relative half-width of a 95 % interval above which a parameter is "
+                         f"poorly constrained), got {poor!r}")
+    check_problems(problems)
+    rounds, seconds = {}, {}
+    n_sets = len(problems) * (int(np.prod([a.size for a in grid_axes(space)])) + 1)
+    say(f"global stage: {len(problems)} problem(s), {n_sets} parameter sets on the grid")
+    t0 = time.perf_counter()
+    ls = Lockstep(global_rtol, space.V0, space.g)
+    globals_ = ls.map(search, problems)
+    rounds["global"], seconds["global"] = ls.rounds, time.perf_counter() - t0
+
+    say(f"least squares from the best grid points ({time.perf_counter() - t0:.1f} s so far)")
+    t1 = time.perf_counter()
+    ls = Lockstep(rtol, space.V0, space.g)
+    fits = ls.map(lambda pr_g, ev: refine(pr_g[0], pr_g[1].theta, ev), list(zip(problems, globals_)))
+    rounds["least_squares"], seconds["least_squares"] = ls.rounds, time.perf_counter() - t1
+
+    s2 = [noise_variance(f.rss, pr.n_residuals, space.p, pr.noise_given) for pr, f in zip(problems, fits)]
+    covs = [covariance(f.jac, s) for f, s in zip(fits, s2)]
+    crit = [threshold(pr.noise_given, pr.n_residuals - space.p) for pr in problems]
+    profs = ivs = labels = None
+    if profiles:
+        say(f"profile likelihoods of {space.p} parameter(s) x {len(problems)} problem(s) "
+            f"({time.perf_counter() - t0:.1f} s so far)")
+        t2 = time.perf_counter()
+        ls = Lockstep(rtol, space.V0, space.g)
+        profs = profile_all(problems, [f.theta for f in fits], [f.rss for f in fits], covs, s2, crit, ls)
+        rounds["profiles"], seconds["profiles"] = ls.rounds, time.perf_counter() - t2
+        ivs, labels = [], []
+        for q, f in enumerate(fits):
+            row = [interval(f.theta[j], pf.values, (pf.rss - f.rss) / s2[q], crit[q]) for j, pf in enumerate(profs[q])]
+            ivs.append(row)
+            labels.append([label(f.theta[j], iv, poor) for j, iv in enumerate(row)])
+    say(f"fit done in {time.perf_counter() - t0:.1f} s")
+    settings = {"free": list(space.names), "rtol": rtol, "global_rtol": global_rtol, "poor": poor,
+                "per_data_set": bool(per_data_set), "params": _params(params).as_dict()}
+    return FitOutcome(problems, space, globals_, fits, s2, covs, crit, profs, ivs, labels, rounds, seconds, settings)
+
+
+def fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2"),
+        params: FrictionParams | str = "sample2", bounds: Mapping[str, Sequence[float]] | None = None,
+        start: Mapping[str, float] | None = None, per_data_set: bool = False, poor: float = 0.25,
+        rtol: float = 1e-6, global_rtol: float = 1e-4, profiles: bool = True,
+        progress: Callable[[str], None] | None = None, history: str = "sweep.fit") -> xr.Dataset:
+    """Fit the friction parameters to measured stop data; returns a Dataset (docs/fit.md, "Output").
+
+    Parameters
+    ----------
+    data : Curve | RelaxedSlips | sequence of them
+        Relaxation curves x(t) [m] vs t [s] at known K/M [s-2] and V [m s-1], relaxed slips Dx_inf [m] at
+        (K/M, V) (sweep.fit.data); each names its ``sample``.
+    free : names from ("A", "m1", "m2", "D0", "K_over_M_factor")
+        The parameters to fit (eqs. 1, 2, 6; K_over_M_factor multiplies every nominal K/M of a sample).
+    params : FrictionParams or preset name
+        Values of the fixed parameters and starting values of the free ones (V0 [m s-1] and g [m s-2] too).
+    bounds : {name: (lower, upper)}
+        Bounds of free parameters (default :func:`sweep.fit.space.default_bounds`); the start must lie inside.
+    start : {name: value}
+        Starting values overriding ``params``.
+    per_data_set : bool
+        False: data sets with the same ``sample`` share one parameter set. True: each data set gets its own (a
+        campaign of many samples in one call: all their engine runs are merged).
+    poor : float
+        A parameter is "poorly constrained" where its 95 % interval reaches further than poor x |best| from the
+        best value (default 0.25, i.e. +-25 %).
+    rtol, global_rtol : float
+        Engine accuracy of the least-squares and profile stages (default 1e-6) and of the global stage (1e-4);
+        both must lie far below the data's relative noise (1e-10..1e-4).
+    profiles : bool
+        Compute the profile likelihoods, 95 % intervals and labels (default True).
+    progress : callable(str)
+        Receives a line per stage (default: the "sweep" logger at INFO).
+    """
+    return build_fit_dataset(run_fit(data, free, params, bounds, start, per_data_set, poor, rtol, global_rtol,
+                                     profiles, progress), history=history)

@@ -1,0 +1,131 @@
+"""Forward model of the fit: many stop transients with per-point friction parameters, in one engine call.
+
+Each point is a stop from steady sliding at V (docs/physics.md 3a, quasi-static model, aging law) with its own
+(A, m1, m2, D0, K/M, V): the fit's parameter sets, perturbed sets and profile points of every curve go into one
+flat batch. In reduced variables (docs/physics.md 2; paper section 4) a point is
+
+    chi = (K/M) D0/g,   mu1 = m1 - 2 m2 ln(V/V0),   k = chi/A,  a = mu1/A,  b = m2/A,   tau = V t/D0,
+
+and what it returns is the slip x(t) = D0 xi(tau) [m] at the point's own times and the relaxed slip
+Dx_inf = D0 xi_inf [m] (eq. 10 when m2 = 0; the engine's closed-form tail otherwise: the limit, not a horizon).
+
+The plan comes from :func:`sweep.plan.stop_plan_for_points` (the step rule, horizon and error estimates of a
+sweep, per point); points with sampled times run through the per-point kernel
+(:func:`sweep.integrate.batch.stop_batch`, each point with its own row of reduced times), relaxed-slip-only
+batches through the engine's lanes (:func:`sweep.engine.run_points`).
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from .. import physics
+from ..engine import RawResult, mark_error_above_tol, run_points
+from ..integrate.batch import StopOutputs, stop_batch
+from ..integrate.stop_point import Method, StopPoints, Tolerances
+from ..params import FrictionParams
+from ..plan import PointParams, stop_plan_for_points
+from ..scene import Scene
+from ..status import Status
+
+__all__ = ["ForwardPoints", "ForwardResult", "forward", "stable_sliding"]
+
+OK = int(Status.OK)
+
+
+class ForwardPoints(NamedTuple):
+    """Flat per-point inputs of :func:`forward` (SI units; every array of length n, ``t`` of shape (n, n_t))."""
+
+    A: np.ndarray
+    """Direct-effect coefficient [1] (eq. 1), > 0."""
+    m1: np.ndarray
+    """Slope of mu_d at V0 [1] (eq. 6)."""
+    m2: np.ndarray
+    """Curvature of mu_d [1] (eq. 6)."""
+    D0: np.ndarray
+    """Memory length [m], > 0."""
+    K_over_M: np.ndarray
+    """Spring stiffness over slider mass [s-2]."""
+    V: np.ndarray
+    """Driving velocity before the stop [m s-1]."""
+    t: np.ndarray
+    """Times after the stop at which x(t) is wanted [s], shape (n, n_t); n_t may be 0 (relaxed slip only)."""
+
+    @property
+    def n(self) -> int:
+        return int(np.size(self.A))
+
+
+@dataclass
+class ForwardResult:
+    """What :func:`forward` returns, per point: slip at the asked times and relaxed slip [m], their absolute error
+    estimates [m], the engine's status code (:class:`sweep.Status`) and whether steady sliding before the stop was
+    stable (chi > mu1, eq. 3)."""
+
+    x: np.ndarray
+    x_err: np.ndarray
+    dx_inf: np.ndarray
+    dx_inf_err: np.ndarray
+    status: np.ndarray
+    stable: np.ndarray
+
+
+def stable_sliding(points: ForwardPoints, V0: float = 1e-6, g: float = 9.81) -> np.ndarray:
+    """Per point: steady sliding at V is stable, chi > mu1(V) (eq. 3, quasi-static Hopf line)."""
+    chi, mu1 = _chi_mu1(points, V0, g)
+    return np.asarray(physics.stable_sliding(chi, mu1, points.A), dtype=bool)
+
+
+def _chi_mu1(points: ForwardPoints, V0: float, g: float) -> tuple[np.ndarray, np.ndarray]:
+    chi = np.asarray(physics.reduced_stiffness(points.K_over_M, points.D0, g), dtype=float)
+    mu1 = np.asarray(physics.mu1(points.V, points.m1, points.m2, V0), dtype=float)
+    return np.atleast_1d(chi), np.atleast_1d(mu1)
+
+
+@functools.lru_cache(maxsize=8)
+def _settings(rtol: float, sampled: bool) -> Scene:
+    """The scene whose settings every forward batch uses: quasi-static stop, aging law, the engine's own method
+    choice for ``rtol``; its grid and parameters are placeholders (the points bring their own)."""
+    return Scene(protocol="stop", params=FrictionParams(A=1.0, m1=0.0, m2=0.0, D0=1.0), K_over_M=[1.0], V=[1.0],
+                 rtol=rtol, observables=("xi_inf", "slip_at") if sampled else ("xi_inf",), t_obs=(1.0,),
+                 model="quasistatic")
+
+
+def forward(points: ForwardPoints, rtol: float = 1e-8, V0: float = 1e-6, g: float = 9.81) -> ForwardResult:
+    """Solve every point of ``points`` in one engine call; see the module docstring for the equations.
+
+    ``rtol`` is the engine's relative accuracy (1e-10..1e-2; pick it far below the data's relative noise).
+    V0 [m s-1] and g [m s-2] as in :class:`sweep.FrictionParams`.
+    """
+    n = points.n
+    t = np.asarray(points.t, dtype=float).reshape(n, -1)
+    chi, mu1 = _chi_mu1(points, V0, g)
+    A = np.broadcast_to(np.asarray(points.A, dtype=float), (n,))
+    D0 = np.broadcast_to(np.asarray(points.D0, dtype=float), (n,))
+    V = np.broadcast_to(np.asarray(points.V, dtype=float), (n,))
+    G = np.asarray(physics.inertia_number(V, D0, g), dtype=float).reshape(n) / A
+    m2 = np.broadcast_to(np.asarray(points.m2, dtype=float), (n,))
+    scene = _settings(float(rtol), t.shape[1] > 0)
+    plan = stop_plan_for_points(scene, PointParams(chi, mu1, A.copy(), m2.copy(), G))
+    if t.shape[1] == 0:
+        raw = run_points(scene, plan, np.arange(n))
+    else:
+        raw = _sampled(scene, plan, np.ascontiguousarray(V[:, None] * t / D0[:, None]))
+    mark_error_above_tol(scene, raw)
+    return ForwardResult(x=D0[:, None] * raw.xi_at, x_err=D0[:, None] * raw.xi_at_err, dx_inf=D0 * raw.xi_inf,
+                         dx_inf_err=D0 * raw.xi_inf_err, status=raw.status,
+                         stable=np.asarray(physics.stable_sliding(chi, mu1, A), dtype=bool))
+
+
+def _sampled(scene: Scene, plan, obs_tau: np.ndarray) -> RawResult:
+    """The per-point kernel over every point of ``plan``, point i sampled at its own reduced times obs_tau[i]
+    (what :func:`sweep.engine.run_points` does for a grid, whose sample times are shared along V; no t50/t90)."""
+    out = RawResult.empty(plan.n_points, obs_tau.shape[1])
+    stop_batch(Method.of(plan.tableau), StopPoints(plan.k, plan.a, plan.b, plan.s_c, plan.step), plan.finite,
+               Tolerances(scene.rtol, scene.atol["xi_inf"], plan.ctrl_tol), plan.max_steps, plan.tau_samples,
+               obs_tau, np.empty(0), StopOutputs(*(getattr(out, f) for f in StopOutputs._fields)))
+    return out

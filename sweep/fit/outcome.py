@@ -1,0 +1,36 @@
+"""What a fit found (sweep.fit.core.run_fit), before it becomes a Dataset (sweep.fit.result)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .globalstage import GlobalResult
+from .local import LocalFit
+from .problem import Problem
+from .profiles import Profile
+from .space import ParamSpace
+from .uncertainty import Interval
+
+__all__ = ["FitOutcome"]
+
+
+@dataclass
+class FitOutcome:
+    """Everything a fit found, per problem (lists in the order of ``problems``); sweep.fit.result turns it into the
+    Dataset."""
+
+    problems: list[Problem]
+    space: ParamSpace
+    global_results: list[GlobalResult]
+    fits: list[LocalFit]
+    s2: list[float]
+    covariances: list[np.ndarray]
+    crit: list[float]
+    profiles: list[list[Profile]] | None
+    intervals: list[list[Interval]] | None
+    labels: list[list[str]] | None
+    rounds: dict[str, int]
+    seconds: dict[str, float]
+    settings: dict[str, object]

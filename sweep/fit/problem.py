@@ -1,0 +1,137 @@
+"""One least-squares problem: the data sets of one sample and the parameter space they share.
+
+For a parameter set theta the residuals are r = (model - data)/noise over every sample of every data set, in the
+order of the data sets (curves: x(t_i); relaxed slips: Dx_inf at each (K/M, V)). With no noise given the weights
+are 1 [m-1]: the noise is then estimated from the residuals at the best fit (sweep.fit.uncertainty).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from .data import Curve, Data, RelaxedSlips
+from .forward import ForwardPoints, ForwardResult
+from .space import ParamSpace
+
+__all__ = ["Problem", "make_problems"]
+
+MODEL_FAILED = 1e3
+"""Residual [noise units] put where the engine returns no number (a parameter set the model cannot solve, e.g. no
+finite relaxed slip): large enough that least squares steps away from it."""
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """The data sets ``data`` of sample ``name`` and the parameter ``space`` they share."""
+
+    name: str
+    data: tuple[Data, ...]
+    space: ParamSpace
+
+    @property
+    def rows(self) -> int:
+        """Forward points per parameter set: one per curve and one per relaxed-slip value."""
+        return sum(1 if isinstance(d, Curve) else d.n for d in self.data)
+
+    @property
+    def n_t(self) -> int:
+        """Sampled times per forward point (the longest curve)."""
+        return max([d.n for d in self.data if isinstance(d, Curve)], default=0)
+
+    @property
+    def n_residuals(self) -> int:
+        return sum(d.n for d in self.data)
+
+    @property
+    def noise_given(self) -> bool:
+        return self.data[0].noise is not None
+
+    @property
+    def observed(self) -> np.ndarray:
+        """The data, concatenated in residual order [m]."""
+        return np.concatenate([d.x if isinstance(d, Curve) else d.dx_inf for d in self.data])
+
+    @property
+    def weights(self) -> np.ndarray:
+        """1/noise per residual [m-1] (1 where no noise is given)."""
+        if not self.noise_given:
+            return np.ones(self.n_residuals)
+        return np.concatenate([1.0 / d.noise for d in self.data])
+
+    def stiffness_velocity(self) -> tuple[np.ndarray, np.ndarray]:
+        """Nominal (K/M [s-2], V [m s-1]) of each forward row."""
+        km = [np.atleast_1d(d.K_over_M) for d in self.data]
+        v = [np.atleast_1d(d.V) for d in self.data]
+        return np.concatenate(km), np.concatenate(v)
+
+    def points(self, theta: np.ndarray, n_t: int | None = None) -> ForwardPoints:
+        """Forward points of the parameter sets ``theta`` (m x p): m blocks of :attr:`rows` rows; each curve's times
+        padded to ``n_t`` columns (default :attr:`n_t`) with its last time (no new time, so no extra work)."""
+        theta = np.atleast_2d(theta)
+        m, rows = theta.shape[0], self.rows
+        n_t = self.n_t if n_t is None else n_t
+        km, v = self.stiffness_velocity()
+        t = np.zeros((rows, n_t))
+        r = 0
+        for d in self.data:
+            if isinstance(d, Curve):
+                t[r, :d.n], t[r, d.n:] = d.t, d.t[-1]
+                r += 1
+            else:
+                r += d.n
+        full = {k: np.repeat(val, rows) for k, val in self.space.full(theta).items()}
+        return ForwardPoints(A=full["A"], m1=full["m1"], m2=full["m2"], D0=full["D0"],
+                             K_over_M=np.tile(km, m) * full["K_over_M_factor"], V=np.tile(v, m),
+                             t=np.tile(t, (m, 1)))
+
+    def model(self, res: ForwardResult, m: int) -> np.ndarray:
+        """Model values (m x n_residuals) [m] from the forward results of :meth:`points` of m parameter sets."""
+        rows = self.rows
+        x, dx = res.x.reshape(m, rows, -1), res.dx_inf.reshape(m, rows)
+        parts, r = [], 0
+        for d in self.data:
+            if isinstance(d, Curve):
+                parts.append(x[:, r, :d.n])
+                r += 1
+            else:
+                parts.append(dx[:, r:r + d.n])
+                r += d.n
+        return np.concatenate(parts, axis=1)
+
+    def residuals(self, res: ForwardResult, m: int) -> np.ndarray:
+        """Weighted residuals (m x n_residuals) [noise units]; MODEL_FAILED where the model gave no number."""
+        r = (self.model(res, m) - self.observed) * self.weights
+        return np.where(np.isfinite(r), r, MODEL_FAILED)
+
+    def stable(self, res: ForwardResult, m: int) -> np.ndarray:
+        """Per parameter set: steady sliding was stable before every stop of the data (eq. 3)."""
+        return res.stable.reshape(m, self.rows).all(axis=1)
+
+
+def make_problems(data: Sequence[Data], space: ParamSpace, per_data_set: bool) -> list[Problem]:
+    """Group the data sets into problems: by their ``sample`` name (shared parameters), or one per data set."""
+    if isinstance(data, (Curve, RelaxedSlips)):
+        data = [data]
+    data = list(data)
+    if not data:
+        raise InputError("data is empty: give at least one Curve or RelaxedSlips")
+    for i, d in enumerate(data):
+        if not isinstance(d, (Curve, RelaxedSlips)):
+            raise InputError(f"data[{i}] must be a sweep.fit Curve or RelaxedSlips, got {type(d).__name__}")
+    groups: dict[str, list[Data]] = {}
+    for i, d in enumerate(data):
+        groups.setdefault(f"{d.name}#{i}" if per_data_set else d.sample, []).append(d)
+    problems = [Problem(name, tuple(ds), space) for name, ds in groups.items()]
+    for pr in problems:
+        given = {d.noise is not None for d in pr.data}
+        if len(given) > 1:
+            raise InputError(f"sample {pr.name!r}: give noise for every data set or for none (it is then estimated "
+                             f"from the residuals)")
+        if pr.n_residuals <= space.p:
+            raise InputError(f"sample {pr.name!r}: {pr.n_residuals} data values for {space.p} free parameters; "
+                             f"need more values than parameters")
+    return problems

@@ -1,0 +1,108 @@
+"""Profile likelihoods: the least misfit at fixed values of one parameter, the others free (sweep.fit.local).
+
+Each free parameter of each problem is profiled at best +- OFFSETS standard errors (from the covariance), cut at
+its bounds (the bound itself then being the last point). A side whose profile has not crossed the 95 % threshold
+and has not reached its bound is extended to EXTEND standard errors in a second round. Every profile point of every
+parameter of every problem is one least-squares task: a round runs them all in lockstep, their engine runs merged
+(sweep.fit.lockstep). Each profile point starts from the best fit moved along the covariance's regression line
+(theta_k = best_k + C_kj/C_jj (value - best_j)), so a few iterations suffice.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .local import refine
+from .lockstep import Lockstep
+from .problem import Problem
+
+__all__ = ["EXTEND", "OFFSETS", "Profile", "profile_all"]
+
+OFFSETS = (0.75, 1.5, 2.25, 3.0)
+"""First round, in standard errors either side of the best value."""
+EXTEND = (4.0, 6.0, 9.0, 14.0)
+"""Second round, on the sides still below the threshold."""
+
+
+@dataclass
+class Profile:
+    """Profile of one parameter: its ``values`` (increasing, the best value included) and the least sum of squared
+    weighted residuals ``rss`` at each."""
+
+    values: np.ndarray
+    rss: np.ndarray
+
+
+def _side_values(best: float, sigma: float, sign: int, bound: float, offsets) -> list[float]:
+    out = []
+    for o in offsets:
+        v = best + sign * o * sigma
+        if (v - bound) * sign >= 0:
+            if (best - bound) * sign < 0:
+                out.append(bound)
+            break
+        out.append(v)
+    return out
+
+
+def _sigma(cov: np.ndarray, j: int, lo: float, hi: float) -> float:
+    s = float(np.sqrt(cov[j, j])) if np.isfinite(cov[j, j]) and cov[j, j] > 0 else np.inf
+    return min(s, (hi - lo) / 6.0)
+
+
+def _start(best: np.ndarray, cov: np.ndarray, j: int, value: float) -> np.ndarray:
+    theta = best.copy()
+    if np.all(np.isfinite(cov[:, j])) and cov[j, j] > 0:
+        theta += cov[:, j] / cov[j, j] * (value - best[j])
+    theta[j] = value
+    return theta
+
+
+def profile_all(problems: list[Problem], best: list[np.ndarray], best_rss: list[float], covs: list[np.ndarray],
+                s2: list[float], crit: float | list[float], lockstep: Lockstep) -> list[list[Profile]]:
+    """Profiles of every free parameter of every problem (problem x parameter); ``crit`` the threshold per problem
+    (uncertainty.threshold), ``s2`` the noise variance per problem."""
+    crits = crit if isinstance(crit, list) else [crit] * len(problems)
+    points: dict[tuple[int, int], list[tuple[float, float]]] = {}
+
+    def run(tasks):
+        def one(task, evaluate):
+            q, j, value = task
+            fit = refine(problems[q], _start(best[q], covs[q], j, value), evaluate, hold={j: value})
+            return fit.rss
+        for (q, j, value), rss in zip(tasks, lockstep.map(one, tasks)):
+            points.setdefault((q, j), []).append((value, rss))
+
+    sigmas = {}
+    tasks = []
+    for q, pr in enumerate(problems):
+        sp = pr.space
+        for j in range(sp.p):
+            sigmas[q, j] = _sigma(covs[q], j, sp.lower[j], sp.upper[j])
+            points[q, j] = [(float(best[q][j]), best_rss[q])]
+            for sign, bound in ((-1, sp.lower[j]), (1, sp.upper[j])):
+                tasks += [(q, j, v) for v in _side_values(best[q][j], sigmas[q, j], sign, bound, OFFSETS)]
+    run(tasks)
+    tasks = []
+    for (q, j), pts in points.items():
+        sp = problems[q].space
+        b = float(best[q][j])
+        for sign, bound in ((-1, sp.lower[j]), (1, sp.upper[j])):
+            side = [(v, r) for v, r in pts if (v - b) * sign > 0]
+            reached = any(v == bound for v, _ in side)
+            crossed = any((r - best_rss[q]) / s2[q] >= crits[q] for _, r in side)
+            if not (reached or crossed):
+                far = [v for v in _side_values(b, sigmas[q, j], sign, bound, EXTEND)]
+                tasks += [(q, j, v) for v in far]
+    if tasks:
+        run(tasks)
+    out = []
+    for q, pr in enumerate(problems):
+        row = []
+        for j in range(pr.space.p):
+            pts = sorted(points[q, j])
+            row.append(Profile(np.array([v for v, _ in pts]), np.array([r for _, r in pts])))
+        out.append(row)
+    return out

@@ -1,0 +1,174 @@
+"""The Dataset of a fit (CF-1.11; docs/fit.md "Output"), and its netCDF file.
+
+Dimensions: ``sample`` (one per problem: a sample's data sets sharing one parameter set), ``parameter`` and
+``parameter_`` (the free parameters), ``profile_point``, ``grid_<name>`` (the global stage's level-1 grid of each
+free parameter) and ``datum`` (every data value of every data set, in order).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from ..dataset import REFERENCES, versions
+from .data import Curve
+from .globalstage import grid_axes
+from .outcome import FitOutcome
+from .space import UNITS
+from .uncertainty import LABELS
+
+__all__ = ["build_fit_dataset", "save_fit", "LABEL_FLAGS"]
+
+LABEL_FLAGS = {"flag_values": np.arange(len(LABELS), dtype=np.int8),
+               "flag_meanings": " ".join(lab.replace(" ", "_") for lab in LABELS)}
+LONG = {"A": "direct-effect coefficient A (eq. 1)", "m1": "slope m1 of mu_d at V0 (eq. 6)",
+        "m2": "curvature m2 of mu_d (eq. 6)", "D0": "memory length D0", "K_over_M_factor": "factor on the nominal K/M"}
+
+
+def _v(dims, data, units: str | None, long_name: str, **attrs) -> xr.Variable:
+    a = {"long_name": long_name, **attrs}
+    if units is not None:
+        a["units"] = units
+    return xr.Variable(dims, data, a)
+
+
+def _parameters(out: FitOutcome) -> dict[str, xr.Variable]:
+    sp, nq = out.space, len(out.problems)
+    v: dict[str, xr.Variable] = {}
+    for j, name in enumerate(sp.names):
+        u, ln = UNITS[name], LONG[name]
+        v[name] = _v("sample", [f.theta[j] for f in out.fits], u, f"best fit of {ln}")
+        v[f"{name}_stderr"] = _v("sample", [np.sqrt(c[j, j]) for c in out.covariances], u,
+                                 f"standard error of {name} from the covariance (s^2 (J^T J)^-1)")
+        v[f"{name}_global"] = _v("sample", [g.theta[j] for g in out.global_results], u,
+                                 f"{name} at the best point of the global stage")
+        if out.intervals is None:
+            continue
+        v[f"{name}_lower"] = _v("sample", [iv[j].lower for iv in out.intervals], u,
+                                f"lower end of the 95 % profile-likelihood interval of {name}")
+        v[f"{name}_upper"] = _v("sample", [iv[j].upper for iv in out.intervals], u,
+                                f"upper end of the 95 % profile-likelihood interval of {name}")
+        v[f"{name}_label"] = _v("sample", np.array([LABELS.index(lab[j]) for lab in out.labels], np.int8), None,
+                                f"how well {name} is determined", **LABEL_FLAGS,
+                                comment=f"poorly constrained: 95 % interval wider than +-{out.settings['poor']:g} x "
+                                        f"|best|; not identifiable: the profile stays below the threshold up to a "
+                                        f"bound")
+        n_pp = max(pf[j].values.size for pf in out.profiles)
+        vals, delta = np.full((nq, n_pp), np.nan), np.full((nq, n_pp), np.nan)
+        for q, pf in enumerate(out.profiles):
+            n = pf[j].values.size
+            vals[q, :n] = pf[j].values
+            delta[q, :n] = (pf[j].rss - out.fits[q].rss) / out.s2[q]
+        v[f"{name}_profile"] = _v(("sample", f"profile_point_{name}"), vals, u, f"profiled values of {name}")
+        v[f"{name}_profile_misfit"] = _v(("sample", f"profile_point_{name}"), delta, "1",
+                                         f"increase of the misfit over its minimum with {name} fixed and the other "
+                                         f"free parameters optimised (units of the noise variance)",
+                                         threshold_95=np.array(out.crit))
+    p = sp.p
+    cov = np.array(out.covariances).reshape(nq, p, p)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sd = np.sqrt(np.einsum("qii->qi", cov))
+        corr = cov / sd[:, :, None] / sd[:, None, :]
+    v["covariance"] = _v(("sample", "parameter", "parameter_"), cov, None,
+                         "covariance of the free parameters, s^2 (J^T J)^-1",
+                         comment="units: the product of the two parameters' units (D0 in m, the others 1)")
+    v["correlation"] = _v(("sample", "parameter", "parameter_"), corr, "1", "correlation of the free parameters")
+    return v
+
+
+def _per_sample(out: FitOutcome) -> dict[str, xr.Variable]:
+    n = [pr.n_residuals for pr in out.problems]
+    return {
+        "misfit": _v("sample", [f.rss / s for f, s in zip(out.fits, out.s2)], "1",
+                     "sum of squared residuals over the noise variance at the best fit (chi^2)"),
+        "degrees_of_freedom": _v("sample", np.array(n) - out.space.p, "1", "data values minus free parameters"),
+        "noise": _v("sample", [np.sqrt(s) if not pr.noise_given else np.nan for pr, s in zip(out.problems, out.s2)],
+                    "m", "noise estimated from the residuals, sqrt(RSS/(n - p)) (NaN: noise given)"),
+        "function_evaluations": _v("sample", [f.nfev for f in out.fits], "1", "least-squares function evaluations"),
+        "stable_before_stop": _v("sample", np.array([f.stable for f in out.fits], np.int8), None,
+                                 "steady sliding stable before every stop at the best fit (chi > mu1, eq. 3)",
+                                 flag_values=np.array([0, 1], np.int8), flag_meanings="no yes"),
+    }
+
+
+def _landscape(out: FitOutcome) -> tuple[dict[str, xr.Variable], dict[str, xr.Variable]]:
+    sp = out.space
+    axes = grid_axes(sp)
+    coords = {f"grid_{n}": _v(f"grid_{n}", a, UNITS[n], f"global-stage grid of {n}") for n, a in zip(sp.names, axes)}
+    land = np.array([g.landscape / s for g, s in zip(out.global_results, out.s2)])
+    return coords, {"misfit_landscape": _v(("sample",) + tuple(coords), land, "1",
+                                           "misfit (chi^2, noise variance of the best fit) over the global stage's "
+                                           "grid (engine at global_rtol; NaN: stick-slip side of the Hopf line)")}
+
+
+def _data(out: FitOutcome) -> dict[str, xr.Variable]:
+    cols: dict[str, list] = {k: [] for k in ("sample", "set", "t", "K_over_M", "V", "observed", "fitted", "residual",
+                                              "noise")}
+    for q, (pr, f) in enumerate(zip(out.problems, out.fits)):
+        noise = 1.0 / pr.weights if pr.noise_given else np.full(pr.n_residuals, np.sqrt(out.s2[q]))
+        fitted = pr.observed + f.residuals / pr.weights
+        cols["observed"].append(pr.observed)
+        cols["fitted"].append(fitted)
+        cols["residual"].append((fitted - pr.observed) / noise)
+        cols["noise"].append(noise)
+        factor = out.space.full(f.theta)["K_over_M_factor"][0]
+        for d in pr.data:
+            n = d.n
+            cols["sample"].append(np.full(n, q))
+            cols["set"].append(np.full(n, d.name, dtype=object))
+            if isinstance(d, Curve):
+                cols["t"].append(d.t)
+                cols["K_over_M"].append(np.full(n, d.K_over_M * factor))
+                cols["V"].append(np.full(n, d.V))
+            else:
+                cols["t"].append(np.full(n, np.nan))
+                cols["K_over_M"].append(d.K_over_M * factor)
+                cols["V"].append(d.V)
+    c = {k: np.concatenate(v) for k, v in cols.items()}
+    return {
+        "datum_sample": _v("datum", c["sample"].astype(np.int32), None, "index of the sample (problem) of the datum"),
+        "datum_set": _v("datum", c["set"].astype(str), None, "name of the data set of the datum"),
+        "datum_t": _v("datum", c["t"], "s", "time after the stop (NaN: a relaxed slip)"),
+        "datum_K_over_M": _v("datum", c["K_over_M"], "s-2", "K/M of the datum (times the fitted factor if free)"),
+        "datum_V": _v("datum", c["V"], "m s-1", "driving velocity before the stop"),
+        "observed": _v("datum", c["observed"], "m", "measured slip x(t) or relaxed slip Dx_inf"),
+        "fitted": _v("datum", c["fitted"], "m", "the model at the best fit"),
+        "residual": _v("datum", c["residual"], "1", "(fitted - observed)/noise"),
+        "datum_noise": _v("datum", c["noise"], "m", "noise of the datum (given, or estimated per sample)"),
+    }
+
+
+def build_fit_dataset(out: FitOutcome, history: str = "sweep.fit") -> xr.Dataset:
+    """The Dataset of a fit (module docstring)."""
+    grid_coords, landscape = _landscape(out)
+    coords = {"sample": _v("sample", np.array([pr.name for pr in out.problems], dtype=str), None,
+                           "sample (data sets sharing one parameter set)"),
+              "parameter": _v("parameter", np.array(out.space.names, dtype=str), None, "free parameter"),
+              "parameter_": _v("parameter_", np.array(out.space.names, dtype=str), None, "free parameter"),
+              **grid_coords}
+    bounds = {n: [float(lo), float(hi)] for n, lo, hi in zip(out.space.names, out.space.lower, out.space.upper)}
+    attrs = {
+        "Conventions": "CF-1.11",
+        "title": "Friction parameters fitted to stop transients (Baumberger & Gauthier 1996 spring-block model)",
+        "source": versions(), "references": REFERENCES,
+        "history": f"{_dt.datetime.now(_dt.UTC).isoformat(timespec='seconds')}: {history}",
+        "sweep_kind": "fit",
+        "fit_settings": json.dumps({**out.settings, "bounds": bounds}),
+        "fit_rounds": json.dumps(out.rounds), "fit_seconds": json.dumps({k: round(v, 3) for k, v in
+                                                                          out.seconds.items()}),
+        "comment": "quasi-static stop model, aging law (docs/physics.md 3a); intervals from profile likelihoods",
+    }
+    data_vars = {**_parameters(out), **_per_sample(out), **landscape, **_data(out)}
+    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+
+
+def save_fit(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Write the fit's Dataset as netCDF4 (through sweep.io.save: written beside, then renamed into place)."""
+    from ..io import save
+
+    return save(ds, path)

@@ -1,0 +1,173 @@
+"""sweep.fit against data made by the independent scipy reference (tests/fit_reference.py, tests/reference.py).
+
+Issue 21's tests: the forward model, coverage of the 95 % intervals over noise draws (with unbiasedness and the
+width against the Fisher information of the noiseless data), identifiability of one curve / two velocities /
+relaxed slips, a start far from the truth, many curves in one call against one call each.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fit_reference import fisher_widths, relaxed_slip, slip_curve
+
+import sweep
+from sweep.fit import Curve, RelaxedSlips
+from sweep.fit.forward import ForwardPoints, forward
+from sweep.fit.uncertainty import LABELS
+
+SAMPLE2 = dict(A=0.007, m1=0.0125, m2=0.0033, D0=0.7e-6)
+SAMPLE1 = dict(A=0.012, m1=0.010, m2=0.0014, D0=1.0e-6)
+KM2 = 2.8e5  # Figs. 2 and 4 (sample2)
+T = np.logspace(-1, 3.5, 40)  # s: tau = 0.14 .. 4500 at 1 um/s
+FREE = ("A", "m1", "m2")
+WELL, POOR, NOT = LABELS
+
+
+def _params(d: dict) -> sweep.FrictionParams:
+    return sweep.FrictionParams(**d)
+
+
+def _label(ds, name, i=0):
+    return LABELS[int(ds[f"{name}_label"].values[i])]
+
+
+def _covers(ds, name, truth, i=0):
+    return float(ds[f"{name}_lower"][i]) <= truth <= float(ds[f"{name}_upper"][i])
+
+
+def test_forward_model_matches_the_reference():
+    """x(t) and Dx_inf of points with their own parameters, in one call, to ~rtol of the reference."""
+    cases = [(SAMPLE2, KM2, 1e-6), (SAMPLE2, 1e6, 5e-6), (SAMPLE1, 3e5, 1e-5), ({**SAMPLE1, "m2": 0.0}, 2e5, 3e-6)]
+    pts = ForwardPoints(*(np.array([c[0][k] for c in cases]) for k in ("A", "m1", "m2", "D0")),
+                        K_over_M=np.array([c[1] for c in cases]), V=np.array([c[2] for c in cases]),
+                        t=np.tile(T, (len(cases), 1)))
+    res = forward(pts, rtol=1e-8)
+    for i, (p, km, v) in enumerate(cases):
+        dx = relaxed_slip(p, km, v)
+        assert abs(res.dx_inf[i] / dx - 1) < 1e-7
+        np.testing.assert_allclose(res.x[i], slip_curve(p, km, v, T), rtol=0, atol=1e-7 * dx)
+    assert np.all(res.status == 0)
+
+
+# --- coverage over noise draws -----------------------------------------------------------------------------
+
+N_DRAWS = 40
+NOISE = 0.005  # of the relaxed slip
+
+
+@pytest.fixture(scope="module")
+def coverage():
+    """N_DRAWS noisy copies of one reference curve, fitted in one call, each its own problem."""
+    x = slip_curve(SAMPLE2, KM2, 1e-6, T)
+    sigma = NOISE * relaxed_slip(SAMPLE2, KM2, 1e-6)
+    rng = np.random.default_rng(20261125)
+    curves = [Curve(T, np.abs(x + sigma * rng.standard_normal(T.size)), KM2, 1e-6, noise=sigma, name=f"draw{i}")
+              for i in range(N_DRAWS)]
+    ds = sweep.fit(curves, free=FREE, params=_params(SAMPLE2), per_data_set=True)
+    fisher = fisher_widths(lambda p: slip_curve(p, KM2, 1e-6, T), SAMPLE2, FREE, np.full(T.size, sigma))
+    return ds, fisher
+
+
+@pytest.mark.parametrize("name", FREE)
+def test_95_percent_intervals_cover_the_truth_in_85_to_100_percent_of_draws(coverage, name):
+    ds, _ = coverage
+    covered = np.mean((ds[f"{name}_lower"] <= SAMPLE2[name]) & (SAMPLE2[name] <= ds[f"{name}_upper"]))
+    print(f"{name}: coverage {covered:.3f} over {N_DRAWS} draws")
+    assert 0.85 <= covered <= 1.0
+
+
+@pytest.mark.parametrize("name", FREE)
+def test_estimates_are_unbiased_within_their_spread(coverage, name):
+    ds, _ = coverage
+    est = ds[name].values
+    print(f"{name}: mean {est.mean():.5g} truth {SAMPLE2[name]:.5g} spread {est.std(ddof=1):.3g}")
+    assert abs(est.mean() - SAMPLE2[name]) < 3.0 * est.std(ddof=1) / np.sqrt(est.size) + 0.1 * est.std(ddof=1)
+
+
+@pytest.mark.parametrize("name", FREE)
+def test_interval_widths_agree_with_the_fisher_information_within_2x(coverage, name):
+    ds, fisher = coverage
+    width = (ds[f"{name}_upper"] - ds[f"{name}_lower"]).values
+    ratio = width / fisher[FREE.index(name)]
+    print(f"{name}: width / Fisher width {ratio.min():.3f}..{ratio.max():.3f} (median {np.median(ratio):.3f})")
+    assert np.all((ratio > 0.5) & (ratio < 2.0))
+
+
+# --- identifiability --------------------------------------------------------------------------------------
+
+def _noisy(p, km, v, t, rel, seed, **kw):
+    x = slip_curve(p, km, v, t)
+    sigma = rel * relaxed_slip(p, km, v)
+    noise = sigma * np.random.default_rng(seed).standard_normal(t.size)
+    return Curve(t, np.abs(x + noise), km, v, noise=sigma, **kw)
+
+
+def test_one_curve_at_one_velocity_gives_A_and_mu1_and_only_a_poor_m2():
+    """At V = V0, mu1 = m1: A and m1 well constrained; m2 poorly constrained, its interval covering the truth."""
+    t = np.logspace(-1, 3.5, 60)
+    ds = sweep.fit(_noisy(SAMPLE2, KM2, 1e-6, t, 0.005, 1), free=FREE, params=_params(SAMPLE2))
+    for name in FREE:
+        assert _covers(ds, name, SAMPLE2[name]), name
+    assert (_label(ds, "A"), _label(ds, "m1"), _label(ds, "m2")) == (WELL, WELL, POOR)
+
+
+def test_fixing_m2_at_zero_biases_A_and_mu1():
+    """Identifiability section: one curve fitted with m2 = 0 held gives A and mu1 off by several standard
+    errors (the issue quotes ~9 % and ~40 %); the free-m2 fit covers them."""
+    t = np.logspace(-1, 3.5, 60)
+    curve = _noisy(SAMPLE2, KM2, 1e-6, t, 0.002, 1)
+    ds = sweep.fit(curve, free=("A", "m1"), params=_params({**SAMPLE2, "m2": 0.0}))
+    bias_A, bias_m1 = float(ds["A"][0]) / SAMPLE2["A"] - 1, float(ds["m1"][0]) / SAMPLE2["m1"] - 1
+    print(f"m2 = 0 held: A off by {bias_A:+.3f}, m1 off by {bias_m1:+.3f}")
+    assert not _covers(ds, "A", SAMPLE2["A"]) or not _covers(ds, "m1", SAMPLE2["m1"])
+
+
+def test_two_velocities_determine_A_m1_m2():
+    curves = [_noisy(SAMPLE2, KM2, v, T, 0.002, s, name=f"V{v:g}") for v, s in ((1e-6, 3), (5e-6, 4))]
+    ds = sweep.fit(curves, free=FREE, params=_params(SAMPLE2))
+    for name in FREE:
+        assert _covers(ds, name, SAMPLE2[name]), name
+        assert _label(ds, name) == WELL, name
+
+
+def test_relaxed_slips_over_K_over_M_and_V_determine_A_m1_m2():
+    """Fig. 3-like data (sample1): Dx_inf at 4 K/M x 3 V, 1 % noise."""
+    km = np.repeat([2e5, 4e5, 7e5, 1.2e6], 3)
+    v = np.tile([3e-6, 1e-5, 3e-5], 4)
+    dx = np.array([relaxed_slip(SAMPLE1, a, b) for a, b in zip(km, v)])
+    sigma = 0.01 * dx
+    obs = dx + sigma * np.random.default_rng(5).standard_normal(dx.size)
+    ds = sweep.fit(RelaxedSlips(km, v, obs, noise=sigma), free=FREE, params=_params(SAMPLE1))
+    for name in FREE:
+        assert _covers(ds, name, SAMPLE1[name]), name
+        assert _label(ds, name) == WELL, name
+
+
+def test_a_start_three_times_off_still_finds_the_truth():
+    curves = [_noisy(SAMPLE2, KM2, v, T, 0.002, s, name=f"V{v:g}") for v, s in ((1e-6, 3), (5e-6, 4))]
+    start = {k: 3.0 * SAMPLE2[k] for k in FREE}
+    ds = sweep.fit(curves, free=FREE, params=_params({**SAMPLE2, **start}))
+    for name in FREE:
+        assert _covers(ds, name, SAMPLE2[name]), name
+
+
+# --- many curves in one call ----------------------------------------------------------------------------
+
+def test_twenty_curves_in_one_call_equal_twenty_separate_calls():
+    """Each curve its own sample: the estimates (and their standard errors) of one call over 20 curves are those of
+    20 separate calls, bit for bit; so are the profile intervals (checked on 3 of them, to keep the test short)."""
+    rng = np.random.default_rng(7)
+    t = np.logspace(-1, 3, 16)
+    curves = []
+    for i in range(20):
+        p = {**SAMPLE2, "A": SAMPLE2["A"] * rng.uniform(0.8, 1.25), "m1": SAMPLE2["m1"] * rng.uniform(0.8, 1.25)}
+        curves.append(_noisy(p, KM2, 1e-6, t, 0.005, 100 + i, sample=f"s{i}", name=f"c{i}"))
+    together = sweep.fit(curves, free=FREE, params=_params(SAMPLE2))
+    assert together.sizes["sample"] == 20
+    for i, c in enumerate(curves):
+        with_profiles = i in (0, 9, 19)
+        alone = sweep.fit(c, free=FREE, params=_params(SAMPLE2), profiles=with_profiles)
+        for name in FREE:
+            for suffix in ("", "_stderr") + (("_lower", "_upper") if with_profiles else ()):
+                assert float(together[name + suffix][i]) == float(alone[name + suffix][0]), (i, name + suffix)
