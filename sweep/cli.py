@@ -29,7 +29,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from .compile_notice import announce_if_cold
     from .plausibility import warn_implausible
     from .scene import default_scene, load_scene
-    from .size import estimate_size
+    from .size import check_fits, estimate_size
 
     scene = load_scene(args.config) if args.config else default_scene()
     warn_implausible(scene.K_over_M, scene.V)  # before any work, the dry run included
@@ -37,6 +37,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.dry_run:
         return _dry_run(scene, size)
     _check_run_targets(scene, args)
+    check_fits(scene, size)  # (api.prepare_run checks again) before the plan's and the kernels' imports: at once
     announce_if_cold(scene)  # within a second of the start, before the plan imports and compiles anything
     if scene.protocol == "driven":
         return _run_driven(scene, args)
@@ -81,8 +82,6 @@ def _check_run_targets(scene, args: argparse.Namespace) -> None:
 def _dry_run(scene, size) -> int:
     """``sweep run --dry-run``: the size from the grid's shape (refused, like the run, if it does not fit in
     memory), then the plan and the pilot's estimate of the time, both from a subsample where the grid is large."""
-    from .estimate import estimate_seconds, plan_sample
-    from .plan import make_plan
     from .size import check_fits
 
     print(f"{'grid':>28}: {scene.shape[0]} K/M x {scene.shape[1]} V = {scene.n_points:,} points, "
@@ -91,7 +90,10 @@ def _dry_run(scene, size) -> int:
     for line in size.lines():
         print(line)
     sys.stdout.flush()
-    check_fits(scene, size)
+    check_fits(scene, size)  # before the imports of the plan and the kernels (~1 s): a refusal answers at once
+    from .estimate import estimate_seconds, plan_sample
+    from .plan import make_plan
+
     planned, note = plan_sample(scene)
     if note:
         print(f"{'plan of':>28}: {note}")
