@@ -51,7 +51,7 @@ def write(ds: xr.Dataset, path: str | os.PathLike,
           blocks: Iterable[tuple[int, dict[str, xr.Variable]]] | None = None) -> Path:
     """:func:`save` without its checks, for a caller that made them before its work (run_sweep): the file written
     under ``<path>.part`` and renamed into place; the ``.part`` removed if anything fails, and an error of the netCDF
-    library turned into an OSError (ENOSPC where the disk is nearly full: HDF5 says only "HDF error")."""
+    library turned into an OSError: ENOSPC where the disk is nearly full (HDF5 then says "HDF error", or EACCES)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     encoding = {name: dict(COMPRESSION) for name in ds.data_vars}
@@ -68,9 +68,12 @@ def write(ds: xr.Dataset, path: str | os.PathLike,
     except BaseException as exc:
         full = free_bytes(path.parent) < FULL_DISK_BYTES if path.parent.is_dir() else False  # before .part goes
         remove_quietly([tmp])
-        if isinstance(exc, RuntimeError) and str(exc).startswith("NetCDF"):
-            raise (OSError(errno.ENOSPC, f"No space left on device ({exc})") if full else
-                   OSError(errno.EIO, f"netCDF library: {exc}")) from exc
+        library = isinstance(exc, RuntimeError) and str(exc).startswith("NetCDF")
+        if full and (library or isinstance(exc, OSError)) and getattr(exc, "errno", None) != errno.ENOSPC:
+            # on a full disk HDF5 says "HDF error", or fails to close the file with EACCES (measured on a tmpfs)
+            raise OSError(errno.ENOSPC, f"No space left on device; the netCDF library said: {exc}") from exc
+        if library:
+            raise OSError(errno.EIO, f"netCDF library: {exc}") from exc
         raise
     return path
 

@@ -10,6 +10,7 @@ exactly what a killed run leaves.
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import shutil
@@ -451,10 +452,28 @@ def test_too_little_free_space_is_refused_before_any_work(tmp_path, monkeypatch)
     assert os.listdir(tmp_path) == []
 
 
-def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeypatch, reference):
-    """A tmpfs just large enough for the checks, filled by another file after 5 chunks: the run stops with one line
-    (exit 3), and --resume finishes once the space is freed. Needs a tmpfs to mount (root on Linux); the same fault
-    injected is test_a_chunk_write_failing_mid_run_keeps_the_journal_for_resume."""
+def fill(disk: Path) -> Path:
+    """Fill the file system of ``disk`` with one file, as another program would; returns that file."""
+    ballast = disk / "ballast"
+    fd = os.open(ballast, os.O_WRONLY | os.O_CREAT, 0o644)
+    try:
+        while os.write(fd, b"\0" * 4096):
+            pass
+    except OSError as exc:
+        assert exc.errno == errno.ENOSPC
+    finally:
+        os.close(fd)
+    return ballast
+
+
+@pytest.mark.parametrize("when", ["chunks", "netcdf"])
+def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeypatch, capsys, reference, when):
+    """A tmpfs just large enough for the checks, filled by another file after 5 chunks, or just before the netCDF
+    file is written (where the HDF5 library says only "HDF error"): the run stops with one line naming the full disk
+    (exit 3), and --resume finishes once the space is freed. Needs a tmpfs to mount (root on Linux); the same faults
+    injected are test_a_chunk_write_failing_mid_run_keeps_the_journal_for_resume and
+    test_a_netcdf_write_failing_at_the_end_keeps_the_journal_for_resume."""
+    import sweep.api as api
     import sweep.runner as runner
     from sweep.cli import main
 
@@ -464,32 +483,29 @@ def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeyp
                                                  capture_output=True).returncode != 0:
         pytest.skip("cannot mount a tmpfs here (the injected ENOSPC tests cover the same paths)")
     try:
-        out, ballast = disk / "s.nc", disk / "ballast"
-        real = runner.stop_chunk
-        count = [0]
+        out, computed_ = disk / "s.nc", []
+        if when == "chunks":
+            real = runner.stop_chunk
 
-        def filling(sc, plan):
-            compute = real(sc, plan)
+            def filling(sc, plan):
+                compute = real(sc, plan)
+                return lambda points: (computed_.append(1), len(computed_) == 6 and fill(disk), compute(points))[-1]
 
-            def run(points):
-                count[0] += 1
-                if count[0] == 6:  # another program fills the disk
-                    with open(ballast, "wb") as f:
-                        try:
-                            while True:
-                                f.write(b"\0" * 4096)
-                                f.flush()
-                        except OSError:
-                            pass
-                return compute(points)
-            return run
-
-        monkeypatch.setattr(runner, "stop_chunk", filling)
+            monkeypatch.setattr(runner, "stop_chunk", filling)
+        else:
+            real_write = api.write
+            monkeypatch.setattr(api, "write", lambda *a, **k: (fill(disk), real_write(*a, **k))[-1])
         args = ["run", str(config), "-o", str(out), "--chunk-size", str(CHUNK), "-q"]
+        capsys.readouterr()
         assert main(args) == 3
+        (line,) = capsys.readouterr().err.splitlines()
+        assert line.startswith("sweep: error: could not write ") and "(No space left on device" in line, line
+        assert "free some space on that disk, then run the same command with --resume" in line, line
         monkeypatch.undo()
-        assert len(list(journal_path(out).glob("chunk-*.npz"))) == 5 and not list(disk.glob("**/*.tmp"))
-        ballast.unlink()
+        kept = len(list(journal_path(out).glob("chunk-*.npz")))
+        assert kept == (5 if when == "chunks" else 15) and not list(disk.glob("**/*.tmp"))
+        assert not list(disk.glob("*.part"))
+        (disk / "ballast").unlink()
         assert main(args + ["--resume"]) == 0
         assert_same_file(out, reference)
     finally:
