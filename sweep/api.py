@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -71,8 +71,9 @@ def check_run_arguments(output: str | os.PathLike | None = None, resume: bool = 
     scene (the command line's own checks, made here for Python callers too)."""
     if chunk_size is not None and (isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer))
                                    or chunk_size < 1):
+        plain = chunk_size.item() if isinstance(chunk_size, np.generic) else chunk_size  # "0", not "np.int64(0)"
         raise InputError(f"chunk_size must be an integer >= 1 (points per chunk), or None for the protocol's "
-                         f"default; got {chunk_size!r}")
+                         f"default; got {plain!r}")
     for name, value in (("resume", resume), ("overwrite", overwrite)):
         if not isinstance(value, (bool, np.bool_)):
             raise InputError(f"{name} must be True or False, got {value!r}")
@@ -94,7 +95,8 @@ class PreparedRun:
     output: Path | None
     overwrite: bool
     journal: Journal | None
-    imap: object
+    imap: Callable[..., Iterator[tuple[int, dict[str, np.ndarray]]]]
+    """The backend's map over chunks (sweep/backends.py: open_backend)."""
 
     def finish(self, progress: bool | None = None, history: str = "") -> xr.Dataset:
         """Compute the chunks not yet in the journal, build the Dataset and write it to the output (then remove the

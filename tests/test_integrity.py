@@ -559,10 +559,11 @@ def test_the_dry_run_of_a_large_grid_plans_a_subsample(tmp_path, capsys):
     assert "4,000,000 points" in out and "a subsample of 500 K/M x 500 V" in out and "estimated time" in out, out
 
 
-@pytest.mark.parametrize("chunk_size", [0, -5, 2.5, True])
+@pytest.mark.parametrize("chunk_size", [0, -5, np.int64(0), 2.5, True])
 def test_the_api_checks_what_the_cli_checks(chunk_size):
-    with pytest.raises(InputError, match=r"chunk_size must be an integer >= 1 \(points per chunk\)"):
+    with pytest.raises(InputError, match=r"chunk_size must be an integer >= 1 \(points per chunk\)") as info:
         sweep.run_sweep(scene(), progress=False, chunk_size=chunk_size)
+    assert str(info.value).endswith(f"got {chunk_size!r}" if not isinstance(chunk_size, np.generic) else "got 0")
     with pytest.raises(InputError, match="resume=True continues the journal of an output file"):
         sweep.run_sweep(scene(), progress=False, resume=True)
 
