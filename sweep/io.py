@@ -69,7 +69,7 @@ def write(ds: xr.Dataset, path: str | os.PathLike,
         full = free_bytes(path.parent) < FULL_DISK_BYTES if path.parent.is_dir() else False  # before .part goes
         remove_quietly([tmp])
         library = isinstance(exc, RuntimeError) and str(exc).startswith("NetCDF")
-        if full and (library or isinstance(exc, OSError)) and getattr(exc, "errno", None) != errno.ENOSPC:
+        if full and (library or isinstance(exc, PermissionError)):
             # on a full disk HDF5 says "HDF error", or fails to close the file with EACCES (measured on a tmpfs)
             raise OSError(errno.ENOSPC, f"No space left on device; the netCDF library said: {exc}") from exc
         if library:
