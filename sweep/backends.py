@@ -68,6 +68,8 @@ def local_cluster(workers: int = 2) -> Iterator[str]:
 @contextmanager
 def _dask(workers: int | None, scheduler: str | None):
     """A dask Client: connected to ``scheduler``, or on a :func:`local_cluster` of ``workers`` started for it."""
+    if scheduler is not None:
+        _reachable(scheduler)
     _, distributed = _import_dask()
     if scheduler is not None:
         try:
@@ -81,6 +83,30 @@ def _dask(workers: int | None, scheduler: str | None):
         return
     with local_cluster(workers or 2) as address, distributed.Client(address) as client:
         yield client
+
+
+def _reachable(scheduler: str) -> None:
+    """InputError at once where nothing listens at a tcp:// scheduler address (dask.distributed retries a refused
+    connection until its timeout: 5 s for an answer that the first attempt had), or where the host does not answer
+    within CONNECT_TIMEOUT_S. Other schemes (tls://, ucx://...) are left to dask."""
+    import socket
+    from urllib.parse import urlsplit
+
+    try:
+        parts = urlsplit(scheduler if "://" in scheduler else f"tcp://{scheduler}")
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        raise InputError(f"scheduler must be an address such as tcp://host:8786, got {scheduler!r}") from None
+    if parts.scheme != "tcp":
+        return
+    if not host or port is None:
+        raise InputError(f"scheduler must be an address such as tcp://host:8786, got {scheduler!r}")
+    try:
+        socket.create_connection((host, port), timeout=CONNECT_TIMEOUT_S).close()
+    except OSError as exc:
+        why = exc.strerror or str(exc) or type(exc).__name__
+        raise InputError(f"could not connect to the dask scheduler at {scheduler!r} (tried for at most "
+                         f"{CONNECT_TIMEOUT_S:g} s): {why}") from None
 
 
 def _restore(saved: dict[str, str | None]) -> None:

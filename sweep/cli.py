@@ -15,11 +15,12 @@ from pathlib import Path
 import numpy as np
 
 from ._version import __version__
-from .errors import InputError
+from .errors import InputError, JournalWarning
 from .log import configured as logging_configured
 
 DEFAULT_OUT = Path("sweep-out") / "landscape.nc"
 FIGURES_OUT = Path("sweep-out") / "figures"
+OVERWRITE_HELP = "replace output files that exist (without it, an existing file is never replaced)"
 FIGURE_NAMES = ("fig2", "fig3a", "fig3b", "fig4a", "fig4b")
 """The keys of sweep.figures.FIGURES, spelt out so that the parser needs no matplotlib (tests check they agree)."""
 
@@ -28,51 +29,84 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from .compile_notice import announce_if_cold
     from .plausibility import warn_implausible
     from .scene import default_scene, load_scene
+    from .size import check_fits, estimate_size
 
     scene = load_scene(args.config) if args.config else default_scene()
     warn_implausible(scene.K_over_M, scene.V)  # before any work, the dry run included
-    if not args.dry_run:
-        announce_if_cold(scene)  # within a second of the start, before the plan imports and compiles anything
+    size = estimate_size(scene, journaled=True)
+    if args.dry_run:
+        return _dry_run(scene, size)
+    _check_run_targets(scene, args)
+    check_fits(scene, size)  # (api.prepare_run checks again) before the plan's and the kernels' imports: at once
+    announce_if_cold(scene)  # within a second of the start, before the plan imports and compiles anything
     if scene.protocol == "driven":
         return _run_driven(scene, args)
-    from .plan import make_plan
-
-    plan = make_plan(scene)
-    if args.dry_run:
-        from .estimate import estimate_seconds
-
-        seconds, mean_steps = estimate_seconds(scene, plan)
-        print(_plan_text(scene, plan))
-        print(f"{'grid':>28}: {scene.shape[0]} K/M x {scene.shape[1]} V, rtol {scene.rtol:g}, "
-              f"observables {', '.join(scene.observables)}")
-        print(f"{'estimated steps per point':>28}: {mean_steps:.0f} (mean of a pilot subsample)")
-        print(f"{'estimated time':>28}: {seconds:.1f} s on this machine")
-        return 0
-    from .api import warm_up_kernels
-    from .compile_notice import SLOW_S, timed
+    from .compile_notice import SLOW_S
     from .plot import plot_file
 
-    t_warm = time.perf_counter()
-    if args.workers is None and args.scheduler is None:  # (a dask run connects first, then warms up: run_sweep)
-        with timed("kernels"):  # says so before a first compile (empty numba cache) and when it takes long
-            warm_up_kernels(scene, plan)
-    compile_s = time.perf_counter() - t_warm
-    t0 = time.perf_counter()
-    ds = _run_to_file(scene, args)
+    ds, compile_s, elapsed = _run_to_file(scene, args, warm=True)
     out = args.output
-    elapsed = time.perf_counter() - t0
     print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, {scene.n_points / max(elapsed, 1e-9):,.0f} "
           f"points/s; kernel {'compiled' if compile_s > SLOW_S else 'loaded'} in {compile_s:.1f} s beforehand)")
     print(_flag_summary(ds, "status"))
     print(_model_summary(ds))
     try:
-        for png in plot_file(ds, args.png or out.with_suffix(".png")):
+        for png in plot_file(ds, _png(args)):
             print(f"wrote {png}")
     except Exception as exc:  # the results are safe on disk; a failed picture must not hide that
         print(f"sweep: could not draw the picture ({type(exc).__name__}: {exc}); the data are in {out}",
               file=sys.stderr)
         return 1
     return _most_failed(ds, out)
+
+
+def _png(args: argparse.Namespace) -> Path:
+    """The picture of a command that writes data and a picture: --png, else the output with .png."""
+    return args.png or args.output.with_suffix(".png")
+
+
+def _check_run_targets(scene, args: argparse.Namespace) -> None:
+    """Before any work: the data file and the pictures ``sweep run`` will write (sweep/outputs.py), none of them the
+    scene file or one another; the data file's folder, free space and lock are checked by api.prepare_run."""
+    from .outputs import check_targets, picture_paths
+
+    targets = {"data": args.output}
+    if not args.output.is_dir():  # (refused below; its picture's name cannot be made from a folder's)
+        kind = "driven" if scene.protocol == "driven" else "stop"
+        pictures = picture_paths(_png(args), kind, trajectories="trajectory" in scene.observables,
+                                 points=scene.n_points)
+        targets.update({("picture" if i == 0 else "second picture"): path for i, path in enumerate(pictures)})
+    check_targets(targets, overwrite=args.overwrite, inputs={"scene file": args.config})
+
+
+def _dry_run(scene, size) -> int:
+    """``sweep run --dry-run``: the size from the grid's shape (refused, like the run, if it does not fit in
+    memory), then the plan and the pilot's estimate of the time, both from a subsample where the grid is large."""
+    from .size import check_fits
+
+    print(f"{'grid':>28}: {scene.shape[0]} K/M x {scene.shape[1]} V = {scene.n_points:,} points, "
+          + (f"rtol {scene.rtol:g}, " if scene.protocol == "stop" else "")
+          + f"observables {', '.join(scene.observables)}")
+    for line in size.lines():
+        print(line)
+    sys.stdout.flush()
+    check_fits(scene, size)  # before the imports of the plan and the kernels (~1 s): a refusal answers at once
+    from .estimate import estimate_seconds, plan_sample
+    from .plan import make_plan
+
+    planned, note = plan_sample(scene)
+    if note:
+        print(f"{'plan of':>28}: {note}")
+    plan = make_plan(planned)
+    if scene.protocol == "driven":
+        for key, text in plan.describe().items():
+            print(f"{key:>28}: {text}")
+        return 0
+    seconds, mean_steps = estimate_seconds(planned, plan, n_points=scene.n_points)
+    print(_plan_text(scene, plan))
+    print(f"{'estimated steps per point':>28}: {mean_steps:.0f} (mean of a pilot subsample)")
+    print(f"{'estimated time':>28}: {seconds:.1f} s on this machine (timed pilot)")
+    return 0
 
 
 def _plan_text(scene, plan) -> str:
@@ -91,23 +125,15 @@ def _plan_text(scene, plan) -> str:
 
 def _run_driven(scene, args: argparse.Namespace) -> int:
     """``sweep run`` of a driven scene: one simulation per point (no plan, no pilot estimate)."""
-    from .plan import make_plan
     from .plot import plot_regimes
 
-    if args.dry_run:
-        for key, text in make_plan(scene).describe().items():
-            print(f"{key:>28}: {text}")
-        print(f"{'grid':>28}: {scene.shape[0]} K/M x {scene.shape[1]} V, observables {', '.join(scene.observables)}")
-        return 0
-    t0 = time.perf_counter()
-    ds = _run_to_file(scene, args)
+    ds, _, elapsed = _run_to_file(scene, args, warm=False)
     out = args.output
-    elapsed = time.perf_counter() - t0
     print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, including compilation on a first run)")
     print(_flag_summary(ds, "status"))
     print(_model_summary(ds))
     print(_flag_summary(ds, "regime"))
-    print(f"wrote {plot_regimes(ds, args.png or out.with_suffix('.png'))}")
+    print(f"wrote {plot_regimes(ds, _png(args))}")
     return _most_failed(ds, out)
 
 
@@ -127,14 +153,24 @@ def _most_failed(ds, out: Path) -> int:
                  "or inaccurate: check the units (K_over_M [s-2], V [m/s]) and ranges", 1)
 
 
-def _run_to_file(scene, args: argparse.Namespace):
-    """run_sweep into args.output, journaled (resumable with --resume)."""
-    from .api import run_sweep
+def _run_to_file(scene, args: argparse.Namespace, warm: bool):
+    """run_sweep into args.output, journaled (resumable with --resume), through api.prepare_run: every check, the
+    lock and the journal's check before the kernels are loaded (``warm``: separately, timed; a dask run always
+    warms up before its fan-out). Returns (Dataset, seconds warming up, seconds running)."""
+    from .api import prepare_run, warm_up_kernels
+    from .compile_notice import timed
 
     dask = args.workers is not None or args.scheduler is not None
-    return run_sweep(scene, progress=None if not args.quiet else False, history=_history(), output=args.output,
-                     resume=args.resume, chunk_size=args.chunk_size, backend="dask" if dask else "threads",
-                     workers=args.workers, scheduler=args.scheduler)
+    with prepare_run(scene, args.output, resume=args.resume, overwrite=args.overwrite, chunk_size=args.chunk_size,
+                     backend="dask" if dask else "threads", workers=args.workers, scheduler=args.scheduler) as run:
+        t_warm = time.perf_counter()
+        if warm or dask:
+            with timed("kernels"):  # says so before a first compile (empty numba cache) and when it takes long
+                warm_up_kernels(scene, run.plan)
+        compile_s = time.perf_counter() - t_warm
+        t0 = time.perf_counter()
+        ds = run.finish(progress=None if not args.quiet else False, history=_history())
+    return ds, compile_s, time.perf_counter() - t0
 
 
 def _history() -> str:
@@ -161,11 +197,17 @@ def _model_summary(ds) -> str:
 
 def _cmd_plot(args: argparse.Namespace) -> int:
     from .files import read_sweep_file
-    from .plot import plot_file
+    from .outputs import check_targets, picture_paths
+    from .plot import has_trajectories, plot_file
 
-    ds, _ = read_sweep_file(args.file)
-    for png in plot_file(ds, args.output or Path(args.file).with_suffix(".png"), variable=args.variable):
-        print(f"wrote {png}")
+    ds, kind = read_sweep_file(args.file)
+    png = args.output or Path(args.file).with_suffix(".png")
+    pictures = picture_paths(png, kind, trajectories=has_trajectories(ds),
+                             points=ds.sizes.get("K_over_M", 1) * ds.sizes.get("V", 1), variable=args.variable)
+    check_targets({f"picture {i + 1}" if i else "picture": path for i, path in enumerate(pictures)},
+                  overwrite=args.overwrite, inputs={"sweep file": args.file})
+    for written in plot_file(ds, png, variable=args.variable):
+        print(f"wrote {written}")
     return 0
 
 
@@ -202,17 +244,20 @@ def _cmd_hopf(args: argparse.Namespace) -> int:
     """``sweep hopf CONFIG.toml -o hopf.nc``: the Hopf line over the file's V axis, netCDF + PNG."""
     from .hopf import locate_hopf
     from .io import save
+    from .outputs import check_targets
     from .plot import plot_hopf
     from .scene import hopf_config
 
     params, v, kwargs = hopf_config(args.config)
+    check_targets({"data": args.output, **({} if args.output.is_dir() else {"picture": _png(args)})},
+                  overwrite=args.overwrite, inputs={"scene file": args.config})  # before the computation
     t0 = time.perf_counter()
     ds = locate_hopf(params, v, progress=False if args.quiet else None, **kwargs)
     ds.attrs["history"] = _history()
-    out = save(ds, args.output)
+    out = save(ds, args.output, overwrite=args.overwrite)
     print(f"wrote {out} ({v.size} velocities in {time.perf_counter() - t0:.2f} s; {_flag_summary(ds, 'bifurcation')}; "
           f"{_flag_summary(ds, 'model')})")
-    print(f"wrote {plot_hopf(ds, args.png or out.with_suffix('.png'))}")
+    print(f"wrote {plot_hopf(ds, _png(args))}")
     return 0
 
 
@@ -220,7 +265,7 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     """``sweep reproduce NAME -o DIR``: the paper's figures, each as netCDF + PNG + a text of key numbers."""
     from .figures import reproduce
 
-    for done in reproduce(args.name, args.output):
+    for done in reproduce(args.name, args.output, overwrite=args.overwrite):
         print(f"{done.name}: computed in {done.seconds:.2f} s; wrote {done.data}, {done.png}, {done.text}")
         for line in done.key_numbers:
             print(f"  {line}")
@@ -253,7 +298,10 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--dry-run", action="store_true", help="print the plan and an estimated time, then exit")
     run.add_argument("--resume", action="store_true",
                      help="continue an interrupted run into the same output: compute only the chunks missing from "
-                          "its journal (OUTPUT.journal), after checking that the scene and plan are the same")
+                          "its journal (OUTPUT.journal), after checking that the scene and plan are the same and "
+                          "every chunk is whole (a damaged one is moved to OUTPUT.rejected and computed again)")
+    run.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP + "; without --resume, also start over "
+                     "from an existing journal (deleted)")
     run.add_argument("--chunk-size", type=_positive_int, default=None,
                      help="points per chunk (journal entry); default 4096 for stop, 1024 for driven scenes")
     run.add_argument("--workers", type=_positive_int, default=None,
@@ -267,6 +315,7 @@ def build_parser() -> argparse.ArgumentParser:
                                        "driven regimes, or Hopf line")
     plot.add_argument("file")
     plot.add_argument("-o", "--output", type=Path, help="PNG path (default: the file with .png)")
+    plot.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     plot.add_argument("--variable", default=None,
                       help="draw this (K_over_M, V) variable alone (default: xi_inf and the stress relaxation of a "
                            "stop sweep, the regime and amplitude of a driven one)")
@@ -275,6 +324,7 @@ def build_parser() -> argparse.ArgumentParser:
     hopf.add_argument("config", help="TOML with preset and/or [params], a [V] axis table, optional rtol, model")
     hopf.add_argument("-o", "--output", type=Path, default=Path("sweep-out") / "hopf.nc", help="netCDF output")
     hopf.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
+    hopf.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     hopf.set_defaults(func=_cmd_hopf)
     rep = add("reproduce", help="regenerate the paper's figures from the presets (netCDF + PNG + key "
                                            "numbers beside the paper's)")
@@ -282,6 +332,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help=f"one of {', '.join([*FIGURE_NAMES, 'all'])}")
     rep.add_argument("-o", "--output", type=Path, default=FIGURES_OUT,
                      help=f"output folder (default {FIGURES_OUT})")
+    rep.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     rep.set_defaults(func=_cmd_reproduce)
     info = add("info", help="summarise a sweep file")
     info.add_argument("file")
@@ -293,10 +344,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    """Warnings of sweep (implausible inputs, failed points) as one line ``sweep: warning: ...``; others as usual."""
+    """Warnings of sweep (implausible inputs, failed points, files refused from a journal) as one line
+    ``sweep: warning: ...``; others as usual."""
     from .plausibility import PlausibilityWarning
 
-    if issubclass(category, PlausibilityWarning):
+    if issubclass(category, (PlausibilityWarning, JournalWarning)):
         print(f"sweep: warning: {message}", file=sys.stderr)
     else:
         _python_show_warning(message, category, filename, lineno, file, line)
@@ -307,7 +359,8 @@ _python_show_warning = warnings.showwarning
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code: 0 done, 1 finished with failures (a summary says which), 2 a
-    user mistake (one line on stderr, no traceback), 130 interrupted (Ctrl-C)."""
+    user mistake (one line on stderr, no traceback), 3 a file could not be written during the run (disk full,
+    permission...: one line; a journaled run keeps its finished chunks for --resume), 130 interrupted (Ctrl-C)."""
     previous_show_warning, warnings.showwarning = warnings.showwarning, _show_warning
     previous_sigint = _exit_on_ctrl_c_while_compiling()
     try:
@@ -318,6 +371,8 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(f"error: {exc}", 2)
     except (FileNotFoundError, PermissionError, IsADirectoryError, NotADirectoryError) as exc:
         return _fail(f"error: {exc}", 2)
+    except OSError as exc:  # OutputError (sweep/outputs.py: a write failed during the run), or a picture
+        return _fail(f"error: {exc}", 3)
     except KeyboardInterrupt:
         return _fail("interrupted (Ctrl-C)", 130)
     except Exception as exc:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import os
 from collections.abc import Iterable
 from pathlib import Path
@@ -9,7 +10,9 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-__all__ = ["save", "open_dataset"]
+from .outputs import check_targets, free_bytes, remove_quietly, write_failed
+
+__all__ = ["save", "open_dataset", "write"]
 
 COMPRESSION = {"zlib": True, "complevel": 4}
 GRID = ("K_over_M", "V")
@@ -19,19 +22,36 @@ BLOCK_CHUNK_BYTES = 2**20
 BLOCK_CACHE_CHUNKS = 4
 """HDF5 chunk cache of such a variable, in chunks: a block fills its chunks in order, so a few suffice (the default
 cache, 64 MiB a variable, held every chunk being written: 166 MiB for a 2e5-point trajectory sweep)."""
+FULL_DISK_BYTES = 16 * 2**20
+"""A netCDF write that fails with less than this free is taken for a full disk (an HDF5 chunk is ~1 MiB)."""
 
 
 def save(ds: xr.Dataset, path: str | os.PathLike,
-         blocks: Iterable[tuple[int, dict[str, xr.Variable]]] | None = None) -> Path:
+         blocks: Iterable[tuple[int, dict[str, xr.Variable]]] | None = None, overwrite: bool = False) -> Path:
     """Write ``ds`` to ``path`` as netCDF4 (zlib-compressed, CF-1.11 attributes as built by the engine).
 
     ``blocks``: variables too large to hold whole (the trajectories of a large sweep), written after ``ds`` one
     block at a time: (first flat point, {name: Variable with dims ("point", ...)}) over consecutive points of the
     grid, in ascending order; the first block defines each variable (dtype, trailing dims, attributes).
 
-    The file is written beside its destination and renamed into place, so an interrupted write never leaves
-    a truncated file under the final name. Returns the path.
+    ``path`` is checked first (sweep/outputs.py): an existing file is replaced only with ``overwrite=True``; a folder
+    or an unwritable place is an :class:`~sweep.errors.InputError`. The file is written beside its destination and
+    renamed into place, so an interrupted write never leaves a truncated file under the final name; a write that
+    fails (disk full...) is an :class:`~sweep.errors.OutputError` naming the file. Returns the path.
     """
+    path = Path(path)
+    check_targets({"data": path}, overwrite=overwrite)
+    try:
+        return write(ds, path, blocks)
+    except OSError as exc:
+        raise write_failed(exc, path) from None
+
+
+def write(ds: xr.Dataset, path: str | os.PathLike,
+          blocks: Iterable[tuple[int, dict[str, xr.Variable]]] | None = None) -> Path:
+    """:func:`save` without its checks, for a caller that made them before its work (run_sweep): the file written
+    under ``<path>.part`` and renamed into place; the ``.part`` removed if anything fails, and an error of the netCDF
+    library turned into an OSError: ENOSPC where the disk is nearly full (HDF5 then says "HDF error", or EACCES)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     encoding = {name: dict(COMPRESSION) for name in ds.data_vars}
@@ -40,10 +60,21 @@ def save(ds: xr.Dataset, path: str | os.PathLike,
         if var.dtype.kind in "iu":
             encoding[name]["_FillValue"] = None
     tmp = path.with_name(path.name + ".part")
-    ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
-    if blocks is not None:
-        _append_blocks(tmp, blocks, ds.sizes[GRID[1]])
-    os.replace(tmp, path)
+    try:
+        ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
+        if blocks is not None:
+            _append_blocks(tmp, blocks, ds.sizes[GRID[1]])
+        os.replace(tmp, path)
+    except BaseException as exc:
+        full = free_bytes(path.parent) < FULL_DISK_BYTES if path.parent.is_dir() else False  # before .part goes
+        remove_quietly([tmp])
+        library = isinstance(exc, RuntimeError) and str(exc).startswith("NetCDF")
+        if full and (library or isinstance(exc, PermissionError)):
+            # on a full disk HDF5 says "HDF error", or fails to close the file with EACCES (measured on a tmpfs)
+            raise OSError(errno.ENOSPC, f"No space left on device; the netCDF library said: {exc}") from exc
+        if library:
+            raise OSError(errno.EIO, f"netCDF library: {exc}") from exc
+        raise
     return path
 
 

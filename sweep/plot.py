@@ -19,6 +19,7 @@ import xarray as xr
 
 from .errors import InputError
 from .files import KINDS, file_kind  # noqa: F401 (re-exported: sweep.plot.file_kind)
+from .outputs import picture_paths
 from .plot_curves import draw_curve, draw_hopf, draw_hopf_gap, draw_psi, draw_regime_curve, draw_xi, trajectory_points
 from .plot_maps import draw_map, draw_regime_map
 from .plot_style import caption, figure_legend, new_figure, save
@@ -38,22 +39,23 @@ def plot_file(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = No
     sweep over more than one point, ``<path stem>_trajectories.png``. ``variable``: map or draw that variable of a
     stop or driven file alone. Returns the paths written."""
     kind = file_kind(ds)
-    path = Path(path)
+    pictures = picture_paths(path, kind, has_trajectories(ds), ds.sizes.get("K_over_M", 1) * ds.sizes.get("V", 1),
+                             variable)
     if variable is not None:
         if variable not in ds.data_vars or set(ds[variable].dims) != {"K_over_M", "V"}:
             names = [n for n, v in ds.data_vars.items() if set(v.dims) == {"K_over_M", "V"}]
             raise InputError(f"--variable must be a (K_over_M, V) variable of the file, one of {names}; "
                              f"got {variable!r}")
-        return [plot_landscape(ds, path, variable=variable)]
+        return [plot_landscape(ds, pictures[0], variable=variable)]
     if kind == "hopf":
-        return [plot_hopf(ds, path)]
+        return [plot_hopf(ds, pictures[0])]
     if kind == "driven":
-        return [plot_regimes(ds, path)]
-    if has_trajectories(ds) and ds.sizes["K_over_M"] * ds.sizes["V"] == 1:
-        return [plot_trajectories(ds, path)]  # a single point: its transient is the whole story
-    written = [plot_landscape(ds, path)]
-    if has_trajectories(ds):
-        written.append(plot_trajectories(ds, path.with_name(path.stem + "_trajectories.png")))
+        return [plot_regimes(ds, pictures[0])]
+    if has_trajectories(ds) and len(pictures) == 1:
+        return [plot_trajectories(ds, pictures[0])]  # a single point: its transient is the whole story
+    written = [plot_landscape(ds, pictures[0])]
+    if len(pictures) > 1:
+        written.append(plot_trajectories(ds, pictures[1]))
     return written
 
 

@@ -24,15 +24,18 @@ from .progress import Progress
 from .scene import Scene
 from .status import Status
 
-__all__ = ["Interrupted", "chunk_task", "execute", "in_process", "run_chunks", "sampled_blocks", "stop_chunk",
-           "stop_outputs", "warm_up"]
-
-JOURNAL_FORMAT = 2
-"""2: chunks are consecutive ranges of points (1: points spread over the grid)."""
+__all__ = ["Interrupted", "chunk_ranges", "chunk_task", "execute", "in_process", "run_chunks", "sampled_blocks",
+           "stop_chunk", "stop_outputs", "warm_up"]
 
 
 class Interrupted(RuntimeError):
     """A journaled run was interrupted (Ctrl-C); the message says where the finished chunks are and how to resume."""
+
+
+def chunk_ranges(n: int, chunk_size: int | None) -> list[tuple[int, int]]:
+    """The chunk layout of ``n`` points (engine.chunk_points): (first point, last point + 1) of each chunk, which the
+    journal records and checks every chunk against."""
+    return [(int(points.min()), int(points.max()) + 1) for points in chunk_points(n, chunk_size)]
 
 
 def chunk_task(scene: Scene, plan: Plan, points: np.ndarray) -> dict[str, np.ndarray]:

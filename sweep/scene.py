@@ -383,11 +383,16 @@ def _axis_from_toml(name: str, spec: Any) -> np.ndarray:
 SCENE_KEYS = {f.name for f in fields(Scene)} | {"preset"}
 
 
-def scene_from_mapping(cfg: Mapping[str, Any]) -> Scene:
-    """Build a Scene from a parsed TOML mapping (same fields as :class:`Scene`, plus ``preset``)."""
+def _check_keys(cfg: Mapping[str, Any]) -> None:
+    """InputError naming the keys of a scene file that no command knows (a misspelt ``rtoll`` is never ignored)."""
     unknown = set(cfg) - SCENE_KEYS
     if unknown:
         raise InputError(f"unknown key(s) {sorted(unknown)} in scene; allowed: {sorted(SCENE_KEYS)}")
+
+
+def scene_from_mapping(cfg: Mapping[str, Any]) -> Scene:
+    """Build a Scene from a parsed TOML mapping (same fields as :class:`Scene`, plus ``preset``)."""
+    _check_keys(cfg)
     for required in ("K_over_M", "V"):
         if required not in cfg:
             raise InputError(f"scene is missing the [{required}] axis table")
@@ -432,11 +437,13 @@ def _read_toml(source: str | Path) -> dict[str, Any]:
 
 def hopf_config(source: str | Path) -> tuple[FrictionParams, np.ndarray, dict[str, Any]]:
     """(params, V axis, keyword arguments of sweep.locate_hopf) from a TOML file with preset and/or [params], a
-    [V] axis table and optionally rtol, model and model_tol (other scene keys, e.g. [K_over_M], are ignored)."""
+    [V] axis table and optionally rtol, model, model_tol and state_law. The other keys of a scene (e.g. [K_over_M])
+    are allowed, so that a scene file serves both commands, and unused; any other key is refused, as in a scene."""
     cfg = _read_toml(source)
+    _check_keys(cfg)
     if "V" not in cfg:
         raise InputError("hopf needs the [V] axis table of velocities [m s-1]")
-    kwargs = {k: cfg[k] for k in ("rtol", "model", "model_tol") if k in cfg}
+    kwargs = {k: cfg[k] for k in ("rtol", "model", "model_tol", "state_law") if k in cfg}
     return _params_from(cfg), _axis_from_toml("V", cfg["V"]), kwargs
 
 

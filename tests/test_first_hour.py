@@ -131,12 +131,13 @@ def test_a_journal_without_chunks_does_not_block_a_new_run(tmp_path):
     resume, so a new run starts afresh instead of asking for --resume; a journal with chunks is still kept."""
     from sweep.journal import Journal, journal_path
 
-    Journal.open(tmp_path / "o.nc", {"scene": "a"}, resume=False)
-    Journal.open(tmp_path / "o.nc", {"scene": "b"}, resume=False)  # no InputError
-    journal = Journal.open(tmp_path / "o.nc", {"scene": "b"}, resume=False)
+    one_chunk = [(0, 1)]
+    Journal.open(tmp_path / "o.nc", {"scene": "a"}, one_chunk, resume=False)
+    Journal.open(tmp_path / "o.nc", {"scene": "b"}, one_chunk, resume=False)  # no InputError
+    journal = Journal.open(tmp_path / "o.nc", {"scene": "b"}, one_chunk, resume=False)
     journal.write(0, {"x": __import__("numpy").zeros(1)})
     with pytest.raises(sweep.InputError, match="resume"):
-        Journal.open(tmp_path / "o.nc", {"scene": "b"}, resume=False)
+        Journal.open(tmp_path / "o.nc", {"scene": "b"}, one_chunk, resume=False)
     assert journal_path(tmp_path / "o.nc").is_dir()
 
 

@@ -24,8 +24,9 @@ DATA = ROOT / "sweep-out" / "gallery"
 
 
 def sweep(*args) -> None:
+    """Run ``sweep ARGS --overwrite``: the gallery's files are regenerated in place."""
     print("$ sweep", *args, flush=True)
-    if main([str(a) for a in args]) != 0:
+    if main([str(a) for a in args] + ["--overwrite"]) != 0:
         sys.exit(f"sweep {' '.join(map(str, args))} failed")
 
 

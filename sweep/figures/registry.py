@@ -14,6 +14,7 @@ import xarray as xr
 
 from ..errors import InputError
 from ..io import save
+from ..outputs import check_targets
 from ..plot_style import file_params, preset_name
 from ..plot_style import save as save_png
 from . import fig2, fig3, fig4
@@ -56,27 +57,39 @@ FIGURES: dict[str, Figure] = {f.name: f for f in (
 )}
 
 
-def reproduce(name: str, out_dir: str | os.PathLike) -> list[Written]:
-    """Reproduce figure ``name`` (a key of :data:`FIGURES`, or "all") into ``out_dir``: NAME.nc, NAME.png and
-    NAME.txt (the key numbers beside the paper's, to check by eye)."""
+def reproduce(name: str, out_dir: str | os.PathLike, overwrite: bool = False) -> list[Written]:
+    """Reproduce figure ``name`` (a key of :data:`FIGURES`, or "all") into the folder ``out_dir``: NAME.nc,
+    NAME.png and NAME.txt (the key numbers beside the paper's, to check by eye). Every file is checked before any
+    figure is computed (sweep/outputs.py): an existing one is replaced only with ``overwrite=True``."""
     if name != "all" and name not in FIGURES:
         raise InputError(f"unknown figure {name!r}; one of {[*FIGURES, 'all']}")
     out = Path(out_dir)
-    return [_write(FIGURES[n], out) for n in (FIGURES if name == "all" else [name])]
+    if out.exists() and not out.is_dir():
+        raise InputError(f"the output of reproduce is a folder, and {out} is a file: give a folder (e.g. "
+                         f"{out.with_suffix('')}_figures)")
+    names = list(FIGURES) if name == "all" else [name]
+    check_targets({f"{n} {kind}": _paths(out, n)[kind] for n in names for kind in ("data", "picture", "text")},
+                  overwrite=overwrite)
+    return [_write(FIGURES[n], out) for n in names]
+
+
+def _paths(out: Path, name: str) -> dict[str, Path]:
+    """The files of figure ``name`` in the folder ``out``."""
+    return {"data": out / f"{name}.nc", "picture": out / f"{name}.png", "text": out / f"{name}.txt"}
 
 
 def _write(figure: Figure, out: Path) -> Written:
     t0 = time.perf_counter()
     ds = figure.compute()
     seconds = time.perf_counter() - t0
-    data = save(ds, out / f"{figure.name}.nc")
-    png = save_png(figure.draw(ds), out / f"{figure.name}.png")
+    paths = _paths(out, figure.name)
+    data = save(ds, paths["data"], overwrite=True)  # checked by reproduce before any figure was computed
+    png = save_png(figure.draw(ds), paths["picture"])
     numbers = figure.key_numbers(ds)
     preset = preset_name(file_params(ds))
     header = [figure.title, f"reproduces: {PAPER}",
               f"parameters: preset {preset} (paper Table I, partly illegible in the OCR, ~20 % uncertainty: see "
               f"sweep.provenance[{preset!r}])",
               f"files: {data.name} (data), {png.name} (picture); regenerate with: sweep reproduce {figure.name}", ""]
-    text = out / f"{figure.name}.txt"
-    text.write_text("\n".join(header + numbers) + "\n", encoding="utf-8")
-    return Written(figure.name, data, png, text, numbers, seconds)
+    paths["text"].write_text("\n".join(header + numbers) + "\n", encoding="utf-8")
+    return Written(figure.name, data, png, paths["text"], numbers, seconds)
