@@ -376,10 +376,13 @@ def measure_compile(runner: Runner, trees: list[Tree], families: list[str], repe
     return out
 
 
-def measure_speed(runner: Runner, trees: list[Tree], repeats: int) -> dict:
-    """Per workload: alternate old/new ``repeats`` times, min wall per tree, ratio new/old and PASS/MISS."""
+def measure_speed(runner: Runner, trees: list[Tree], repeats: int, only: list[str] | None = None) -> dict:
+    """Per workload (``only``: those named): alternate old/new ``repeats`` times, min wall per tree, ratio new/old
+    and PASS/MISS."""
     out = {}
     for name, what in WORKLOADS.items():
+        if only and name not in only:
+            continue
         row = {"what": what, "loadavg_before": loadavg(), "runs": {t.label: [] for t in trees}}
         for tree in alternate(trees, repeats):
             row["runs"][tree.label].append(runner.run(tree, "time", name, tree.timing_cache, workload=name))
@@ -499,6 +502,9 @@ def main() -> None:
     ap.add_argument("--timed-calls", type=int, default=3,
                     help="timed calls per run after its warm-up (default 3; the smallest counts): a single call per "
                          "process left dp5 at 1.077 on one run and 1.03 on the next")
+    ap.add_argument("--only", type=lambda v: v.split(","), default=None,
+                    help="comma-separated speed workloads to time again, skipping compile times and numbers "
+                         f"(known: {', '.join(WORKLOADS)})")
     ap.add_argument("--quick", action="store_true", help="tiny grids, 1 repeat, only the driven compile family")
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
     ap.add_argument("--worker", help=argparse.SUPPRESS)
@@ -507,6 +513,9 @@ def main() -> None:
     if args.worker:
         args.result.write_text(json.dumps(worker(json.loads(args.worker))))
         return
+    unknown = sorted(set(args.only or ()) - set(WORKLOADS))
+    if unknown:
+        ap.error(f"--only: unknown workload(s) {unknown}; known: {', '.join(WORKLOADS)}")
     repeats = args.repeats or (1 if args.quick else 3)
     t_start = time.perf_counter()
     with contextlib.ExitStack() as stack:
@@ -517,12 +526,14 @@ def main() -> None:
         runner = Runner(args.quick, timed_calls=1 if args.quick else args.timed_calls, scratch=scratch)
         families = list(QUICK_COMPILE_FAMILIES if args.quick else COMPILE_FAMILIES)
         print(f"old {old.commit[:10]} ({old.root}), new {new.commit[:10]} ({new.root}); repeats {repeats}", flush=True)
-        print("[1/3] first-call compile time, empty numba caches", flush=True)
-        compile_ = measure_compile(runner, trees, families, args.compile_repeats)
-        print("[2/3] numbers at rtol 1e-6", flush=True)
-        numbers = measure_numbers(runner, trees)
+        compile_, numbers = {}, {}
+        if not args.only:
+            print("[1/3] first-call compile time, empty numba caches", flush=True)
+            compile_ = measure_compile(runner, trees, families, args.compile_repeats)
+            print("[2/3] numbers at rtol 1e-6", flush=True)
+            numbers = measure_numbers(runner, trees)
         print("[3/3] speed, old and new alternated", flush=True)
-        speed = measure_speed(runner, trees, repeats)
+        speed = measure_speed(runner, trees, repeats, args.only)
     result = {
         "benchmark": "benchmarks/compare_commits.py" + (" --quick (tiny grids: a check of the script, not a result)"
                                                         if args.quick else ""),
@@ -534,7 +545,8 @@ def main() -> None:
         "limits": {"speed_ratio_max": SPEED_LIMIT, "numbers_max_rel_diff": NUMBERS_LIMIT, "rtol": RTOL},
         "compile": compile_, "numbers": numbers, "speed": speed,
         "verdict": {"speed": "PASS" if all(r["result"] == "PASS" for r in speed.values()) else "MISS",
-                    "numbers": "PASS" if all(r["result"] == "PASS" for r in numbers.values()) else "MISS",
+                    "numbers": ("not measured (--only)" if not numbers else
+                                "PASS" if all(r["result"] == "PASS" for r in numbers.values()) else "MISS"),
                     "compile_ratio": {k: r["ratio_compile_new_over_old"] for k, r in compile_.items()}},
         "commands": runner.commands, "benchmark_wall_s": time.perf_counter() - t_start,
     }
