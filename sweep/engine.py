@@ -86,32 +86,42 @@ def n_samples(scene: Scene, plan: Plan) -> int:
 
 
 def lane_runs(plan: Plan, method: str, points: np.ndarray, steps: np.ndarray, rtol: float, atol: float,
-              correction: bool = False, dtype: np.dtype | None = None) -> LaneOutputs:
+              correction: bool = False, dtype: np.dtype | None = None, max_steps: int | None = None) -> LaneOutputs:
     """One fixed-step run per entry of ``points`` (plan points) at ``steps`` in the lane kernels of ``method``, with
-    the first-order inertial correction if asked for (else its array is empty)."""
+    the first-order inertial correction if asked for (else its array is empty); at most ``max_steps`` steps per run
+    (default: the plan's)."""
     relax_batch = lane_kernels(plan.dtype if dtype is None else dtype, method, correction)[1]
     n = points.size
     out = LaneOutputs(np.full(n, np.nan), np.full(n, np.nan), np.full(n if correction else 0, np.nan),
                       np.zeros(n, np.int8), np.zeros(n, np.int32))
     relax_batch(LanePoints(plan.k, plan.a, plan.b, plan.s_c, plan.G),
-                LaneRuns(points, np.ascontiguousarray(steps, dtype=float), rtol, atol, plan.max_steps),
+                LaneRuns(points, np.ascontiguousarray(steps, dtype=float), rtol, atol,
+                         plan.max_steps if max_steps is None else max_steps),
                 4 * numba.get_num_threads(), out)
     return out
 
 
-def _lane_runner(scene: Scene, plan: Plan, method: str):
-    """run(points, steps) -> (xi_inf, tail bound, status, steps taken): one fixed-step run per entry, in lanes."""
+def _lane_runner(scene: Scene, plan: Plan, method: str, correction: np.ndarray | None = None):
+    """run(points, steps) -> (xi_inf, tail bound, status, steps taken): one fixed-step run per entry, in lanes.
+    With ``correction`` (an array over the points of the first call) the first call's runs also carry the first-order
+    inertial correction into it: the ladder's coarsest run, so that model="auto" needs no run of its own."""
+    first = [correction is not None]
 
     def run(points, steps):
-        out = lane_runs(plan, method, points, steps, scene.rtol, scene.atol["xi_inf"])
+        out = lane_runs(plan, method, points, steps, scene.rtol, scene.atol["xi_inf"], correction=first[0])
+        if first[0]:
+            correction[:] = out.correction
+            first[0] = False
         return out.xi_inf, out.tail_err, out.status, out.steps
 
     return run
 
 
-def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
+def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray, correction: np.ndarray | None = None) -> RawResult:
     """Relaxed slip of the points g through the lane kernels (one per method of the plan), each point down its own
-    step ladder (sweep/integrate/ladder.py: a pilot pair, then rungs until a checked estimate meets the tolerance)."""
+    step ladder (sweep/integrate/ladder.py: a pilot pair, then rungs until a checked estimate meets the tolerance).
+    ``correction`` (over g, NaN-filled): the first-order inertial correction of the rk4 points is written there from
+    the ladder's first run (:func:`_lane_runner`)."""
     out = RawResult.empty(g.size, 0, 0)
     out.status[~plan.finite[g]] = NO_FINITE_LIMIT
     out.steps[~plan.finite[g]] = 0
@@ -120,11 +130,14 @@ def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
         if live.size == 0:
             continue
         pts = g[live]
-        res = climb(_lane_runner(scene, plan, method), pts, plan.step[pts], METHODS[method].order,
+        carried = np.full(live.size, np.nan) if correction is not None and method == "rk4" else None
+        res = climb(_lane_runner(scene, plan, method, carried), pts, plan.step[pts], METHODS[method].order,
                     scene.rtol, scene.atol["xi_inf"], plan.roundoff, fixed=plan.step_source == "override",
                     growth=perturbation_growth(plan.k[pts], plan.a[pts], 1.0))
         out.xi_inf[live], out.xi_inf_err[live], out.status[live], out.steps[live], out.work[live] = (
             res.xi, res.error, res.status, res.steps, res.work)
+        if carried is not None:
+            correction[live] = carried
     return out
 
 
@@ -137,13 +150,14 @@ def _relax_general(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
     return out
 
 
-def run_points(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
+def run_points(scene: Scene, plan: Plan, g: np.ndarray, correction: np.ndarray | None = None) -> RawResult:
     """Run the plan's points ``g`` (one chunk: one call of a compiled batch) and return their flat outputs, in the
-    order of ``g``. A point's numbers do not depend on the other points of the chunk."""
+    order of ``g``. A point's numbers do not depend on the other points of the chunk. ``correction`` (over g,
+    NaN-filled): where the relaxed-slip lanes run, the first-order inertial correction of their rk4 points."""
     if plan.state_law != "aging":
         return _relax_general(scene, plan, g)
     if plan.lanes:
-        return _relax_in_lanes(scene, plan, g)
+        return _relax_in_lanes(scene, plan, g, correction)
     obs_tau = _obs_tau(scene, plan.flat_index(g))
     part = RawResult.empty(g.size, n_samples(scene, plan))
     fractions = FRACTIONS if {"t50", "t90"} & set(scene.observables) else np.empty(0)

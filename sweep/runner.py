@@ -137,13 +137,14 @@ def stop_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.
     n_t = n_samples(scene, plan)
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
+        carried = np.full(points.size, np.nan)  # the first-order correction, where the lanes carried it
         if scene.model == "inertial":
             raw = RawResult.empty(points.size, n_t, 0)
             raw.status[~plan.finite[points]] = Status.NO_FINITE_LIMIT
         else:
-            raw = run_points(scene, plan, points)
+            raw = run_points(scene, plan, points, carried if scene.model == "auto" else None)
             mark_error_above_tol(scene, raw)
-        choice = choose_stop_models(scene, plan, raw, points)
+        choice = choose_stop_models(scene, plan, raw, points, correction=carried)
         mark_error_above_tol(scene, raw)
         arrays = {name: value for name, value in vars(raw).items() if isinstance(value, np.ndarray)}
         arrays["inertial"] = choice.inertial

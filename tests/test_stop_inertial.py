@@ -138,21 +138,19 @@ def test_model_tol_is_checked_before_any_work():
 
 
 def lane_estimate(k: float, a: float, b: float, G: float) -> tuple[float, float, int]:
-    """(xi_inf, first-order correction, status) as model="auto" estimates them for one point: the RK4 lane run at
-    ESTIMATE_STEP carrying the correction, or the per-point RODAS3 at ESTIMATE_RTOL for the stiff points."""
+    """(xi_inf, first-order correction, status) as model="auto" estimates them for one point where the ladder did not
+    carry the correction (time-resolved scenes): the RK4 lane run at ESTIMATE_STEP."""
     from sweep.accuracy import ESTIMATE_RTOL, ESTIMATE_STEP
     from sweep.integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
-    from sweep.integrate.stop_inertial import relax
-    from sweep.plan import stiff_points, time_scale
+    from sweep.model_choice import ESTIMATE_MAX_STEPS
+    from sweep.plan import time_scale
 
-    if stiff_points(np.array(k), np.array(a), np.array(b)):
-        xi, correction, status, _, _ = relax(k, a, b, G, False, ESTIMATE_RTOL, 1e-12, 10**7)
-        return xi, correction, status
     relax_runs = lane_kernels(np.dtype(np.float64), "rk4", True)[0]
     one = lambda x: np.array([float(x)])  # noqa: E731
     out = LaneOutputs(one(np.nan), one(np.nan), one(np.nan), np.zeros(1, np.int8), np.zeros(1, np.int32))
     relax_runs(LanePoints(one(k), one(a), one(b), one(time_scale(k, a)), one(G)),
                LaneRuns(np.zeros(1, np.int64), one(ESTIMATE_STEP), ESTIMATE_RTOL, 1e-12, 10**7), np.arange(1), out)
+    assert out.steps[0] <= ESTIMATE_MAX_STEPS  # else auto falls back to the per-point module
     return out.xi_inf[0], out.correction[0], int(out.status[0])
 
 

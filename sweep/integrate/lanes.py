@@ -251,9 +251,8 @@ def make_lane_kernels(dtype, tableau, correction: bool = False):
                     out.xi_inf[r], out.status[r] = math.nan, NONFINITE
                 elif bound <= TAIL_SAFETY * (rtol * xi + atol):
                     out.xi_inf[r], out.tail_err[r], out.status[r] = xi + tail_slip(k, a, bb, u, E), bound, OK
-                    if correction:
-                        y = tail_correction(k, a, bb, pts.G[p], u, E, float(st[_Y * W + lane]))
-                        out.correction[r], out.status[r] = y, (OK if math.isfinite(y) else NONFINITE)
+                    if correction:  # NaN or inf where it overflowed: the caller's fallback; xi_inf stands
+                        out.correction[r] = tail_correction(k, a, bb, pts.G[p], u, E, float(st[_Y * W + lane]))
                 elif n[lane] >= max_steps:
                     out.xi_inf[r], out.status[r] = math.nan, MAX_STEPS
                 else:
