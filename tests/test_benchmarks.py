@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "benchmarks"
 TIMEOUT_S = 600
 
-DRAWS = {"hopf", "models", "peers", "scaling", "throughput", "work_precision"}
+DRAWS = {"error_coverage", "hopf", "models", "peers", "scaling", "throughput", "work_precision"}
 """Scripts that draw a PNG beside their JSON (run with --no-png)."""
 
 SMOKE_FLAG = {"compare_commits": "--self-test"}
@@ -36,6 +36,7 @@ KEYS = {
     "calibrate_stiff": {"what", "quick", "points", "reference_failures", "rows"},
     "compare_commits": {"benchmark", "self_test", "machine", "trees", "compile", "numbers", "speed", "verdict",
                         "commands"},
+    "error_coverage": {"benchmark", "quick", "machine", "rows"},
     "hopf": {"benchmark", "quick", "machine", "line", "inertial_line", "inertial_driven_deep_stick_slip",
              "driven_grid", "driven_grid_auto"},
     "models": {"benchmark", "quick", "machine", "cost", "accuracy_inertia_scene_model_tol_1e-2",
