@@ -2,7 +2,7 @@
 """Compare two sweep trees (an old commit and a new one) for speed, first-call compile time and numbers.
 
     python benchmarks/compare_commits.py [--old REV] [--new REV | --new-tree DIR] [--repeats N] [--compile-repeats N]
-                                         [--quick] [--out benchmarks/results/compare_commits.json]
+                                         [--quick | --self-test] [--out benchmarks/results/compare_commits.json]
 
 Defaults: old = ee0f86c (the release before the core restructure), new = the tree this script is run from. A REV
 is checked out with ``git worktree add --detach`` and removed afterwards.
@@ -34,7 +34,17 @@ checked out at a fixed path with its files' mtimes set to the commit time, so nu
 warm-ups load kernels instead of compiling them. Compile measurements never use it.
 
 Writes --out (JSON: machine, versions, the exact worker commands, every timing) and prints a summary.
---quick: tiny grids, one repeat, only the driven compile family (the cheapest): checks that the script works.
+--quick: tiny grids, one repeat, only the driven compile family (the cheapest): checks that the script works
+(~6 min the first time a commit is measured: every kernel compiles into the trees' kept caches).
+
+--self-test: the script's own machinery in seconds (the smoke run of tests/test_benchmarks.py): --old (default
+HEAD) checked out as a worktree as above, the new tree as it is, one worker per tree for each part, on the
+SELF_TEST workload instead of the real ones: every workload's inputs built in both trees (scenes made, not run),
+one small kernel of the tree compiled into the empty cache (sweep.models.stop.tail_is_accurate: the compile part),
+the analytic Hopf line timed (the speed part), and as numbers the closed-form xi_inf (m2 = 0) of every case of
+tests/cases.py. The timing caches live in the scratch directory. Checks, in the JSON under self_test (exit 1 if one
+fails): each compile worker wrote its kernel into its empty cache, the numbers of both trees are equal, the worktree
+was removed.
 """
 
 from __future__ import annotations
@@ -93,6 +103,11 @@ COMPILE_FAMILIES = {  # family -> workload whose first call compiles it (the qui
 QUICK_COMPILE_FAMILIES = ("driven",)
 """--quick measures the cheapest family to compile (~10-20 s a tree), only to check that the step works."""
 NUMBER_SETS = ("default_quasistatic", "default_auto", "cases_auto", "cases_quasistatic", "cases_time_resolved")
+SELF_TEST = "self_test"
+SELF_TEST_WORKLOADS = {SELF_TEST: "--self-test: every workload's inputs built (not run), one small kernel compiled "
+                                  "(sweep.models.stop.tail_is_accurate), the analytic Hopf line over 20 velocities"}
+SELF_TEST_COMPILE_FAMILIES = {SELF_TEST: (SELF_TEST, True)}
+SELF_TEST_NUMBER_SETS = (SELF_TEST,)
 
 
 # ================================================================================ worker side (imports sweep)
@@ -122,6 +137,21 @@ def make_workload(name: str, quick: bool) -> tuple[Callable[[], object], dict]:
     driven = {"protocol": "driven", "observables": None, **grid(24, 24, k=(4, 6), v=(-7, -5))}
     p2 = sweep.presets["sample2"]
     default_grid = grid(200, 100) if quick else {}
+    if name == SELF_TEST:
+        built = {w: make_workload(w, True)[1] for w in WORKLOADS}  # the scenes made (checked by the tree), not run
+        from sweep import physics
+        try:
+            from sweep.models.stop import tail_is_accurate  # numba cache=True: compiles into the empty cache
+        except ImportError:  # a tree without it: nothing compiles
+            tail_is_accurate = None
+        v = np.logspace(-7, np.log10(5e-6), 20)
+
+        def call() -> object:
+            if tail_is_accurate is not None:
+                tail_is_accurate(1.0, 0.5, 0.1, 3.0, 1e-3, 1e-6)
+            return physics.hopf_K_over_M(v, p2.A, p2.m1, p2.m2, p2.D0, p2.V0, p2.g)
+
+        return call, {**built, "self_test_V": describe(v)}
     if name == "default_quasistatic":
         return run(**default_grid, **qs)
     if name == "default_auto":
@@ -177,6 +207,16 @@ def number_set(name: str, quick: bool, cases_file: Path) -> tuple[dict[str, np.n
     the inputs."""
     import sweep
 
+    if name == SELF_TEST:  # closed form where m2 = 0 (NaN elsewhere): no kernel runs
+        from sweep import physics
+
+        cases = load_cases(cases_file)
+        with np.errstate(all="ignore"):
+            xi = np.array([float(physics.xi_inf_m2zero(c["chi"], c["A"], c["mu1"])) if c["m2"] == 0 else np.nan
+                           for c in map(cases.case_params, cases.ALL_CASES)])
+        return {"case": np.array([c.name for c in cases.ALL_CASES]), "xi_inf": xi,
+                "status": np.where(np.isfinite(xi), "ok", "no_value"), "steps": np.zeros(xi.size, np.int64)}, {
+                    "closed_form": "sweep.physics.xi_inf_m2zero on the m2 = 0 cases of tests/cases.py"}
     if name.startswith("default_"):
         call, inputs = make_workload(name, quick)
         ds = call()
@@ -225,7 +265,7 @@ def worker(spec: dict) -> dict:
            "numba_cache_dir": numba.config.CACHE_DIR, "numba_threads": numba.get_num_threads()}
     if spec["kind"] == "numbers":
         arrays, inputs = {}, {}
-        for s in NUMBER_SETS:
+        for s in spec.get("sets", NUMBER_SETS):
             values, inputs[s] = number_set(s, spec["quick"], Path(spec["cases_file"]))
             arrays.update({f"{s}__{k}": v for k, v in values.items()})
         np.savez(spec["npz"], **arrays)
@@ -259,6 +299,8 @@ class Tree:
     commit: str
     dirty: bool
     timing_cache: Path
+    checked_out: bool = False
+    """A REV checked out by :func:`checkout` (its worktree is removed at the end)."""
 
 
 def git(*args: str, cwd: Path = ROOT) -> str:
@@ -289,7 +331,8 @@ def checkout(label: str, rev: str) -> Iterator[Tree]:
                 os.utime(f, (stamp, stamp))
         # byte-compile now, as a used tree is: else the first import in a worker pays for it
         subprocess.run([sys.executable, "-m", "compileall", "-q", str(path / "sweep")], check=True)
-        yield Tree(label, path, sha, False, CACHE_ROOT / f"numba-{sha}-{hashlib.sha1(bytes(path)).hexdigest()[:10]}")
+        yield Tree(label, path, sha, False, CACHE_ROOT / f"numba-{sha}-{hashlib.sha1(bytes(path)).hexdigest()[:10]}",
+                   checked_out=True)
     finally:
         subprocess.run(["git", "worktree", "remove", "--force", str(path)], cwd=ROOT, capture_output=True)
         if path.parent != CACHE_ROOT:
@@ -353,12 +396,12 @@ def alternate(trees: list[Tree], repeats: int) -> Iterator[Tree]:
         yield from trees
 
 
-def measure_compile(runner: Runner, trees: list[Tree], families: list[str], repeats: int) -> dict:
-    """First-call times from an empty numba cache, per family and tree: ``repeats`` runs per tree, trees
-    alternated, each in a new empty cache; per tree the run with the smallest compile_s is kept (all under runs)."""
+def measure_compile(runner: Runner, trees: list[Tree], families: dict[str, tuple[str, bool]], repeats: int) -> dict:
+    """First-call times from an empty numba cache, per family (``families``: family -> (workload, quick size)) and
+    tree: ``repeats`` runs per tree, trees alternated, each in a new empty cache; per tree the run with the smallest
+    compile_s is kept (all under runs)."""
     out = {}
-    for family in families:
-        workload, small = COMPILE_FAMILIES[family]
+    for family, (workload, small) in families.items():
         rows = {"workload": workload, "quick_size": small or runner.quick, "loadavg_before": loadavg(),
                 "runs": {t.label: [] for t in trees}}
         for tree in alternate(trees, repeats):
@@ -371,16 +414,22 @@ def measure_compile(runner: Runner, trees: list[Tree], families: list[str], repe
         rows["inputs"] = pop_inputs(rows["runs"])
         for label, runs in rows["runs"].items():
             rows[label] = min(runs, key=lambda r: r["compile_s"])
-        rows["ratio_compile_new_over_old"] = rows["new"]["compile_s"] / rows["old"]["compile_s"]
+        rows["ratio_compile_new_over_old"] = ratio(rows["new"]["compile_s"], rows["old"]["compile_s"])
         out[family] = rows
     return out
 
 
-def measure_speed(runner: Runner, trees: list[Tree], repeats: int, only: list[str] | None = None) -> dict:
+def ratio(new: float, old: float) -> float | None:
+    """new / old, None where old is not positive (a compile_s of ~0: nothing compiled)."""
+    return new / old if old > 0 else None
+
+
+def measure_speed(runner: Runner, trees: list[Tree], repeats: int, workloads: dict[str, str] = WORKLOADS,
+                  only: list[str] | None = None) -> dict:
     """Per workload (``only``: those named): alternate old/new ``repeats`` times, min wall per tree, ratio new/old
     and PASS/MISS."""
     out = {}
-    for name, what in WORKLOADS.items():
+    for name, what in workloads.items():
         if only and name not in only:
             continue
         row = {"what": what, "loadavg_before": loadavg(), "runs": {t.label: [] for t in trees}}
@@ -409,11 +458,11 @@ def relative_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.where(same, 0.0, np.where(np.isnan(rel), np.inf, rel))
 
 
-def compare_numbers(old: Path, new: Path) -> dict:
+def compare_numbers(old: Path, new: Path, sets: tuple[str, ...] = NUMBER_SETS) -> dict:
     """Per number set: max relative difference of every float variable, statuses and steps that differ."""
     a, b = np.load(old), np.load(new)
     out = {}
-    for s in NUMBER_SETS:
+    for s in sets:
         row = {"points": int(a[f"{s}__xi_inf"].size)}
         for var in ("xi_inf", "t50", "t90"):
             if f"{s}__{var}" in a.files:
@@ -428,14 +477,14 @@ def compare_numbers(old: Path, new: Path) -> dict:
     return out
 
 
-def measure_numbers(runner: Runner, trees: list[Tree]) -> dict:
+def measure_numbers(runner: Runner, trees: list[Tree], sets: tuple[str, ...] = NUMBER_SETS) -> dict:
     """Each tree writes its arrays to an .npz in the scratch dir; then compared old vs new."""
     paths, inputs = {}, {}
     for tree in trees:
         paths[tree.label] = runner.scratch / f"numbers-{tree.label}.npz"
         inputs[tree.label] = runner.run(tree, "numbers", "all", tree.timing_cache, npz=str(paths[tree.label]),
-                                        cases_file=str(HERE.parent / "tests" / "cases.py"))["inputs"]
-    out = compare_numbers(paths["old"], paths["new"])
+                                        cases_file=str(HERE.parent / "tests" / "cases.py"), sets=list(sets))["inputs"]
+    out = compare_numbers(paths["old"], paths["new"], sets)
     for name, row in out.items():
         row["inputs"] = same_inputs(inputs["old"][name], inputs["new"][name])
     return out
@@ -452,17 +501,22 @@ def machine() -> dict:
             "numba_default_threads": numba.config.NUMBA_NUM_THREADS}
 
 
+def fmt(x: float | None, f: str = "{:.2f}", width: int = 0) -> str:
+    return f"{'-':>{width}s}" if x is None else f.format(x)
+
+
 def print_summary(r: dict) -> None:
     """One screen: trees, compile times, speed ratios, numbers."""
     t = r["trees"]
-    print(f"\n== compare_commits {r['date']}{'  (QUICK)' if r['quick'] else ''}  {r['machine']['cpu']}, "
+    mode = "  (SELF-TEST)" if r.get("self_test") else "  (QUICK)" if r["quick"] else ""
+    print(f"\n== compare_commits {r['date']}{mode}  {r['machine']['cpu']}, "
           f"numba {r['machine']['numba']}, numpy {r['machine']['numpy']}")
     for label in ("old", "new"):
         print(f"{label}: {t[label]['commit'][:10]}{' (dirty)' if t[label]['dirty'] else ''}  {t[label]['root']}")
     print(f"\nfirst call from an empty numba cache [s]   {'old':>8s}{'new':>8s}{'new/old':>9s}")
     for family, row in r["compile"].items():
         print(f"  {family + ' compile':40s}{row['old']['compile_s']:8.1f}{row['new']['compile_s']:8.1f}"
-              f"{row['ratio_compile_new_over_old']:9.3f}")
+              f"{fmt(row['ratio_compile_new_over_old'], '{:9.3f}', 9)}")
         if family == next(iter(r["compile"])):
             print(f"  {'import sweep':40s}{row['old']['import_s']:8.2f}{row['new']['import_s']:8.2f}"
                   f"{row['new']['import_s'] / row['old']['import_s']:9.3f}")
@@ -486,12 +540,26 @@ def print_summary(r: dict) -> None:
     if only:
         print(f"note: input fields of one tree only (left at their defaults): {', '.join(sorted(only))}")
     print(f"\nverdict: speed {r['verdict']['speed']}, numbers {r['verdict']['numbers']} "
-          f"(compile new/old: {', '.join(f'{k} {v:.2f}' for k, v in r['verdict']['compile_ratio'].items())})")
+          f"(compile new/old: {', '.join(f'{k} {fmt(v)}' for k, v in r['verdict']['compile_ratio'].items())})")
+    if r.get("self_test"):
+        st = r["self_test"]
+        print(f"self-test: {'PASS' if st['passed'] else 'FAIL'} "
+              + ", ".join(f"{k} {'ok' if v else 'FAILED'}" for k, v in st["checks"].items()))
 
 
-def main() -> None:
+def self_test_checks(compile_: dict, numbers: dict, trees: list[Tree]) -> dict:
+    """--self-test's checks: each compile worker wrote its kernel into its empty cache; both trees' numbers equal;
+    a checked-out REV's worktree removed afterwards."""
+    checks = {f"compile_wrote_cache_{label}": all(r["cache_files_written"] > 0 for r in row["runs"][label])
+              for row in compile_.values() for label in ("old", "new")}
+    checks["numbers_equal"] = all(row["result"] == "PASS" for row in numbers.values())
+    checks["worktrees_removed"] = all(not t.root.exists() for t in trees if t.checked_out)
+    return {"checks": checks, "passed": all(checks.values())}
+
+
+def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--old", default=DEFAULT_OLD, help=f"old revision (default {DEFAULT_OLD})")
+    ap.add_argument("--old", default=None, help=f"old revision (default {DEFAULT_OLD}; HEAD with --self-test)")
     new = ap.add_mutually_exclusive_group()
     new.add_argument("--new", help="new revision (checked out in a temporary worktree)")
     new.add_argument("--new-tree", type=Path, default=ROOT, help="new tree as it is (default: this script's tree)")
@@ -505,39 +573,56 @@ def main() -> None:
     ap.add_argument("--only", type=lambda v: v.split(","), default=None,
                     help="comma-separated speed workloads to time again, skipping compile times and numbers "
                          f"(known: {', '.join(WORKLOADS)})")
-    ap.add_argument("--quick", action="store_true", help="tiny grids, 1 repeat, only the driven compile family")
+    mode = ap.add_mutually_exclusive_group()
+    mode.add_argument("--quick", action="store_true", help="tiny grids, 1 repeat, only the driven compile family")
+    mode.add_argument("--self-test", action="store_true",
+                      help="the machinery only, on a workload that compiles one small kernel (seconds; a smoke run)")
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     ap.add_argument("--result", type=Path, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.worker:
         args.result.write_text(json.dumps(worker(json.loads(args.worker))))
-        return
+        return 0
     unknown = sorted(set(args.only or ()) - set(WORKLOADS))
     if unknown:
         ap.error(f"--only: unknown workload(s) {unknown}; known: {', '.join(WORKLOADS)}")
-    repeats = args.repeats or (1 if args.quick else 3)
+    if args.only and args.self_test:
+        ap.error("--only times real workloads again; --self-test runs none")
+    self_test = args.self_test
+    old_rev = args.old or ("HEAD" if self_test else DEFAULT_OLD)
+    repeats = args.repeats or (1 if args.quick or self_test else 3)
+    if self_test:
+        families, sets, workloads = SELF_TEST_COMPILE_FAMILIES, SELF_TEST_NUMBER_SETS, SELF_TEST_WORKLOADS
+    else:
+        families = {f: COMPILE_FAMILIES[f] for f in (QUICK_COMPILE_FAMILIES if args.quick else COMPILE_FAMILIES)}
+        sets, workloads = NUMBER_SETS, WORKLOADS
     t_start = time.perf_counter()
     with contextlib.ExitStack() as stack:
         scratch = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="sweep-compare-")))
-        old = stack.enter_context(checkout("old", args.old))
+        old = stack.enter_context(checkout("old", old_rev))
         new = stack.enter_context(checkout("new", args.new)) if args.new else working_tree("new", args.new_tree)
         trees = [old, new]
-        runner = Runner(args.quick, timed_calls=1 if args.quick else args.timed_calls, scratch=scratch)
-        families = list(QUICK_COMPILE_FAMILIES if args.quick else COMPILE_FAMILIES)
-        print(f"old {old.commit[:10]} ({old.root}), new {new.commit[:10]} ({new.root}); repeats {repeats}", flush=True)
+        if self_test:  # no cache kept between runs: the timing caches in the scratch directory
+            trees = [dataclasses.replace(t, timing_cache=scratch / f"numba-timing-{t.label}") for t in trees]
+        runner = Runner(args.quick or self_test, timed_calls=1 if args.quick or self_test else args.timed_calls,
+                        scratch=scratch)
+        print(f"old {old.commit[:10]} ({old.root}), new {new.commit[:10]} ({new.root}); repeats {repeats}"
+              + ("; SELF-TEST" if self_test else ""), flush=True)
         compile_, numbers = {}, {}
         if not args.only:
             print("[1/3] first-call compile time, empty numba caches", flush=True)
             compile_ = measure_compile(runner, trees, families, args.compile_repeats)
             print("[2/3] numbers at rtol 1e-6", flush=True)
-            numbers = measure_numbers(runner, trees)
+            numbers = measure_numbers(runner, trees, sets)
         print("[3/3] speed, old and new alternated", flush=True)
-        speed = measure_speed(runner, trees, repeats, args.only)
+        speed = measure_speed(runner, trees, repeats, workloads, args.only)
     result = {
-        "benchmark": "benchmarks/compare_commits.py" + (" --quick (tiny grids: a check of the script, not a result)"
-                                                        if args.quick else ""),
+        "benchmark": "benchmarks/compare_commits.py" + (
+            " --self-test (the script's machinery on a tiny workload: a check, not a result)" if self_test else
+            " --quick (tiny grids: a check of the script, not a result)" if args.quick else ""),
         "command": shlex.join([sys.executable, *sys.argv]), "quick": args.quick,
+        "self_test": self_test_checks(compile_, numbers, trees) if self_test else None,
         "date": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"), "machine": machine(), "repeats": repeats,
         "compile_repeats": args.compile_repeats,
         "trees": {t.label: {"root": str(t.root), "commit": t.commit, "dirty": t.dirty,
@@ -554,7 +639,8 @@ def main() -> None:
     args.out.write_text(json.dumps(result, indent=1) + "\n")
     print_summary(result)
     print(f"\nwrote {args.out} ({result['benchmark_wall_s']:.0f} s)")
+    return 0 if not self_test or result["self_test"]["passed"] else 1
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -18,10 +18,18 @@ Side by side, in one run, through the public ``sweep.run_sweep``:
 Writes benchmarks/results/models.json (machine, versions, every number) and models.png (left: model_error over
 (K/M, V) with the model_tol contour and the inertial points; right: wall time vs model_tol). numba runs with its
 default threads (recorded). Run: python benchmarks/models.py (~2-3 min on 2 cores).
+
+    python benchmarks/models.py [--quick] [--out benchmarks/results/models.json] [--no-png]
+
+--quick: both scenes on coarse grids (every 20th K/M and 10th V of the default scene: 10 x 10; every 10th K/M and
+V of the inertia scene: 10 x 5), model_tol 1e-1 and 1e-3 only, one timed call after the warm-up: checks that the
+script works (seconds); its numbers are not results.
 """
 
 from __future__ import annotations
 
+import argparse
+import dataclasses
 import json
 import sys
 import time
@@ -76,14 +84,14 @@ def gamma_over_A(scene):
     return scene.V**2 / (p.g * p.D0) / p.A
 
 
-def time_models(scene, label, model_tol=1e-2):
-    """Part 1 for one scene: every model, best-of-3 run_sweep, elapsed_seconds, the line alone."""
+def time_models(scene, label, model_tol=1e-2, repeats=3):
+    """Part 1 for one scene: every model, best-of-``repeats`` run_sweep, elapsed_seconds, the line alone."""
     rows, datasets = {}, {}
     for model in MODELS:
         sc = with_model(scene, model, model_tol=model_tol)
-        wall, walls, ds = best_of(lambda sc=sc: sweep.run_sweep(sc, progress=False))
+        wall, walls, ds = best_of(lambda sc=sc: sweep.run_sweep(sc, progress=False), repeats)
         line_s, _, _ = best_of(lambda sc=sc: sweep.locate_hopf(sc.params, sc.V, model=sc.model, bifurcation=False,
-                                                              model_tol=sc.model_tol))
+                                                              model_tol=sc.model_tol), repeats)
         n_in = int(ds["model"].values.sum())
         rows[model] = {"wall_s_best_of_3": wall, "wall_s_all": walls, "elapsed_seconds": ds.attrs["elapsed_seconds"],
                        "line_s_best_of_3": line_s, "inertial_points": n_in,
@@ -126,6 +134,8 @@ def numerics_vs_reference(ds, ref, rtol, atol=1e-12):
     rtol |x| + atol, how many of them the status flags (error_above_tol), and the estimate/true ratio."""
     x, err_est = ds["xi_inf"].values, ds["xi_inf_error"].values
     both = np.isfinite(x) & np.isfinite(ref) & (ds["model"].values == 1)
+    if not both.any():  # (a --quick grid may have no inertial point)
+        return {"inertial_points_compared": 0}
     true = np.abs(x - ref)[both]
     bound = rtol * np.abs(x[both]) + atol
     flagged = ds["status"].values[both] == Status.ERROR_ABOVE_TOL
@@ -192,12 +202,12 @@ def accuracy(ds_auto, ds_qs, ds_ref, model_tol):
     return out
 
 
-def tol_sweep(scene, ref):
+def tol_sweep(scene, ref, tols=MODEL_TOLS, repeats=3):
     """Part 3: model_tol 1e-1 .. 1e-4 on the inertia scene."""
     rows, datasets = [], {}
-    for tol in MODEL_TOLS:
+    for tol in tols:
         sc = with_model(scene, "auto", model_tol=tol)
-        wall, walls, ds = best_of(lambda sc=sc: sweep.run_sweep(sc, progress=False))
+        wall, walls, ds = best_of(lambda sc=sc: sweep.run_sweep(sc, progress=False), repeats)
         x = ds["xi_inf"].values
         both = np.isfinite(x) & np.isfinite(ref)
         err = np.abs(x[both] / ref[both] - 1.0)
@@ -260,14 +270,28 @@ def plot(path, ds_auto, untrusted, model_tol, tol_rows, timing):
     plt.close(fig)
 
 
-def main() -> None:
+def coarse(scene, every_k, every_v):
+    """Every ``every_k``-th K/M and ``every_v``-th V of a scene (--quick)."""
+    return dataclasses.replace(scene, K_over_M=scene.K_over_M[::every_k], V=scene.V[::every_v])
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="coarse grids, two model_tols, one timed call (a smoke run)")
+    ap.add_argument("--out", type=Path, default=OUT / "models.json", help="the JSON (the PNG beside it, .png)")
+    ap.add_argument("--no-png", action="store_true")
+    args = ap.parse_args(argv)
+    quick = args.quick
+    repeats = 1 if quick else 3
+    inertia_scene = coarse(INERTIA_SCENE, 10, 10) if quick else INERTIA_SCENE
+    model_tols = MODEL_TOLS[::2] if quick else MODEL_TOLS
     t_start = time.perf_counter()
     digest0, load0 = sweep_digest(), loadavg()
     threads = numba.get_num_threads()
     print(f"numba threads: {threads}", flush=True)
-    default = sweep.default_scene()
+    default = coarse(sweep.default_scene(), 20, 10) if quick else sweep.default_scene()
     print("1. cost per model", flush=True)
-    timing_default, ds_default = time_models(default, "default")
+    timing_default, ds_default = time_models(default, "default", repeats=repeats)
     timing_default["auto_reasons"] = auto_reasons(default, ds_default["auto"])
     # no rtol-1e-9 reference on the default scene (too slow): the forced inertial run at rtol 1e-6 stands in
     # (its own error, < 5e-6 on the inertia scene, is far below model_tol)
@@ -276,11 +300,11 @@ def main() -> None:
         "auto": acc_default["auto"], "quasistatic": acc_default["quasistatic"],
         "true_over_model_error_on_auto_quasistatic_points": acc_default[
             "true_over_model_error_on_auto_quasistatic_points"]}
-    timing_inertia, ds = time_models(INERTIA_SCENE, "inertia")
+    timing_inertia, ds = time_models(inertia_scene, "inertia", repeats=repeats)
     load_after_cost = loadavg()
     print("2. reference (inertial, rtol 1e-9)", flush=True)
-    ref_scene = sweep.Scene(protocol="stop", params=INERTIA_PARAMS, K_over_M=INERTIA_SCENE.K_over_M,
-                            V=INERTIA_SCENE.V, rtol=REFERENCE_RTOL, model="inertial")
+    ref_scene = sweep.Scene(protocol="stop", params=INERTIA_PARAMS, K_over_M=inertia_scene.K_over_M,
+                            V=inertia_scene.V, rtol=REFERENCE_RTOL, model="inertial")
     t0 = time.perf_counter()
     ds_ref = sweep.run_sweep(ref_scene, progress=False)
     ref_s = time.perf_counter() - t0
@@ -290,34 +314,39 @@ def main() -> None:
     x_in, ref = ds["inertial"]["xi_inf"].values, ds_ref["xi_inf"].values
     both = np.isfinite(x_in) & np.isfinite(ref)
     acc["inertial_rtol_1e-6_vs_reference_max_rel_diff"] = float(np.max(np.abs(x_in[both] / ref[both] - 1.0)))
-    acc["numerics_vs_reference"] = {model: numerics_vs_reference(ds[model], ref, INERTIA_SCENE.rtol)
+    acc["numerics_vs_reference"] = {model: numerics_vs_reference(ds[model], ref, inertia_scene.rtol)
                                     for model in ("inertial", "auto")}
-    acc["auto_reasons"] = auto_reasons(INERTIA_SCENE, ds["auto"])
+    acc["auto_reasons"] = auto_reasons(inertia_scene, ds["auto"])
     print(json.dumps(acc, indent=1), flush=True)
     print("3. model_tol sweep", flush=True)
-    tol_rows, _ = tol_sweep(INERTIA_SCENE, ref)
-    g = gamma_over_A(INERTIA_SCENE)
+    tol_rows, _ = tol_sweep(inertia_scene, ref, model_tols, repeats)
+    g = gamma_over_A(inertia_scene)
     result = {
-        "benchmark": "models", "date": time.strftime("%Y-%m-%dT%H:%M:%S%z", time.gmtime()), "machine": machine_info(),
+        "benchmark": "models" + (" --quick (coarse grids: a check of the script, not a result)" if quick else ""),
+        "quick": quick, "date": time.strftime("%Y-%m-%dT%H:%M:%S%z", time.gmtime()), "machine": machine_info(),
         "numba_threads": threads, "sweep_source_digest_start_end": [digest0, sweep_digest()],
         "loadavg_start_end": [load0, loadavg()], "loadavg_after_part1": load_after_cost,
         "settings": {"estimate_margin": ESTIMATE_MARGIN, "first_order_trust": FIRST_ORDER_TRUST,
-                     "reference_rtol": REFERENCE_RTOL, "timing": "best of 3 wall (perf_counter) after 1 warm-up",
-                     "inertia_scene": "sample1 with D0 = 1e-7 m, K/M logspace(3, 6, 100), V logspace(-7, -3.5, 50)",
+                     "reference_rtol": REFERENCE_RTOL,
+                     "timing": f"best of {repeats} wall (perf_counter) after 1 warm-up",
+                     "inertia_scene": "sample1 with D0 = 1e-7 m, K/M logspace(3, 6, 100), V logspace(-7, -3.5, 50)"
+                                      + (", every 10th K/M and V" if quick else ""),
+                     "default_scene": "sweep.default_scene()" + (", every 20th K/M and 10th V" if quick else ""),
                      "inertia_scene_gamma_over_A": [float(g.min()), float(g.max())]},
         "cost": {"default_scene": timing_default, "inertia_scene": timing_inertia},
         "accuracy_inertia_scene_model_tol_1e-2": acc,
         "model_tol_sweep_inertia_scene": tol_rows,
         "benchmark_wall_s": time.perf_counter() - t_start,
     }
-    OUT.mkdir(exist_ok=True)
-    (OUT / "models.json").write_text(json.dumps(result, indent=1, default=str))
-    try:
-        plot(OUT / "models.png", ds["auto"], auto_reasons(INERTIA_SCENE, ds["auto"], mask=True), 1e-2, tol_rows,
-             timing_inertia)
-    except ImportError:
-        print("matplotlib not installed: no PNG")
-    print(f"wrote {OUT / 'models.json'} ({result['benchmark_wall_s']:.0f} s)")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(result, indent=1, default=str))
+    if not args.no_png:
+        try:
+            plot(args.out.with_suffix(".png"), ds["auto"], auto_reasons(inertia_scene, ds["auto"], mask=True), 1e-2,
+                 tol_rows, timing_inertia)
+        except ImportError:
+            print("matplotlib not installed: no PNG")
+    print(f"wrote {args.out} ({result['benchmark_wall_s']:.0f} s)")
     print(f"{'scene':9s} {'model':11s} {'wall s':>8s} {'elapsed s':>9s} {'inertial':>8s} {'wall/qs':>7s} {'el/qs':>6s}")
     for label, t in (("default", timing_default), ("inertia", timing_inertia)):
         for model in MODELS:

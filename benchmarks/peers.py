@@ -36,7 +36,8 @@ against scipy's DOP853 at rtol 1e-13 on a few points (its max difference is the 
 not resolved; the engine's own rtol-1e-10 row is the reference itself and has no error of its own).
 
 Writes benchmarks/results/peers.json and peers.png (time per trajectory per core vs max error, log-log, one
-curve per tool); prints a table. A peer that is not installed is recorded as "not installed" and skipped.
+curve per tool); prints a table. A peer that is not installed is recorded as "not installed" (peers_status, and
+tools_missing with the reason) and skipped; --quick runs with whatever is installed.
 Install the peers with `pip install -e .[bench]` (numbalsoda builds from source: gfortran and cmake; see
 benchmarks/README.md).
 """
@@ -599,6 +600,7 @@ def main(argv=None):
         "sweep_source_digest_start_end": [digest0, common.sweep_digest()],
         "loadavg_start_end": [load0, common.loadavg()],
         "peers_status": status,
+        "tools_missing": {name: why for name, why in status.items() if why != "ok"},  # left out of this run
         "settings": {
             "tols": list(tols), "repeats": repeats, "scipy_repeats": 1, "seed": SEED,
             "atol_peers": f"{ATOL_OVER_RTOL:g} x rtol", "atol_engine": "the scene's atol (xi_inf 1e-12)",

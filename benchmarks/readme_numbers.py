@@ -7,10 +7,16 @@ documented). Run it after a benchmark run:
 
     python benchmarks/readme_numbers.py          # rewrite README.md
     python benchmarks/readme_numbers.py --check  # exit 1 if README.md is not up to date (tests/test_first_hour.py)
+    python benchmarks/readme_numbers.py --out /tmp/n.json   # README.md left alone: the numbers as JSON
+
+With --out the script only reads: it writes every key's value, the README's spans and whether README.md is up to
+date to that JSON, and leaves README.md as it is. --quick changes nothing (the script reads a few small files);
+it is accepted so that every script in benchmarks/ takes the same smoke-run flags (tests/test_benchmarks.py).
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import re
 import sys
@@ -63,13 +69,29 @@ def rewrite(text: str) -> str:
 
 
 def main(argv: list[str]) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--check", action="store_true", help="exit 1 if README.md is not up to date; write nothing")
+    ap.add_argument("--out", type=Path, help="write the numbers as JSON here and leave README.md alone")
+    ap.add_argument("--quick", action="store_true", help="accepted for the smoke run; the script is already quick")
+    args = ap.parse_args(argv)
     readme = ROOT / "README.md"
     old = readme.read_text()
     new = rewrite(old)
-    if "--check" in argv:
+    if args.out is not None:
+        spans = [m["key"] for m in SPAN.finditer(old)]
+        stale = sorted({m["key"] for m in SPAN.finditer(old) if m["text"] != NUMBERS[m["key"]]()})
+        result = {"benchmark": "benchmarks/readme_numbers.py", "results_dir": str(RESULTS),
+                  "numbers": {key: value() for key, value in NUMBERS.items()}, "readme_spans": spans,
+                  "readme_stale_keys": stale, "readme_up_to_date": new == old}
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps(result, indent=1) + "\n")
+        print(f"{len(spans)} marked numbers in README.md, {len(stale)} stale; wrote {args.out} (README.md untouched)")
+    if args.check:
         if new != old:
             print("README.md numbers are stale: run python benchmarks/readme_numbers.py", file=sys.stderr)
             return 1
+        return 0
+    if args.out is not None:
         return 0
     readme.write_text(new)
     print(f"README.md: {len(SPAN.findall(new))} numbers from benchmarks/results and sweep/compile_notice.py")

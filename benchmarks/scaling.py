@@ -38,7 +38,15 @@ average is recorded before and after every measurement.
              trajectories go into the file chunk by chunk; the peak against what the four arrays would take whole.
 
 Writes benchmarks/results/scaling.json and scaling.png (left: points/s vs N; right: peak RSS vs N with the 2 GiB
-line). ~10 min on the 2-core machine (--quick: N up to 1e4, memory 1e4 and 1e5, ~1 min; give --out elsewhere).
+line). ~10 min on the 2-core machine.
+
+--quick (a smoke run: does every part work; give --out elsewhere): N = 1e3 with 1 and 2 threads, one call each;
+dask at 1e3 points, one call per variant and one start-up run (which also imports distributed); memory at 1e4
+points; trajectories at 1e3 points; no waiting for a quiet machine (a smoke run is itself run under pytest).
+~20 s with the kernels in numba's cache (three LocalCluster starts, ~2 s each on an idle 2-core machine).
+
+dask.distributed is optional (the [distributed] extra): without it part 2 is recorded as skipped, with the reason,
+under "dask" and "tools_missing", and the rest runs.
 """
 
 from __future__ import annotations
@@ -162,11 +170,11 @@ def runs(scene, repeats: int, **kw) -> dict:
             "conditions_before": before, "conditions_after": conditions()}, ds
 
 
-def part_threads(sizes, log) -> dict:
+def part_threads(sizes, log, quick=False) -> dict:
     out = {}
     for n in sizes:
         scene = make_scene(n)
-        repeats = 3 if n <= 100_000 else 2
+        repeats = 1 if quick else 3 if n <= 100_000 else 2
         row = {"shape": list(scene.shape), "repeats": repeats}
         for threads in (1, 2):
             numba.set_num_threads(threads)
@@ -181,14 +189,27 @@ def part_threads(sizes, log) -> dict:
     return out
 
 
-def part_dask(sizes, log) -> dict:
+def dask_missing() -> str | None:
+    """Why the dask backend cannot run here (dask.distributed not importable), or None."""
+    try:
+        import distributed  # noqa: F401
+    except Exception as exc:  # ImportError, or a broken installation
+        return f"not installed ({type(exc).__name__}: {exc})"
+    return None
+
+
+def part_dask(sizes, log, quick=False) -> dict:
     numba.set_num_threads(2)
     small = make_scene(STARTUP_POINTS)
-    t0 = time.perf_counter()
-    sweep.run_sweep(small, progress=False, backend="dask", workers=2)  # imports distributed: not the start-up
-    first = time.perf_counter() - t0
-    startup, _ = runs(small, 3, backend="dask", workers=2)
-    small_threads, _ = runs(small, 3)
+    if quick:  # one LocalCluster start fewer: the start-up run includes importing distributed
+        startup, _ = runs(small, 1, backend="dask", workers=2)
+        first = startup["wall_s_best"]
+    else:
+        t0 = time.perf_counter()
+        sweep.run_sweep(small, progress=False, backend="dask", workers=2)  # imports distributed: not the start-up
+        first = time.perf_counter() - t0
+        startup, _ = runs(small, 3, backend="dask", workers=2)
+    small_threads, _ = runs(small, 1 if quick else 3)
     log(f"  dask {STARTUP_POINTS}-point run (start-up): best {startup['wall_s_best']:.3f} s of "
         f"{[round(w, 3) for w in startup['wall_s_all']]} (first in the process {first:.3f} s); threads "
         f"{small_threads['wall_s_best']:.3f} s")
@@ -200,7 +221,7 @@ def part_dask(sizes, log) -> dict:
         variants = (("threads_2", {}), ("dask_2_workers", {"backend": "dask", "workers": 2}),
                     ("dask_running_cluster", {"backend": "dask", "scheduler": address}))
         for n in sizes:
-            out[str(n)] = dask_row(make_scene(n), variants, s_dask, log)
+            out[str(n)] = dask_row(make_scene(n), variants, s_dask, log, rounds=1 if quick else 2)
     out["note"] = ("dask_2_workers: run_sweep(backend='dask', workers=2), a LocalCluster started and shut down by "
                    "each call; dask_running_cluster: run_sweep(backend='dask', scheduler=address) on a "
                    "sweep.local_cluster(2) started once by this script (what the start-up costs is not paid per "
@@ -209,12 +230,13 @@ def part_dask(sizes, log) -> dict:
     return out
 
 
-def dask_row(scene, variants, s_dask: float, log) -> dict:
-    """The variants on ``scene``, alternating, one call each, twice (drift of the machine hits them alike)."""
+def dask_row(scene, variants, s_dask: float, log, rounds: int = 2) -> dict:
+    """The variants on ``scene``, alternating, one call each, ``rounds`` times (drift of the machine hits them
+    alike)."""
     n = scene.n_points
     walls = {name: [] for name, _ in variants}
     values = {}
-    for _ in range(2):
+    for _ in range(rounds):
         for name, kw in variants:
             r, ds = runs(scene, 1, **kw)
             walls[name].append(r)
@@ -426,7 +448,8 @@ def plot(result, path) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--quick", action="store_true", help="N up to 1e4, memory 1e4 and 1e5 (a smoke test)")
+    ap.add_argument("--quick", action="store_true", help="N = 1e3, memory 1e4, trajectories 1e3, one call each, "
+                                                         "no waiting for a quiet machine (a smoke run)")
     ap.add_argument("--out", type=Path, default=OUT / "scaling.json")
     ap.add_argument("--no-png", action="store_true")
     ap.add_argument("--no-wait", action="store_true", help="do not wait for a quiet machine before each part")
@@ -436,10 +459,12 @@ def main() -> None:
     if args.replot:
         plot(json.loads(args.out.read_text()), args.out.with_suffix(".png"))
         return
-    sizes = [1_000, 10_000] if args.quick else [1_000, 10_000, 100_000, 1_000_000]
-    dask_sizes = [10_000] if args.quick else [100_000, 1_000_000]
-    mem_sizes = [10_000, 100_000] if args.quick else [100_000, 1_000_000, 10_000_000]
-    traj_sizes = [10_000] if args.quick else [200_000]
+    quick = args.quick
+    sizes = [1_000] if quick else [1_000, 10_000, 100_000, 1_000_000]
+    dask_sizes = [1_000] if quick else [100_000, 1_000_000]
+    mem_sizes = [10_000] if quick else [100_000, 1_000_000, 10_000_000]
+    traj_sizes = [1_000] if quick else [200_000]
+    wait = not (args.no_wait or quick)  # a smoke run runs under pytest: it would wait for itself
     t_start = time.perf_counter()
     digest0, load0 = sweep_digest(), loadavg()
 
@@ -452,42 +477,53 @@ def main() -> None:
         sweep.run_sweep(make_scene(1_000), progress=False)
     waits, digests = {}, {}
     log("1. threads backend")
-    waits["threads"] = wait_quiet(not args.no_wait, args.max_wait)
+    waits["threads"] = wait_quiet(wait, args.max_wait)
     digests["threads"] = sweep_digest()
-    threads = part_threads(sizes, log)
+    threads = part_threads(sizes, log, quick)
     log("2. dask LocalCluster (2 workers) vs threads (2 threads)")
-    waits["dask"] = wait_quiet(not args.no_wait, args.max_wait)
+    waits["dask"] = wait_quiet(wait, args.max_wait)
     digests["dask"] = sweep_digest()
-    dask = part_dask(dask_sizes, log)
+    tools_missing = {}
+    why = dask_missing()
+    if why is None:
+        dask = part_dask(dask_sizes, log, quick)
+    else:
+        tools_missing["dask.distributed"] = why
+        dask = {"skipped": f"dask.distributed {why}: pip install '.[distributed]'"}
+        log(f"  skipped: {dask['skipped']}")
     log("3. peak memory, fresh processes, output= .nc")
-    waits["memory"] = wait_quiet(not args.no_wait, args.max_wait)
+    waits["memory"] = wait_quiet(wait, args.max_wait)
     digests["memory"] = sweep_digest()
     memory = part_memory(mem_sizes, log)
     log("4. peak memory with trajectories (written into the file chunk by chunk), fresh process")
     memory_traj = part_memory(traj_sizes, log, TRAJECTORY_OBSERVABLES)
     n_big, n_mem = str(dask_sizes[-1]), str(mem_sizes[-1])
     big_mem = memory[n_mem]
-    targets = {
-        f"dask_overhead_at_{n_big}_running_cluster": dask[n_big]["overhead_running_cluster"],
-        f"dask_overhead_at_{n_big}_new_cluster": dask[n_big]["overhead_new_cluster"],
-        f"dask_overhead_at_{n_big}_new_cluster_excluding_startup":
-            dask[n_big]["overhead_new_cluster_excluding_startup"],
-        "dask_overhead_target": DASK_OVERHEAD_TARGET,
-        "dask_overhead_pass_running_cluster": dask[n_big]["overhead_running_cluster"] < DASK_OVERHEAD_TARGET,
-        "dask_overhead_pass_new_cluster": dask[n_big]["overhead_new_cluster"] < DASK_OVERHEAD_TARGET,
+    targets = {"dask_overhead_target": DASK_OVERHEAD_TARGET}
+    if "skipped" not in dask:
+        targets.update({
+            f"dask_overhead_at_{n_big}_running_cluster": dask[n_big]["overhead_running_cluster"],
+            f"dask_overhead_at_{n_big}_new_cluster": dask[n_big]["overhead_new_cluster"],
+            f"dask_overhead_at_{n_big}_new_cluster_excluding_startup":
+                dask[n_big]["overhead_new_cluster_excluding_startup"],
+            "dask_overhead_pass_running_cluster": dask[n_big]["overhead_running_cluster"] < DASK_OVERHEAD_TARGET,
+            "dask_overhead_pass_new_cluster": dask[n_big]["overhead_new_cluster"] < DASK_OVERHEAD_TARGET})
+    targets.update({
         f"peak_rss_gib_at_{n_mem}": big_mem["peak_rss_gib"],
         "peak_rss_target_gib": RSS_TARGET_BYTES / GIB,
-        "peak_rss_pass": bool(not big_mem.get("failed") and big_mem["peak_rss_bytes"] < RSS_TARGET_BYTES),
-    }
+        "peak_rss_pass": bool(not big_mem.get("failed") and big_mem["peak_rss_bytes"] < RSS_TARGET_BYTES)})
     result = {
-        "benchmark": "scaling", "date": time.strftime("%Y-%m-%dT%H:%M:%S%z", time.gmtime()), "machine": machine_info(),
+        "benchmark": "scaling" + (" --quick (tiny sizes: a check of the script, not a result)" if quick else ""),
+        "tools_missing": tools_missing, "date": time.strftime("%Y-%m-%dT%H:%M:%S%z", time.gmtime()),
+        "machine": machine_info(),
         "quick": args.quick, "sweep_source_digest_start_end": [digest0, sweep_digest()],
         "sweep_source_digest_before_part": digests, "sweep_uncommitted_files": dirty_files(),
         "loadavg_start_end": [load0, loadavg()], "waits_for_quiet_machine": waits,
         "settings": {"scene": f"stop, preset {PRESET}, observables xi_inf, rtol {RTOL}, model auto, K/M logspace(3, 6, "
                               "n_k) x V logspace(-7, -4, n_v), n_k the smallest divisor of N >= sqrt(N)",
                      "chunk_size": CHUNK_POINTS["stop"], "timing": "time.perf_counter around run_sweep; best of 3 "
-                     "(N <= 1e5) or 2 (1e6); elapsed = ds.attrs['elapsed_seconds'] (the chunks' compute time, summed)",
+                     "(N <= 1e5) or 2 (1e6), one call with --quick; elapsed = ds.attrs['elapsed_seconds'] (the "
+                     "chunks' compute time, summed)",
                      "quiet": f"no pytest and 1-min load < {LOAD_QUIET} before each part (poll {POLL_S:.0f} s)",
                      "memory_timeout_s": MEMORY_TIMEOUT_S},
         "threads": threads, "dask": dask, "memory": memory, "memory_trajectories": memory_traj, "targets": targets,
@@ -513,12 +549,15 @@ def main() -> None:
                  f"{d['overhead_new_cluster']:+9.1%}" if d else f"{'':9s}",
                  f"{m['peak_rss_bytes'] / 2**20:12.0f}" if m else f"{'':12s}"]
         print(f"{n:>10,d} " + " ".join(cells))
-    print(f"\ndask overhead at {int(n_big):,d} points (target < 10 %): "
-          f"{'PASS' if targets['dask_overhead_pass_running_cluster'] else 'MISS'} on a running LocalCluster "
-          f"({dask[n_big]['overhead_running_cluster']:+.1%}); "
-          f"{'PASS' if targets['dask_overhead_pass_new_cluster'] else 'MISS'} with a LocalCluster started and shut "
-          f"down by the call ({dask[n_big]['overhead_new_cluster']:+.1%}, of which the start-up "
-          f"{dask[n_big]['overhead_new_cluster'] - dask[n_big]['overhead_new_cluster_excluding_startup']:.1%})")
+    if "skipped" in dask:
+        print(f"\ndask: {dask['skipped']}")
+    else:
+        print(f"\ndask overhead at {int(n_big):,d} points (target < 10 %): "
+              f"{'PASS' if targets['dask_overhead_pass_running_cluster'] else 'MISS'} on a running LocalCluster "
+              f"({dask[n_big]['overhead_running_cluster']:+.1%}); "
+              f"{'PASS' if targets['dask_overhead_pass_new_cluster'] else 'MISS'} with a LocalCluster started and "
+              f"shut down by the call ({dask[n_big]['overhead_new_cluster']:+.1%}, of which the start-up "
+              f"{dask[n_big]['overhead_new_cluster'] - dask[n_big]['overhead_new_cluster_excluding_startup']:.1%})")
     for n, r in memory_traj.items():
         if not r.get("failed"):
             print(f"trajectories, {int(n):,d} points: peak RSS {r['peak_rss_bytes'] / 2**20:.0f} MiB; held whole "

@@ -2,8 +2,8 @@
 """Work-precision benchmark (in the manner of SciMLBenchmarks): achieved error vs time per trajectory, every
 engine configuration and scipy's DOP853 / LSODA / Radau side by side, on one fixed set of stop problems.
 
-    python benchmarks/work_precision.py [--quick] [--out benchmarks/results/work_precision.json] [--no-png]
-                                        [--no-threads2] [--replot]
+    python benchmarks/work_precision.py [--quick | --half] [--out benchmarks/results/work_precision.json]
+                                        [--no-png] [--no-threads2] [--replot]
 
 * Problems: six fixed quasi-static stop points from tests/cases.py (reduced form chi, A, mu1, m2), among them
   the costly corner of the default grid, a slow tail and the stiff corner (PROBLEMS below).
@@ -28,6 +28,11 @@ the cheapest scipy one (speed-up per core; target >= 150x, project goal 1000x), 
 choice vs the fastest engine configuration that meets that rtol (target within 1.5x).
 
 Writes benchmarks/results/work_precision.json and work_precision.png; prints a table. See benchmarks/README.md.
+
+--half: every other configuration and scipy rtol, one timing pass (~3 min on the 2-core machine; the former
+--quick). --quick (a smoke run: does it work, in seconds; its numbers are not results): one or two configurations
+of every engine family (QUICK_CONFIGS), scipy at rtol 1e-3, 1e-6, 1e-9, each timed once on a batch sized for
+~2 ms, one pass.
 """
 
 from __future__ import annotations
@@ -87,6 +92,11 @@ GOAL_SPEEDUP = 1000.0
 TARGET_AUTO = 1.5
 REF_RTOL = 1e-13
 SCIPY_CAP_S = 4.0  # a scipy trajectory slower than this: no repeats, and no tighter rtol for that method
+QUICK_CONFIGS = ("rk4 h=1", "rk4 h=0.25", "rk4 f32 h=0.5", "auto h=0.5", "auto f32 h=0.5", "rk4 rule rtol=0.0001",
+                 "rk4 f32 rule rtol=0.0001", "dp5 rtol=1e-06", "dop853 rtol=1e-06", "auto rtol=0.001",
+                 "auto rtol=1e-06", "auto rtol=1e-09")
+"""The engine configurations of --quick (labels of :func:`engine_configs`): every family at least once."""
+RTOLS_SCIPY_QUICK = [1e-3, 1e-6, 1e-9]
 
 
 # ------------------------------------------------------------------------------------------ problems
@@ -158,7 +168,7 @@ def rtol_for_step(h: float, lo: float, hi: float) -> float:
     return float(min(hi, max(lo, c * h**4)))
 
 
-def time_engine(scene, plan, target_s, repeats, n_min=64, n_max=400_000):
+def time_engine(scene, plan, target_s, repeats, n_min=64, n_max=400_000, probes=3):
     """Best-of-``repeats`` seconds per trajectory (CPU, wall) of the problem repeated N times through
     sweep.runner.execute (the kernel path run_sweep takes, without building the Dataset); N is chosen so that
     one call lasts about ``target_s``, from probes at growing N (a call has a fixed cost of ~0.4 ms, so a probe
@@ -167,8 +177,8 @@ def time_engine(scene, plan, target_s, repeats, n_min=64, n_max=400_000):
     batch xi_inf)."""
     n = n_min
     execute(scene, plan, np.zeros(n, np.int64), progress=False)  # compile / load from numba's cache
-    for _ in range(3):
-        per, _, _ = timed(lambda n=n: execute(scene, plan, np.zeros(n, np.int64), progress=False), 3)
+    for _ in range(probes):
+        per, _, _ = timed(lambda n=n: execute(scene, plan, np.zeros(n, np.int64), progress=False), min(3, repeats))
         n_next = int(min(n_max, max(n_min, target_s / max(per / n, 1e-9))))
         if n_next <= n:
             break
@@ -178,7 +188,7 @@ def time_engine(scene, plan, target_s, repeats, n_min=64, n_max=400_000):
     return cpu / n, wall / n, n, res.xi_inf
 
 
-def run_engine_config(pbs, refs, label, family, kw_for, threads2, target_s, repeats):
+def run_engine_config(pbs, refs, label, family, kw_for, threads2, target_s, repeats, probes=3):
     """One engine configuration over all problems: error (public run_sweep on the 1-point scene), timing.
     Returns the summary and, per problem, (scene, plan) for later timing passes (:func:`time_row`)."""
     rows, handles = [], []
@@ -198,16 +208,16 @@ def run_engine_config(pbs, refs, label, family, kw_for, threads2, target_s, repe
                "status": sweep.Status(status).name.lower(), "steps_fine": steps,
                "work": int(execute(scene, plan, np.zeros(1, np.int64), progress=False).work[0])}
         row["estimate_over_true"] = row["rel_err_estimate"] / max(row["rel_err"], 1e-300)
-        time_row(row, scene, plan, threads2, target_s, repeats)
+        time_row(row, scene, plan, threads2, target_s, repeats, probes)
         rows.append(row)
         handles.append((scene, plan))
     return summarise(label, family, rows, refs), handles
 
 
-def time_row(row, scene, plan, threads2, target_s, repeats):
+def time_row(row, scene, plan, threads2, target_s, repeats, probes=3):
     """Time one (configuration, problem) and keep the best over the passes so far (1 thread, and 2 threads)."""
     numba.set_num_threads(1)
-    t1, w1, n1, xb = time_engine(scene, plan, target_s, repeats)
+    t1, w1, n1, xb = time_engine(scene, plan, target_s, repeats, probes=probes)
     row.setdefault("us_per_traj_1thread_passes", []).append(t1 * 1e6)
     row["us_per_traj_1thread"] = min(row["us_per_traj_1thread_passes"])
     row["us_per_traj_1thread_wall"] = min(row.get("us_per_traj_1thread_wall", math.inf), w1 * 1e6)
@@ -220,7 +230,7 @@ def time_row(row, scene, plan, threads2, target_s, repeats):
     row["ns_per_stage_eval_approx"] = row["us_per_traj_1thread"] * 1e3 / evals if evals else None
     if threads2:
         numba.set_num_threads(2)
-        c2, w2, _, _ = time_engine(scene, plan, target_s, repeats)
+        c2, w2, _, _ = time_engine(scene, plan, target_s, repeats, probes=probes)
         row["us_per_traj_per_core_2threads"] = min(row.get("us_per_traj_per_core_2threads", math.inf), 2 * w2 * 1e6)
         row["us_cpu_per_traj_2threads"] = min(row.get("us_cpu_per_traj_2threads", math.inf), c2 * 1e6)
         numba.set_num_threads(1)
@@ -254,11 +264,17 @@ def summarise(label, family, rows, refs):
     return out
 
 
-def engine_configs(quick):
-    """(label, family, kw_for(problem)) of every engine configuration."""
+def engine_configs(half=False, quick=False):
+    """(label, family, kw_for(problem)) of every engine configuration (half: every other step h; quick: only
+    QUICK_CONFIGS)."""
+    if quick:
+        cfgs = [c for c in engine_configs(half=True) if c[0] in QUICK_CONFIGS]
+        missing = set(QUICK_CONFIGS) - {c[0] for c in cfgs}
+        assert not missing, f"QUICK_CONFIGS names no configuration {sorted(missing)}"
+        return cfgs
     cfgs = []
-    hs = STEPS_H[::2] if quick else STEPS_H
-    hs32 = STEPS_H_F32[::2] if quick else STEPS_H_F32
+    hs = STEPS_H[::2] if half else STEPS_H
+    hs32 = STEPS_H_F32[::2] if half else STEPS_H_F32
     # fixed steps: rk4 alone, and method auto (RK4, and ros4 at the stiff points: sweep.plan.stiff_points)
     for method, name, family in (("rk4", "rk4", "engine rk4"), ("auto", "auto", "engine auto (rk4 + ros4)")):
         for precision, tag, steps, rtol_min in (("float64", "", hs, 1e-10), ("float32", " f32", hs32, 1e-5)):
@@ -505,7 +521,9 @@ def fmt(x, f="{:.3g}"):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--quick", action="store_true", help="fewer configurations and repeats (~1-2 min)")
+    mode = ap.add_mutually_exclusive_group()
+    mode.add_argument("--quick", action="store_true", help="a dozen configurations, one timing each (a smoke run)")
+    mode.add_argument("--half", action="store_true", help="every other configuration, one pass (~3 min)")
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
     ap.add_argument("--no-png", action="store_true")
     ap.add_argument("--no-threads2", action="store_true", help="skip the 2-thread engine timings")
@@ -519,9 +537,12 @@ def main(argv=None):
         return
     warnings.simplefilter("ignore", RuntimeWarning)
     t_start = time.perf_counter()
-    repeats = 3 if args.quick else 7  # short calls, several of them: the best one escapes other processes' load
-    target_s = 0.02  # batches of thousands of points at loose rtol, as in a sweep (run_sweep's chunks are 4096)
-    passes = 1 if args.quick else 2
+    # short calls, several of them: the best one escapes other processes' load
+    repeats = 1 if args.quick else 3 if args.half else 7
+    # batches of thousands of points at loose rtol, as in a sweep (run_sweep's chunks are 4096)
+    target_s = 0.002 if args.quick else 0.02
+    probes = 1 if args.quick else 3
+    passes = 1 if args.quick or args.half else 2
     threads2 = not args.no_threads2 and numba.config.NUMBA_NUM_THREADS >= 2
 
     load0 = loadavg()
@@ -536,8 +557,8 @@ def main(argv=None):
 
     print("[2/4] engine configurations (1 thread" + (", then 2 threads" if threads2 else "") + ")", flush=True)
     engine, handles = [], []
-    for label, fam, kw_for in engine_configs(args.quick):
-        c, h = run_engine_config(pbs, refs, label, fam, kw_for, threads2, target_s, repeats)
+    for label, fam, kw_for in engine_configs(args.half, args.quick):
+        c, h = run_engine_config(pbs, refs, label, fam, kw_for, threads2, target_s, repeats, probes)
         engine.append(c)
         handles.append(h)
         print(f"  {label:<24} err {c['max_rel_err']:9.2e}  {c['us_per_traj']:9.2f} us/traj  steps mean "
@@ -552,8 +573,9 @@ def main(argv=None):
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
 
     print(f"[3/4] scipy DOP853 / LSODA / Radau, rtol {RTOLS_SCIPY[0]:g}..{RTOLS_SCIPY[-1]:g}", flush=True)
-    scipy_cfgs, skipped = run_scipy(pbs, refs, 2 if args.quick else 7, passes,
-                                    RTOLS_SCIPY[::2] if args.quick else RTOLS_SCIPY)
+    scipy_cfgs, skipped = run_scipy(pbs, refs, 1 if args.quick else 2 if args.half else 7, passes,
+                                    RTOLS_SCIPY_QUICK if args.quick else RTOLS_SCIPY[::2] if args.half
+                                    else RTOLS_SCIPY)
 
     print("[4/4] summary", flush=True)
     table, auto = summary(engine, scipy_cfgs)
@@ -564,7 +586,7 @@ def main(argv=None):
         "what": "work-precision: achieved xi_inf error vs time per trajectory, engine configurations and scipy",
         "date": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
         "machine": machine_info(),
-        "quick": args.quick,
+        "quick": args.quick, "half": args.half,
         "problems": [{k: v for k, v in pb.items() if k != "params"} | {"params": pb["params"].as_dict()}
                      for pb in pbs],
         "reference": refs,

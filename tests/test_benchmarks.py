@@ -1,0 +1,134 @@
+"""Smoke run of every benchmark script in benchmarks/ (issue 17: "every benchmark script runs at HEAD").
+
+Each script runs in a subprocess with its smallest setting (--quick; compare_commits.py: --self-test, since its
+--quick compiles every kernel into two fresh caches, ~6 min), --no-png where it draws, and --out in a temporary
+directory; the test asserts exit code 0, the JSON's top-level keys, and that benchmarks/results/ and README.md
+were left alone. The numbers of a smoke run mean nothing: a script that runs says only that it still works with the
+package as it is. Optional peers of peers.py (jax/diffrax, numbalsoda: the [bench] extra) are used where
+installed; the script must then say which were missing, which one test checks by hiding them. The whole file takes
+~2-3 min on the 2-core development machine with the kernels in numba's cache (benchmarks/README.md).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+BENCH = ROOT / "benchmarks"
+TIMEOUT_S = 600
+
+DRAWS = {"error_coverage", "hopf", "models", "peers", "scaling", "throughput", "work_precision"}
+"""Scripts that draw a PNG beside their JSON (run with --no-png)."""
+
+SMOKE_FLAG = {"compare_commits": "--self-test"}
+"""The smoke-run flag of a script whose --quick is not seconds (default --quick)."""
+
+KEYS = {
+    "calibrate_rk4": {"benchmark", "points", "reference_failures", "rows", "plan_constants", "versions"},
+    "calibrate_stiff": {"what", "quick", "points", "reference_failures", "rows"},
+    "compare_commits": {"benchmark", "self_test", "machine", "trees", "compile", "numbers", "speed", "verdict",
+                        "commands"},
+    "error_coverage": {"benchmark", "quick", "machine", "rows"},
+    "hopf": {"benchmark", "quick", "machine", "line", "inertial_line", "inertial_driven_deep_stick_slip",
+             "driven_grid", "driven_grid_auto"},
+    "models": {"benchmark", "quick", "machine", "cost", "accuracy_inertia_scene_model_tol_1e-2",
+               "model_tol_sweep_inertia_scene"},
+    "peers": {"benchmark", "machine", "versions", "peers_status", "tools_missing", "settings", "scenes"},
+    "readme_numbers": {"numbers", "readme_spans", "readme_stale_keys", "readme_up_to_date"},
+    "scaling": {"benchmark", "quick", "tools_missing", "machine", "threads", "dask", "memory", "memory_trajectories",
+                "targets"},
+    "structure": {"import_cycle", "modules", "longest_functions", "largest_positional_lists"},
+    "throughput": {"benchmark", "machine", "versions", "scene", "engine", "scipy", "numpy_rk4", "cold_start",
+                   "estimate", "targets"},
+    "work_precision": {"quick", "machine", "problems", "reference", "engine", "scipy", "summary"},
+}
+"""Every script of benchmarks/ and the top-level keys its JSON must have."""
+
+OPTIONAL_PEERS = {"numbalsoda": ("numbalsoda",), "diffrax": ("jax", "diffrax")}
+"""peers.py's optional peers and the modules each needs."""
+
+
+def scripts() -> list[str]:
+    return sorted(p.stem for p in BENCH.glob("*.py") if not p.name.startswith("_"))
+
+
+def fingerprint() -> dict[str, str]:
+    """sha256 of every file under benchmarks/results/ and of README.md: a smoke run must write neither."""
+    files = [*sorted((BENCH / "results").rglob("*")), ROOT / "README.md"]
+    return {str(f.relative_to(ROOT)): hashlib.sha256(f.read_bytes()).hexdigest() for f in files if f.is_file()}
+
+
+def run_script(name: str, tmp: Path, *extra: str, pythonpath: tuple[str, ...] = ()) -> dict:
+    """benchmarks/NAME.py with its smoke flag, --no-png where it draws, --out TMP/NAME.json: its JSON."""
+    out = tmp / f"{name}.json"
+    argv = [sys.executable, str(BENCH / f"{name}.py"), SMOKE_FLAG.get(name, "--quick"), "--out", str(out)]
+    argv += ["--no-png"] if name in DRAWS else []
+    env = {**os.environ, "MPLBACKEND": "Agg",
+           "PYTHONPATH": os.pathsep.join([*pythonpath, str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    before = fingerprint()
+    proc = subprocess.run([*argv, *extra], cwd=tmp, env=env, capture_output=True, text=True, timeout=TIMEOUT_S)
+    assert proc.returncode == 0, f"{' '.join(argv)} exited {proc.returncode}:\n{proc.stdout[-3000:]}\n" \
+                                 f"{proc.stderr[-5000:]}"
+    assert fingerprint() == before, f"{name}.py changed benchmarks/results/ or README.md"
+    assert out.is_file(), f"{name}.py wrote no {out}"
+    if name in DRAWS:
+        assert not list(tmp.glob("*.png")), f"{name}.py drew a PNG despite --no-png"
+    result = json.loads(out.read_text())
+    assert KEYS[name] <= result.keys(), f"{name}.py's JSON lacks {sorted(KEYS[name] - result.keys())}"
+    return result
+
+
+def test_every_script_has_a_smoke_run():
+    """A new script in benchmarks/ needs its entry in KEYS (and with it a smoke run below)."""
+    assert scripts() == sorted(KEYS)
+
+
+@pytest.mark.parametrize("name", [n for n in sorted(KEYS) if n != "peers"])
+def test_script_runs(name, tmp_path):
+    result = run_script(name, tmp_path)
+    if name == "compare_commits":
+        assert result["self_test"]["passed"], result["self_test"]
+    if name == "scaling":
+        has_dask = importlib.util.find_spec("distributed") is not None
+        assert ("dask.distributed" in result["tools_missing"]) == (not has_dask)
+        assert ("skipped" in result["dask"]) == (not has_dask)
+
+
+def test_peers_with_the_peers_installed_here(tmp_path):
+    """Every optional peer either ran (status ok, its rows in the JSON) or is recorded as missing, with the
+    reason; one whose modules are not installed is never "ok"."""
+    result = run_script("peers", tmp_path)
+    tools = {t["family"] for scene in result["scenes"].values() for t in scene["tools"].values()}
+    assert {"engine", "scipy"} <= tools
+    for peer, modules in OPTIONAL_PEERS.items():
+        status = result["peers_status"][peer]
+        if status == "ok":
+            assert peer in tools and peer not in result["tools_missing"]
+        else:
+            assert status.startswith("not installed") and result["tools_missing"][peer] == status
+            assert peer not in tools
+        if any(importlib.util.find_spec(m) is None for m in modules):
+            assert status != "ok"
+
+
+def test_peers_without_the_optional_peers(tmp_path):
+    """jax and numbalsoda hidden (modules that raise ImportError ahead of them on sys.path): the run goes on with
+    the engine and scipy and says which peers were missing."""
+    hide = tmp_path / "hide"
+    hide.mkdir()
+    for module in ("jax", "numbalsoda"):
+        (hide / f"{module}.py").write_text('raise ImportError("hidden by tests/test_benchmarks.py")\n')
+    result = run_script("peers", tmp_path, "--no-corner", pythonpath=(str(hide),))
+    assert set(result["tools_missing"]) == set(OPTIONAL_PEERS)
+    assert all(result["peers_status"][p].startswith("not installed (ImportError") for p in OPTIONAL_PEERS)
+    assert result["peers_status"]["scipy"] == "ok"
+    tools = {t["family"] for t in result["scenes"]["default"]["tools"].values()}
+    assert tools == {"engine", "scipy"}
