@@ -137,15 +137,19 @@ def _relax_general(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
     return out
 
 
-def run_points(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
+def run_points(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray | None = None) -> RawResult:
     """Run the plan's points ``g`` (one chunk: one call of a compiled batch) and return their flat outputs, in the
-    order of ``g``. A point's numbers do not depend on the other points of the chunk."""
+    order of ``g``. A point's numbers do not depend on the other points of the chunk.
+
+    ``obs_tau`` (shape (g.size, n_t), reduced times tau = V t/D0 [1]): each point's own sample times of slip_at,
+    instead of the scene's t_obs (shared along V); for plans whose points do not lie on a grid (sweep.fit). Only the
+    per-point path samples in time: a relaxed-slip plan (lanes, other state laws) has no sampled times."""
     if plan.state_law != "aging":
         return _relax_general(scene, plan, g)
     if plan.lanes:
         return _relax_in_lanes(scene, plan, g)
-    obs_tau = _obs_tau(scene, plan.flat_index(g))
-    part = RawResult.empty(g.size, n_samples(scene, plan))
+    obs_tau = _obs_tau(scene, plan.flat_index(g)) if obs_tau is None else np.ascontiguousarray(obs_tau, float)
+    part = RawResult.empty(g.size, plan.tau_samples.size + obs_tau.shape[1])
     fractions = FRACTIONS if {"t50", "t90"} & set(scene.observables) else np.empty(0)
     stop_batch(Method.of(plan.tableau), StopPoints(plan.k[g], plan.a[g], plan.b[g], plan.s_c[g], plan.step[g]),
                plan.finite[g], Tolerances(scene.rtol, scene.atol["xi_inf"], plan.ctrl_tol), plan.max_steps,
