@@ -74,10 +74,10 @@ class RawResult:
 
 def _obs_tau(scene: Scene, points: np.ndarray) -> np.ndarray:
     """Reduced times tau = V t / D0 of the slip_at observations at the points of the grid ``points`` (flat index
-    i_K n_V + i_V)."""
+    over Scene.dims, i_K n_V + i_V in 2-D; V and D0 of each point)."""
     t = np.asarray(scene.t_obs if "slip_at" in scene.observables else (), dtype=float)
-    tau_v = scene.V[:, None] * t[None, :] / scene.params.D0
-    return np.ascontiguousarray(tau_v[np.asarray(points) % scene.V.size])
+    V, D0 = (np.reshape(scene.at_points(name, points), (-1, 1)) for name in ("V", "D0"))
+    return np.ascontiguousarray(V * t[None, :] / D0)
 
 
 def n_samples(scene: Scene, plan: Plan) -> int:
