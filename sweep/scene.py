@@ -141,7 +141,7 @@ class Scene:
     axes : mapping, optional
         Further axes of the grid, stop protocol only: {name: values} for any of A, m1, m2 [1] and D0 [m]
         (:data:`EXTRA_AXES`; strictly increasing, A and D0 > 0). Each replaces that parameter of ``params``: the
-        Dataset's dims are then (K_over_M, V, *those names in the order of EXTRA_AXES), every point with its own
+        Dataset's dims are then K_over_M, V and those names in the order of EXTRA_AXES, every point with its own
         parameters (e.g. a grid over (A, m1) at one (K/M, V)). TOML: tables [A], [m1], ... like [K_over_M].
     simulated_hopf_line : bool
         Also locate the Hopf line of the scene's model by simulation at each V (coordinate
@@ -429,8 +429,10 @@ def _axis_from_toml(name: str, spec: Any) -> np.ndarray:
     if missing:
         raise InputError(f"[{name}] is missing {sorted(missing)}")
     spacing = spec.get("spacing", "log" if name in POSITIVE_AXES else "linear")
-    check = require_positive if spacing == "log" else require_finite
-    start, stop = check(f"{name}.start", spec["start"]), check(f"{name}.stop", spec["stop"])
+    start, stop = require_finite(f"{name}.start", spec["start"]), require_finite(f"{name}.stop", spec["stop"])
+    if spacing == "log" and min(start, stop) <= 0:
+        raise InputError(f"{name}.start and {name}.stop must be > 0 for spacing \"log\", got {start!r}, {stop!r}"
+                         + ("" if name in POSITIVE_AXES else '; use spacing = "linear"'))
     num = spec["num"]
     if isinstance(num, bool) or not isinstance(num, int) or num < 1:
         raise InputError(f"{name}.num must be an integer >= 1, got {num!r}")

@@ -161,3 +161,9 @@ def test_sweep_plot_and_info_read_nd_files(tmp_path, capsys):
     assert main(["info", str(big)]) == 0
     out = capsys.readouterr().out
     assert "A" in out and "m1" in out
+
+
+def test_a_log_spaced_m1_table_through_zero_is_refused_with_the_fix():
+    with pytest.raises(sweep.InputError, match='m1.start and m1.stop must be > 0 for spacing "log".*"linear"'):
+        sweep.load_scene('preset = "sample2"\n[K_over_M]\nvalues = [1e5]\n[V]\nvalues = [1e-6]\n'
+                         '[m1]\nstart = -0.01\nstop = 0.02\nnum = 4\nspacing = "log"\n')
