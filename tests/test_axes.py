@@ -52,7 +52,8 @@ def test_a_4d_sweep_over_A_and_m1_is_the_2d_sweeps_bit_for_bit():
 
 
 def test_the_relaxed_slip_of_an_nd_sweep_matches_the_scipy_reference():
-    """Points of a (K/M, V, A, m1, m2, D0) sweep against tests/reference.py (rtol 1e-13), within 2 x the sweep's rtol."""
+    """Points of a (K/M, V, A, m1, m2, D0) sweep against tests/reference.py (rtol 1e-13), within 2 x the sweep's
+    rtol."""
     axes = {"A": [0.006, 0.009], "m1": [0.005, 0.0125], "m2": [0.001, 0.0033], "D0": [0.5e-6, 1e-6]}
     ds = sweep.run_sweep(sweep.Scene(protocol="stop", params=P2, K_over_M=[1e5, 1e6], V=[1e-6, 3e-6], axes=axes,
                                      model="quasistatic", rtol=1e-6), progress=False)
