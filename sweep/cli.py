@@ -84,7 +84,8 @@ def _dry_run(scene, size) -> int:
     memory), then the plan and the pilot's estimate of the time, both from a subsample where the grid is large."""
     from .size import check_fits
 
-    print(f"{'grid':>28}: {scene.shape[0]} K/M x {scene.shape[1]} V = {scene.n_points:,} points, "
+    axes = " x ".join(f"{n} {name}" for n, name in zip(scene.shape, ("K/M", "V", *scene.dims[2:])))
+    print(f"{'grid':>28}: {axes} = {scene.n_points:,} points, "
           + (f"rtol {scene.rtol:g}, " if scene.protocol == "stop" else "")
           + f"observables {', '.join(scene.observables)}")
     for line in size.lines():

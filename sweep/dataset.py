@@ -17,7 +17,7 @@ from .accuracy import ESTIMATE_RTOL, TIGHTER
 from .engine import SAMPLED, RawResult
 from .model_choice import MODEL_FLAG, ModelChoice
 from .plan import Plan, line_uses_inertia
-from .scene import Scene
+from .scene import AXIS_UNITS, Scene
 from .status import Status, flag_attrs
 
 __all__ = ["build_dataset", "build_driven_dataset", "sampled_variables", "REFERENCES"]
@@ -46,25 +46,42 @@ def _var(dims, data, units: str, long_name: str, **attrs) -> xr.Variable:
     return xr.Variable(dims, data, {"units": units, "long_name": long_name, **attrs})
 
 
+AXIS_NAMES = {"K_over_M": "spring stiffness over slider mass K/M", "V": "driving velocity before the stop",
+              "A": "direct-effect coefficient A (eq. 1)", "m1": "slope m1 of mu_d at V0 (eq. 6)",
+              "m2": "curvature m2 of mu_d (eq. 6)", "D0": "memory length D0"}
+"""long_name of each grid axis (Scene.dims)."""
+
+
+def _on(scene: Scene, names: tuple[str, ...], fn) -> tuple[tuple[str, ...], np.ndarray]:
+    """(dims, values) of fn(**parameters) over the grid dims among ``names`` (a quantity of the parameters
+    ``names``; parameters that are not axes enter as numbers): in 2-D, chi over K_over_M and mu1 over V."""
+    dims = scene.on_dims(names)
+    value = fn(**{n: scene.broadcast(n, dims) for n in names})
+    return dims, np.broadcast_to(value, tuple(scene.axis(d).size for d in dims)).copy()
+
+
 def _coords(scene: Scene) -> dict[str, xr.Variable]:
     p = scene.params
-    mu1 = physics.mu1(scene.V, p.m1, p.m2, p.V0)
-    gamma = physics.inertia_number(scene.V, p.D0, p.g)
-    line_inertial = line_uses_inertia(gamma / p.A, scene.model, scene.model_tol)
-    coords = {
-        "K_over_M": _var("K_over_M", scene.K_over_M, "s-2", "spring stiffness over slider mass K/M"),
-        "V": _var("V", scene.V, "m s-1", "driving velocity before the stop"),
-        "chi": _var("K_over_M", physics.reduced_stiffness(scene.K_over_M, p.D0, p.g), "1",
-                    "reduced stiffness chi = K D0/(M g)"),
-        "mu1": _var("V", mu1, "1", "velocity-weakening slope mu1(V) = m1 - 2 m2 ln(V/V0)"),
-        "chi_c": _var("V", physics.chi_c_inertial(mu1, p.A, gamma * line_inertial), "1",
-                      "reduced stiffness on the Hopf line of the model used at this V, mu1 (1 + gamma/A) with inertia "
-                      "(NaN: no Hopf line, mu1 <= 0)", comment=_line_model_comment(scene)),
-        "chi_c_quasistatic": _var("V", physics.chi_c_quasistatic(mu1), "1",
+    line_model = lambda V, m1, m2, A, D0: line_uses_inertia(  # noqa: E731
+        physics.inertia_number(V, D0, p.g) / A, scene.model, scene.model_tol)
+    mu1 = lambda V, m1, m2: physics.mu1(V, m1, m2, p.V0)  # noqa: E731
+    coords = {d: _var(d, scene.axis(d), AXIS_UNITS[d], AXIS_NAMES[d]) for d in scene.dims}
+    coords.update({
+        "chi": _var(*_on(scene, ("K_over_M", "D0"), lambda K_over_M, D0: physics.reduced_stiffness(K_over_M, D0,
+                                                                                                     p.g)),
+                    "1", "reduced stiffness chi = K D0/(M g)"),
+        "mu1": _var(*_on(scene, ("V", "m1", "m2"), mu1), "1", "velocity-weakening slope mu1(V) = m1 - 2 m2 ln(V/V0)"),
+        "chi_c": _var(*_on(scene, ("V", "m1", "m2", "A", "D0"), lambda V, m1, m2, A, D0: physics.chi_c_inertial(
+                          mu1(V, m1, m2), A, physics.inertia_number(V, D0, p.g) * line_model(V, m1, m2, A, D0))),
+                      "1", "reduced stiffness on the Hopf line of the model used at this V, mu1 (1 + gamma/A) with "
+                      "inertia (NaN: no Hopf line, mu1 <= 0)", comment=_line_model_comment(scene)),
+        "chi_c_quasistatic": _var(*_on(scene, ("V", "m1", "m2"), lambda V, m1, m2: physics.chi_c_quasistatic(
+                                      mu1(V, m1, m2))), "1",
                                   "reduced stiffness on the Hopf line of the quasi-static model mu1 (paper eq. 3; NaN: "
                                   "no Hopf line)"),
-        "gamma": _var("V", gamma, "1", "inertia number gamma = V^2/(g D0)"),
-    }
+        "gamma": _var(*_on(scene, ("V", "D0"), lambda V, D0: physics.inertia_number(V, D0, p.g)), "1",
+                      "inertia number gamma = V^2/(g D0)"),
+    })
     if "trajectory" in scene.observables:
         coords["tau"] = _var("tau", scene.tau_samples, "1", "reduced time after the stop tau = V t/D0")
     if "slip_at" in scene.observables:
@@ -79,12 +96,12 @@ def _line_model_comment(scene: Scene) -> str:
     return f"{scene.model} model"
 
 
-def _model_variables(scene: Scene, choice: ModelChoice, grid) -> dict[str, xr.Variable]:
+def _model_variables(scene: Scene, choice: ModelChoice, grid, dims=DIMS) -> dict[str, xr.Variable]:
     """The per-point model flag and, with model="auto", the quasi-static model's estimated error."""
-    out = {"model": _var(DIMS, grid(choice.inertial.astype(np.int8)), "1", "model used for the point", **MODEL_FLAG)}
+    out = {"model": _var(dims, grid(choice.inertial.astype(np.int8)), "1", "model used for the point", **MODEL_FLAG)}
     if choice.model_error is not None:
         out["model_error"] = _var(
-            DIMS, grid(choice.model_error), "1", "relative error of xi_inf with the quasi-static model",
+            dims, grid(choice.model_error), "1", "relative error of xi_inf with the quasi-static model",
             comment=f"first-order inertial correction (estimated at rtol {ESTIMATE_RTOL:g}) where the quasi-static "
                     f"model is used (model = 0: 1.5 x model_error <= model_tol = {scene.model_tol:g}); measured "
                     f"between the two models where inertia was solved for; NaN where there is no finite xi_inf")
@@ -97,41 +114,42 @@ def build_dataset(scene: Scene, plan: Plan, raw: RawResult, choice: ModelChoice,
     variables sampled in time (:func:`sampled_variables`: the trajectory and slip_at), which a journaled run
     writes into its file chunk by chunk instead of holding them whole (sweep/io.py)."""
     shape = scene.shape
-    p = scene.params
+    dims = scene.dims
+    V, A, D0, g = (scene.broadcast(n) for n in ("V", "A", "D0", "g"))
     grid = lambda a: a.reshape(shape + a.shape[1:])  # noqa: E731
     xi_inf = grid(raw.xi_inf)
     chi = plan.chi.reshape(shape)
-    gamma_used = physics.inertia_number(scene.V, p.D0, p.g) * line_uses_inertia(
-        physics.inertia_number(scene.V, p.D0, p.g) / p.A, scene.model, scene.model_tol)
-    stable = physics.stable_sliding(chi, plan.mu1.reshape(shape), p.A, gamma_used[None, :]).astype(np.int8)
-    xi_in = np.asarray(physics.xi_inertial(physics.inertia_number(scene.V, p.D0, p.g)[None, :], chi))
+    gamma = physics.inertia_number(V, D0, g)
+    gamma_used = gamma * line_uses_inertia(gamma / A, scene.model, scene.model_tol)
+    stable = physics.stable_sliding(chi, plan.mu1.reshape(shape), A, gamma_used).astype(np.int8)
+    xi_in = np.asarray(physics.xi_inertial(gamma, chi))
     data = {
-        "xi_inf": _var(DIMS, xi_inf, "1", "relaxed slip after the stop in units of D0, Dx_inf/D0"),
-        "slip_inf": _var(DIMS, p.D0 * xi_inf, "m", "relaxed slip after the stop Dx_inf"),
-        "stress_relaxation": _var(DIMS, chi * xi_inf, "1", "reduced stress relaxation K Dx_inf/(M g) = chi xi_inf"),
-        "stable": _var(DIMS, stable, "1", "steady sliding at V is linearly stable (model of chi_c)",
+        "xi_inf": _var(dims, xi_inf, "1", "relaxed slip after the stop in units of D0, Dx_inf/D0"),
+        "slip_inf": _var(dims, D0 * xi_inf, "m", "relaxed slip after the stop Dx_inf"),
+        "stress_relaxation": _var(dims, chi * xi_inf, "1", "reduced stress relaxation K Dx_inf/(M g) = chi xi_inf"),
+        "stable": _var(dims, stable, "1", "steady sliding at V is linearly stable (model of chi_c)",
                        flag_values=np.array([0, 1], np.int8), flag_meanings="unstable stable"),
-        **_model_variables(scene, choice, grid),
-        "status": _var(DIMS, grid(raw.status), "1", "numerical status of the point", **flag_attrs()),
-        "steps": _var(DIMS, grid(raw.steps), "1", "steps taken by the point (fine run of the first pass)"),
-        "xi_inertial": _var(DIMS, xi_in, "1", "slip of a pure inertial stop (constant friction) in units of D0, "
+        **_model_variables(scene, choice, grid, dims),
+        "status": _var(dims, grid(raw.status), "1", "numerical status of the point", **flag_attrs()),
+        "steps": _var(dims, grid(raw.steps), "1", "steps taken by the point (fine run of the first pass)"),
+        "xi_inertial": _var(dims, xi_in, "1", "slip of a pure inertial stop (constant friction) in units of D0, "
                             "sqrt(gamma/chi) (eqs. 14-15)"),
-        "creep_over_inertia": _var(DIMS, xi_inf / xi_in, "1",
+        "creep_over_inertia": _var(dims, xi_inf / xi_in, "1",
                                    "relaxed creep slip over the pure inertial slip, xi_inf/xi_inertial (>> 1: creep "
                                    "dominates, D0/V >> sqrt(M/K); ~1 or below: inertia matters)"),
     }
-    errors = {"xi_inf": grid(raw.xi_inf_err), "slip_inf": p.D0 * grid(raw.xi_inf_err),
+    errors = {"xi_inf": grid(raw.xi_inf_err), "slip_inf": D0 * grid(raw.xi_inf_err),
               "stress_relaxation": chi * grid(raw.xi_inf_err)}
-    seconds_per_tau = p.D0 / scene.V[None, :]
+    seconds_per_tau = D0 / V
     for name, col, pct in (("t50", 0, 50), ("t90", 1, 90)):
         if name in scene.observables:
-            data[name] = _var(DIMS, grid(raw.tau_at_fraction[:, col]) * seconds_per_tau, "s",
+            data[name] = _var(dims, grid(raw.tau_at_fraction[:, col]) * seconds_per_tau, "s",
                               f"time after the stop to reach {pct} % of the relaxed slip")
             errors[name] = grid(raw.tau_at_fraction_err[:, col]) * seconds_per_tau
     data.update(_with_errors(data, errors))
     if sampled:
-        data.update(sampled_variables(scene, plan.tau_samples.size, DIMS, *(grid(getattr(raw, name))
-                                                                            for name in SAMPLED)))
+        data.update(sampled_variables(scene, plan.tau_samples.size, dims, *(grid(getattr(raw, name))
+                                                                            for name in SAMPLED), D0=D0))
     attrs = _attrs(scene, "Relaxation landscape of the Baumberger-Gauthier spring-block model (stop scene)",
                    "points on unstable steady sliding (stable = 0) are computed and flagged by stable, not by status",
                    history, raw.seconds)
@@ -142,11 +160,13 @@ def build_dataset(scene: Scene, plan: Plan, raw: RawResult, choice: ModelChoice,
 
 
 def sampled_variables(scene: Scene, n_traj: int, dims: tuple[str, ...], xi_at: np.ndarray, u_at: np.ndarray,
-                      xi_at_err: np.ndarray, u_at_err: np.ndarray) -> dict[str, xr.Variable]:
+                      xi_at_err: np.ndarray, u_at_err: np.ndarray, D0: np.ndarray | float | None = None
+                      ) -> dict[str, xr.Variable]:
     """The variables sampled in time, with their errors, from the kernel's per-point samples (engine.SAMPLED:
     arrays (..., n samples), the ``n_traj`` trajectory times first, then the slip_at times) over the leading
-    ``dims`` (the grid, or the points of one chunk)."""
-    p = scene.params
+    ``dims`` (the grid, or the points of one chunk). ``D0`` [m]: each point's memory length, broadcastable to the
+    leading dims (default: the scene's D0, one number; needed per point where the scene sweeps D0)."""
+    D0 = scene.params.D0 if D0 is None else np.expand_dims(D0, -1) if np.ndim(D0) else D0
     data, errors = {}, {}
     if "trajectory" in scene.observables:
         traj_dims = dims + ("tau",)
@@ -155,8 +175,8 @@ def sampled_variables(scene: Scene, n_traj: int, dims: tuple[str, ...], xi_at: n
         errors["xi"] = xi_at_err[..., :n_traj]
         errors["psi"] = data["psi"].values * np.expm1(u_at_err[..., :n_traj])
     if "slip_at" in scene.observables:
-        data["slip_at"] = _var(dims + ("t_obs",), p.D0 * xi_at[..., n_traj:], "m", "slip since the stop at time t_obs")
-        errors["slip_at"] = p.D0 * xi_at_err[..., n_traj:]
+        data["slip_at"] = _var(dims + ("t_obs",), D0 * xi_at[..., n_traj:], "m", "slip since the stop at time t_obs")
+        errors["slip_at"] = D0 * xi_at_err[..., n_traj:]
     return {**data, **_with_errors(data, errors)}
 
 

@@ -74,10 +74,10 @@ class RawResult:
 
 def _obs_tau(scene: Scene, points: np.ndarray) -> np.ndarray:
     """Reduced times tau = V t / D0 of the slip_at observations at the points of the grid ``points`` (flat index
-    i_K n_V + i_V)."""
+    over Scene.dims, i_K n_V + i_V in 2-D; V and D0 of each point)."""
     t = np.asarray(scene.t_obs if "slip_at" in scene.observables else (), dtype=float)
-    tau_v = scene.V[:, None] * t[None, :] / scene.params.D0
-    return np.ascontiguousarray(tau_v[np.asarray(points) % scene.V.size])
+    V, D0 = (np.reshape(scene.at_points(name, points), (-1, 1)) for name in ("V", "D0"))
+    return np.ascontiguousarray(V * t[None, :] / D0)
 
 
 def n_samples(scene: Scene, plan: Plan) -> int:
@@ -150,16 +150,22 @@ def _relax_general(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
     return out
 
 
-def run_points(scene: Scene, plan: Plan, g: np.ndarray, correction: np.ndarray | None = None) -> RawResult:
+def run_points(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray | None = None,
+               correction: np.ndarray | None = None) -> RawResult:
     """Run the plan's points ``g`` (one chunk: one call of a compiled batch) and return their flat outputs, in the
-    order of ``g``. A point's numbers do not depend on the other points of the chunk. ``correction`` (over g,
-    NaN-filled): where the relaxed-slip lanes run, the first-order inertial correction of their rk4 points."""
+    order of ``g``. A point's numbers do not depend on the other points of the chunk.
+
+    ``obs_tau`` (shape (g.size, n_t), reduced times tau = V t/D0 [1]): each point's own sample times of slip_at,
+    instead of the scene's t_obs (shared along V); for plans whose points do not lie on a grid (sweep.fit). Only the
+    per-point path samples in time: a relaxed-slip plan (lanes, other state laws) has no sampled times.
+    ``correction`` (over g, NaN-filled): where the relaxed-slip lanes run, the first-order inertial correction of
+    their rk4 points is written there."""
     if plan.state_law != "aging":
         return _relax_general(scene, plan, g)
     if plan.lanes:
         return _relax_in_lanes(scene, plan, g, correction)
-    obs_tau = _obs_tau(scene, plan.flat_index(g))
-    part = RawResult.empty(g.size, n_samples(scene, plan))
+    obs_tau = _obs_tau(scene, plan.flat_index(g)) if obs_tau is None else np.ascontiguousarray(obs_tau, float)
+    part = RawResult.empty(g.size, plan.tau_samples.size + obs_tau.shape[1])
     fractions = FRACTIONS if {"t50", "t90"} & set(scene.observables) else np.empty(0)
     stop_batch(Method.of(plan.tableau), StopPoints(plan.k[g], plan.a[g], plan.b[g], plan.s_c[g], plan.step[g]),
                plan.finite[g], Tolerances(scene.rtol, scene.atol["xi_inf"], plan.ctrl_tol), plan.max_steps,

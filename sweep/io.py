@@ -16,7 +16,8 @@ __all__ = ["save", "open_dataset", "write"]
 
 COMPRESSION = {"zlib": True, "complevel": 4}
 GRID = ("K_over_M", "V")
-"""The dims of a sweep's grid; its points are numbered flat in C order (i_K n_V + i_V)."""
+"""The first dims of a sweep's grid (then its extra axes, scene.EXTRA_AXES, where it has them); its points are
+numbered flat in C order (i_K n_V + i_V in 2-D)."""
 BLOCK_CHUNK_BYTES = 2**20
 """Target size of an HDF5 chunk of the variables written in blocks (HDF5 advises 10 KiB .. 1 MiB)."""
 BLOCK_CACHE_CHUNKS = 4
@@ -63,7 +64,7 @@ def write(ds: xr.Dataset, path: str | os.PathLike,
     try:
         ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
         if blocks is not None:
-            _append_blocks(tmp, blocks, ds.sizes[GRID[1]])
+            _append_blocks(tmp, blocks, _grid_dims(ds))
         os.replace(tmp, path)
     except BaseException as exc:
         full = free_bytes(path.parent) < FULL_DISK_BYTES if path.parent.is_dir() else False  # before .part goes
@@ -78,11 +79,19 @@ def write(ds: xr.Dataset, path: str | os.PathLike,
     return path
 
 
-def _append_blocks(path: Path, blocks: Iterable[tuple[int, dict[str, xr.Variable]]], n_v: int) -> None:
-    """Write ``blocks`` (see :func:`save`) into the grid variables of the netCDF file at ``path``."""
+def _grid_dims(ds: xr.Dataset) -> tuple[str, ...]:
+    """The grid dims of a sweep Dataset: (K_over_M, V) and its extra axes, in the order of its variables."""
+    from .scene import EXTRA_AXES
+
+    return GRID + tuple(d for d in EXTRA_AXES if d in ds.dims)
+
+
+def _append_blocks(path: Path, blocks: Iterable[tuple[int, dict[str, xr.Variable]]], grid: tuple[str, ...]) -> None:
+    """Write ``blocks`` (see :func:`save`) into the grid variables (dims ``grid``) of the netCDF file at ``path``."""
     import netCDF4
 
     with netCDF4.Dataset(path, "a") as nc:
+        shape = tuple(nc.dimensions[d].size for d in grid)
         expected = 0
         for start, variables in blocks:
             if start != expected:
@@ -90,41 +99,54 @@ def _append_blocks(path: Path, blocks: Iterable[tuple[int, dict[str, xr.Variable
             for name, var in variables.items():
                 if name not in nc.variables:
                     fill = np.nan if var.dtype.kind == "f" else None
-                    chunks = _row_chunks((nc.dimensions[GRID[0]].size, n_v) + var.shape[1:], var.dtype.itemsize)
-                    created = nc.createVariable(name, var.dtype, GRID + var.dims[1:], fill_value=fill,
+                    chunks = _row_chunks(shape + var.shape[1:], var.dtype.itemsize, len(grid))
+                    created = nc.createVariable(name, var.dtype, grid + var.dims[1:], fill_value=fill,
                                                 chunksizes=chunks, **COMPRESSION)
                     nbytes = int(np.prod(chunks)) * var.dtype.itemsize
                     created.set_var_chunk_cache(size=BLOCK_CACHE_CHUNKS * nbytes, nelems=101,  # hash slots: a prime
                                               preemption=1.0)  # evict the chunks a block has completed first
                     created.setncatts(var.attrs)
-                _write_flat(nc.variables[name], start, np.asarray(var.values), n_v)
+                _write_flat(nc.variables[name], start, np.asarray(var.values), shape)
             expected = start + next(iter(variables.values())).shape[0]
 
 
-def _row_chunks(shape: tuple[int, ...], itemsize: int) -> tuple[int, ...]:
-    """HDF5 chunk shape for a grid variable written in blocks of consecutive points: whole rows of the grid (all V,
-    all trailing values) by the ~BLOCK_CHUNK_BYTES, or part of one row where a row alone is larger, so that a block
-    completes its chunks one after the other."""
-    n_k, n_v, trailing = shape[0], shape[1], shape[2:]
-    per_point = int(np.prod(trailing)) * itemsize
-    along_v = min(n_v, max(1, BLOCK_CHUNK_BYTES // per_point))
-    rows = min(n_k, max(1, BLOCK_CHUNK_BYTES // (along_v * per_point))) if along_v == n_v else 1
-    return (rows, along_v) + tuple(trailing)
+def _row_chunks(shape: tuple[int, ...], itemsize: int, n_grid: int = 2) -> tuple[int, ...]:
+    """HDF5 chunk shape for a grid variable (the first ``n_grid`` dims of ``shape`` its grid) written in blocks of
+    consecutive points: from the last grid dim outwards, whole extents (all trailing values) by the
+    ~BLOCK_CHUNK_BYTES, then part of the next dim, 1 along the dims before it, so that a block completes its chunks
+    one after the other (in 2-D: whole rows of all V, or part of one row where a row alone is larger)."""
+    grid, trailing = shape[:n_grid], shape[n_grid:]
+    size = int(np.prod(trailing)) * itemsize
+    chunks = [1] * n_grid
+    for d in range(n_grid - 1, -1, -1):
+        chunks[d] = min(grid[d], max(1, BLOCK_CHUNK_BYTES // size))
+        if chunks[d] < grid[d]:
+            break
+        size *= grid[d]
+    return tuple(chunks) + tuple(trailing)
 
 
-def _write_flat(var, start: int, values: np.ndarray, n_v: int) -> None:
-    """values[j] into the grid variable ``var`` at flat point start + j: whole rows of the grid in one write, the
-    partial rows at either end in one each."""
+def _write_flat(var, start: int, values: np.ndarray, shape: tuple[int, ...]) -> None:
+    """values[j] into the grid variable ``var`` (grid of ``shape``) at flat point start + j: whole rows of the grid
+    (all points of the dims after the first) in one write, the partial rows at either end in one each (in 2-D) or
+    through the sub-grid of the row."""
+    _write_range(var, (), tuple(shape), start, values)
+
+
+def _write_range(var, prefix: tuple[int, ...], shape: tuple[int, ...], start: int, values: np.ndarray) -> None:
+    """:func:`_write_flat` into the sub-grid ``var[prefix]`` of shape ``shape``."""
+    row = int(np.prod(shape[1:]))
     i, stop = start, start + values.shape[0]
     while i < stop:
-        k, v = divmod(i, n_v)
-        if v == 0 and stop - i >= n_v:
-            rows = (stop - i) // n_v
-            var[k:k + rows] = values[i - start:i - start + rows * n_v].reshape((rows, n_v) + values.shape[1:])
-            i += rows * n_v
+        k, r = divmod(i, row)
+        if r == 0 and stop - i >= row:
+            rows = (stop - i) // row
+            var[prefix + (slice(k, k + rows),)] = values[i - start:i - start + rows * row].reshape(
+                (rows,) + shape[1:] + values.shape[1:])
+            i += rows * row
         else:
-            end = min(stop, (k + 1) * n_v)
-            var[k, v:v + end - i] = values[i - start:end - start]
+            end = min(stop, (k + 1) * row)
+            _write_range(var, prefix + (k,), shape[1:], r, values[i - start:end - start])
             i = end
 
 

@@ -158,7 +158,8 @@ PER_POINT = ("point_method", "step", "chi", "mu1", "k", "a", "b", "s_c", "finite
 
 @dataclass(frozen=True, eq=False)
 class Plan:
-    """The resolved plan of a scene, for every protocol; per-point arrays are flat in C order over (K_over_M, V).
+    """The resolved plan of a scene, for every protocol; per-point arrays are flat in C order over the scene's grid
+    (K_over_M, V and its extra axes, Scene.dims).
 
     ``model`` is the scene's model policy and ``inertial`` its per-point part known before any run (driven scene: per
     V, inertial where gamma/A > model_tol with "auto"; stop scene: "inertial" forced); with "auto" a stop point's
@@ -198,7 +199,8 @@ class Plan:
     notes: tuple[tuple[str, str], ...] = ()
     """The description of a protocol other than the stop scene's (:meth:`describe`)."""
     index: np.ndarray | None = None
-    """Flat indices in the scene's grid (i_K n_V + i_V) of the points of a plan restricted by :meth:`take`; None:
+    """Flat indices in the scene's grid (C order over Scene.dims: i_K n_V + i_V in 2-D) of the points of a plan
+    restricted by :meth:`take`; None:
     every point of the scene, in order."""
 
     @property
@@ -333,14 +335,15 @@ class PointParams(NamedTuple):
 
 
 def _axes(scene: Scene) -> PointParams:
-    """The per-point inputs, flat over the (K_over_M, V) grid."""
-    p = scene.params
-    chi_axis = physics.reduced_stiffness(scene.K_over_M, p.D0, p.g)
-    mu1_axis = physics.mu1(scene.V, p.m1, p.m2, p.V0)
-    G_axis = physics.inertia_number(scene.V, p.D0, p.g) / p.A
-    chi, mu1 = (x.ravel() for x in np.meshgrid(chi_axis, mu1_axis, indexing="ij"))
-    G = np.broadcast_to(G_axis, (scene.K_over_M.size, scene.V.size)).ravel().copy()
-    return PointParams(chi, mu1, np.full(chi.size, p.A), np.full(chi.size, p.m2), G)
+    """The per-point inputs, flat in C order over the scene's grid (K_over_M, V and its extra axes: each point
+    with its own A, m1, m2, D0 where the scene sweeps them). Each formula is evaluated per point, so a point's
+    inputs are the same numbers whatever the other axes."""
+    at = {name: scene.broadcast(name) for name in ("K_over_M", "V", "A", "m1", "m2", "D0", "V0", "g")}
+    flat = lambda x: np.broadcast_to(x, scene.shape).ravel().copy()  # noqa: E731
+    chi = flat(physics.reduced_stiffness(at["K_over_M"], at["D0"], at["g"]))
+    mu1 = flat(physics.mu1(at["V"], at["m1"], at["m2"], at["V0"]))
+    G = flat(physics.inertia_number(at["V"], at["D0"], at["g"]) / at["A"])
+    return PointParams(chi, mu1, flat(at["A"]).astype(float), flat(at["m2"]).astype(float), G)
 
 
 def _common(scene: Scene, chi, mu1, k, a, b, G, finite, inertial) -> dict:

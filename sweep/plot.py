@@ -1,5 +1,7 @@
 """Pictures of sweep files: ``plot_file`` draws the picture that fits the file.
 
+* stop sweep with axes beyond (K/M, V) (A, m1, m2, D0): 2-D slices (sweep/plot_slices.py: small multiples of
+  the (K/M, V) map, or the two longest axes);
 * stop sweep (``xi_inf``): maps of xi_inf and of the stress relaxation over (K/M, V) with the Hopf line (linear
   theory, and located by simulation where the file has it), the stick-slip side hatched, the V range without a
   Hopf line (mu1(V) <= 0) marked and failed points crossed; curves along the axis of a one-line grid (with eq. 10);
@@ -22,6 +24,7 @@ from .files import KINDS, file_kind  # noqa: F401 (re-exported: sweep.plot.file_
 from .outputs import picture_paths
 from .plot_curves import draw_curve, draw_hopf, draw_hopf_gap, draw_psi, draw_regime_curve, draw_xi, trajectory_points
 from .plot_maps import draw_map, draw_regime_map
+from .plot_slices import extra_dims, plot_slices
 from .plot_style import caption, figure_legend, new_figure, save
 
 __all__ = ["file_kind", "plot_file", "plot_hopf", "plot_landscape", "plot_regimes", "plot_trajectories"]
@@ -39,6 +42,8 @@ def plot_file(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = No
     sweep over more than one point, ``<path stem>_trajectories.png``. ``variable``: map or draw that variable of a
     stop or driven file alone. Returns the paths written."""
     kind = file_kind(ds)
+    if kind == "stop" and extra_dims(ds):
+        return _plot_extra_axes(ds, Path(path), variable)
     pictures = picture_paths(path, kind, has_trajectories(ds), ds.sizes.get("K_over_M", 1) * ds.sizes.get("V", 1),
                              variable)
     if variable is not None:
@@ -56,6 +61,21 @@ def plot_file(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = No
     written = [plot_landscape(ds, pictures[0])]
     if len(pictures) > 1:
         written.append(plot_trajectories(ds, pictures[1]))
+    return written
+
+
+def _plot_extra_axes(ds: xr.Dataset, path: Path, variable: str | None) -> list[Path]:
+    """A stop sweep with axes beyond (K/M, V): 2-D slices of ``variable`` (default xi_inf; sweep.plot_slices) and,
+    where the file holds transients, those of its middle slice along the extra axes."""
+    grid = ds["xi_inf"].dims
+    if variable is not None and (variable not in ds.data_vars or ds[variable].dims != grid):
+        names = [n for n, v in ds.data_vars.items() if v.dims == grid]
+        raise InputError(f"--variable must be a {grid} variable of the file, one of {names}; got {variable!r}")
+    written = [plot_slices(ds, path, variable or "xi_inf")]
+    if has_trajectories(ds):
+        middle = ds.isel({d: ds.sizes[d] // 2 for d in extra_dims(ds)})
+        if middle.sizes["K_over_M"] * middle.sizes["V"] > 1:
+            written.append(plot_trajectories(middle, path.with_name(path.stem + "_trajectories.png")))
     return written
 
 

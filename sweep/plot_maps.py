@@ -20,6 +20,7 @@ from .plot_style import (
     thinned,
     um_per_s,
 )
+from .scene import EXTRA_AXES
 
 __all__ = ["draw_map", "draw_regime_map", "hopf_line_dense", "REGIME_COLOURS"]
 
@@ -65,8 +66,9 @@ def draw_regime_map(fig, ax, ds: xr.Dataset) -> None:
 def hopf_line_dense(ds: xr.Dataset, num: int = 400) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The Hopf line dense in V over the file's V range: (V [µm/s], K/M_c of eq. 3 quasi-static [s-2], K/M_c of
     the model the file used [s-2]); NaN where mu1(V) <= 0. The model's line is eq. 3 times the file's own ratio
-    chi_c / chi_c_quasistatic (1 + gamma/A where inertia moves it), interpolated in ln V."""
-    p = file_params(ds)
+    chi_c / chi_c_quasistatic (1 + gamma/A where inertia moves it), interpolated in ln V. The parameters are the
+    file's, except those of a slice of a sweep over them (a scalar coordinate A, m1, m2 or D0: sweep.plot_slices)."""
+    p = {**file_params(ds), **{n: float(ds[n]) for n in EXTRA_AXES if n in ds.coords and ds[n].ndim == 0}}
     v_file = ds["V"].values
     v = np.geomspace(v_file.min(), v_file.max(), num)
     kc = physics.hopf_K_over_M(v, p["A"], p["m1"], p["m2"], p["D0"], p.get("V0", 1e-6), p.get("g", 9.81))

@@ -166,7 +166,8 @@ def sampled_blocks(scene: Scene, n_traj: int, chunk_size: int | None, journal: J
         order = np.argsort(points)  # a chunk is a consecutive range of points, shuffled (engine.chunk_points)
         arrays = journal.read(i)
         yield int(points[order[0]]), sampled_variables(scene, n_traj, ("point",),
-                                                       *(arrays[name][order] for name in SAMPLED))
+                                                       *(arrays[name][order] for name in SAMPLED),
+                                                       D0=scene.at_points("D0", points[order]))
 
 
 def stop_outputs(flat: dict[str, np.ndarray], seconds: float) -> tuple[RawResult, ModelChoice]:

@@ -21,8 +21,8 @@ from .params import FrictionParams, require_finite, require_positive
 from .presets import presets
 from .solvers import METHODS
 
-__all__ = ["Scene", "OBSERVABLES", "DRIVEN_OBSERVABLES", "PROTOCOLS", "DEFAULT_ATOL", "default_scene",
-           "load_scene"]
+__all__ = ["Scene", "OBSERVABLES", "DRIVEN_OBSERVABLES", "PROTOCOLS", "DEFAULT_ATOL", "EXTRA_AXES", "AXIS_UNITS",
+           "default_scene", "load_scene"]
 
 PROTOCOLS = ("stop", "driven")
 OBSERVABLES = ("xi_inf", "trajectory", "slip_at", "t50", "t90")
@@ -44,6 +44,11 @@ PRECISIONS = ("float64", "float32")
 FLOAT32_RTOL_MIN = 1e-5
 TAU_MAX = 1e250
 """Largest reduced time that can be asked for (float64 carries tau up to ~1e308)."""
+EXTRA_AXES = ("A", "m1", "m2", "D0")
+"""Friction parameters a stop scene may sweep beside (K/M, V) (Scene.axes), in the order of the Dataset's dims."""
+AXIS_UNITS = {"K_over_M": "s-2", "V": "m s-1", "A": "1", "m1": "1", "m2": "1", "D0": "m"}
+POSITIVE_AXES = ("K_over_M", "V", "A", "D0")
+"""Axes whose values must be > 0 (the others, m1 and m2, only finite)."""
 
 
 def _plain(value: Any) -> Any:
@@ -52,7 +57,7 @@ def _plain(value: Any) -> Any:
 
 
 def _axis(name: str, values: Any) -> np.ndarray:
-    """Validate one grid axis: 1-D, non-empty, finite, > 0, strictly increasing."""
+    """Validate one grid axis: 1-D, non-empty, finite, strictly increasing, > 0 (except m1 and m2: any finite)."""
     try:
         arr = np.array(values, dtype=float).reshape(-1) if np.ndim(values) <= 1 else None
     except (TypeError, ValueError):
@@ -63,7 +68,7 @@ def _axis(name: str, values: Any) -> np.ndarray:
         raise InputError(f"{name} is empty: give at least one value")
     if not np.all(np.isfinite(arr)):
         raise InputError(f"{name} contains NaN or inf: all values must be finite")
-    if np.any(arr <= 0):
+    if name in POSITIVE_AXES and np.any(arr <= 0):
         raise InputError(f"{name} must be > 0 (allowed range: 0 < {name} < inf), got min {_plain(arr.min())!r}")
     if np.any(np.diff(arr) <= 0):
         raise InputError(f"{name} must be strictly increasing (sorted, no duplicates)")
@@ -133,6 +138,11 @@ class Scene:
         psi' = -xi' psi ln(xi' psi). The slip law runs with model="quasistatic"; its stop scene computes the
         relaxed slip only (observables = ("xi_inf",), finite only for m2 > 0), through the general two-state
         formulation (the fast paths of the aging law rest on its identity xi + ln psi = s).
+    axes : mapping, optional
+        Further axes of the grid, stop protocol only: {name: values} for any of A, m1, m2 [1] and D0 [m]
+        (:data:`EXTRA_AXES`; strictly increasing, A and D0 > 0). Each replaces that parameter of ``params``: the
+        Dataset's dims are then K_over_M, V and those names in the order of EXTRA_AXES, every point with its own
+        parameters (e.g. a grid over (A, m1) at one (K/M, V)). TOML: tables [A], [m1], ... like [K_over_M].
     simulated_hopf_line : bool
         Also locate the Hopf line of the scene's model by simulation at each V (coordinate
         ``K_over_M_c_simulated``, drawn on the maps next to the analytic line; sweep.hopf.with_simulated_line).
@@ -159,6 +169,7 @@ class Scene:
     model_tol: float = 1e-2
     state_law: str = "aging"
     simulated_hopf_line: bool = False
+    axes: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen dataclass)
@@ -201,6 +212,24 @@ class Scene:
         if not isinstance(self.simulated_hopf_line, (bool, np.bool_)):
             raise InputError(f"simulated_hopf_line must be true or false, got {self.simulated_hopf_line!r}")
         set_("simulated_hopf_line", bool(self.simulated_hopf_line))
+        self._check_axes()
+
+    def _check_axes(self) -> None:
+        if not isinstance(self.axes, Mapping):
+            raise InputError(f"axes must be a mapping {{name: values}} with names from {list(EXTRA_AXES)}, got "
+                             f"{type(self.axes).__name__}")
+        unknown = [n for n in self.axes if n not in EXTRA_AXES]
+        if unknown:
+            raise InputError(f"axes has unknown name(s) {unknown}; allowed: {list(EXTRA_AXES)} (K_over_M and V are "
+                             f"the scene's own axes)")
+        axes = {n: _axis(n, self.axes[n]) for n in EXTRA_AXES if n in self.axes}
+        if axes and self.protocol != "stop":
+            raise InputError(f"axes {list(axes)}: extra axes are offered for protocol 'stop' only, got protocol "
+                             f"{self.protocol!r}")
+        if axes and self.simulated_hopf_line:
+            raise InputError(f"simulated_hopf_line needs one parameter set (it is located per V); leave it false "
+                             f"with axes {list(axes)}")
+        object.__setattr__(self, "axes", axes)
 
     def _check_method(self) -> None:
         if self.method != "auto" and self.method not in METHODS:
@@ -299,8 +328,39 @@ class Scene:
         object.__setattr__(self, "trajectory_tau", (lo, hi, int(num)))
 
     @property
-    def shape(self) -> tuple[int, int]:
-        return (self.K_over_M.size, self.V.size)
+    def dims(self) -> tuple[str, ...]:
+        """Names of the grid's axes: (K_over_M, V) and the extra axes, in the order of the Dataset's dims."""
+        return ("K_over_M", "V") + tuple(self.axes)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(self.axis(d).size for d in self.dims)
+
+    def axis(self, name: str) -> np.ndarray:
+        """The values of grid axis ``name`` (one of :attr:`dims`)."""
+        return self.K_over_M if name == "K_over_M" else self.V if name == "V" else self.axes[name]
+
+    def broadcast(self, name: str, dims: tuple[str, ...] | None = None) -> np.ndarray | float:
+        """K_over_M, V or a friction parameter (A, m1, m2, D0, V0, g) shaped to broadcast over ``dims`` (default
+        :attr:`dims`; axes of the grid only): an axis among ``dims`` as an array with ones on the other dims, any
+        other parameter as the number of ``params``."""
+        dims = self.dims if dims is None else dims
+        if name in dims:
+            shape = [1] * len(dims)
+            shape[dims.index(name)] = -1
+            return self.axis(name).reshape(shape)
+        return float(getattr(self.params, name))
+
+    def on_dims(self, names: Sequence[str]) -> tuple[str, ...]:
+        """The grid dims among ``names`` (what a quantity of those parameters varies along), in grid order."""
+        return tuple(d for d in self.dims if d in names)
+
+    def at_points(self, name: str, points: np.ndarray) -> np.ndarray | float:
+        """K_over_M, V or a friction parameter at the flat grid indices ``points`` (C order over :attr:`dims`): an
+        array where ``name`` is an axis, else the number of ``params``."""
+        if name not in self.dims:
+            return float(getattr(self.params, name))
+        return self.axis(name)[np.unravel_index(np.asarray(points), self.shape)[self.dims.index(name)]]
 
     @property
     def time_resolved(self) -> bool:
@@ -309,7 +369,7 @@ class Scene:
 
     @property
     def n_points(self) -> int:
-        return self.K_over_M.size * self.V.size
+        return math.prod(self.shape)
 
     @property
     def tau_samples(self) -> np.ndarray:
@@ -342,9 +402,9 @@ class Scene:
         lines += [f"{k} = {v!r}" for k, v in sorted(self.atol.items())]
         lines.append("[params]")
         lines += [f"{k} = {v!r}" for k, v in self.params.as_dict().items()]
-        for name in ("K_over_M", "V"):
+        for name in self.dims:
             lines.append(f"[{name}]")
-            lines.append("values = [" + ", ".join(repr(float(x)) for x in getattr(self, name)) + "]")
+            lines.append("values = [" + ", ".join(repr(float(x)) for x in self.axis(name)) + "]")
         return "\n".join(lines) + "\n"
 
 
@@ -368,11 +428,14 @@ def _axis_from_toml(name: str, spec: Any) -> np.ndarray:
     missing = {"start", "stop", "num"} - set(spec)
     if missing:
         raise InputError(f"[{name}] is missing {sorted(missing)}")
-    start, stop = require_positive(f"{name}.start", spec["start"]), require_positive(f"{name}.stop", spec["stop"])
+    spacing = spec.get("spacing", "log" if name in POSITIVE_AXES else "linear")
+    start, stop = require_finite(f"{name}.start", spec["start"]), require_finite(f"{name}.stop", spec["stop"])
+    if spacing == "log" and min(start, stop) <= 0:
+        raise InputError(f"{name}.start and {name}.stop must be > 0 for spacing \"log\", got {start!r}, {stop!r}"
+                         + ("" if name in POSITIVE_AXES else '; use spacing = "linear"'))
     num = spec["num"]
     if isinstance(num, bool) or not isinstance(num, int) or num < 1:
         raise InputError(f"{name}.num must be an integer >= 1, got {num!r}")
-    spacing = spec.get("spacing", "log")
     if spacing == "log":
         return _axis(name, np.logspace(math.log10(start), math.log10(stop), num))
     if spacing == "linear":
@@ -380,7 +443,8 @@ def _axis_from_toml(name: str, spec: Any) -> np.ndarray:
     raise InputError(f'{name}.spacing must be "log" or "linear", got {spacing!r}')
 
 
-SCENE_KEYS = {f.name for f in fields(Scene)} | {"preset"}
+SCENE_KEYS = ({f.name for f in fields(Scene)} - {"axes"}) | {"preset"} | set(EXTRA_AXES)
+"""Keys of a scene TOML: the Scene's fields (its extra axes as tables [A], [m1], [m2], [D0]) and ``preset``."""
 
 
 def _check_keys(cfg: Mapping[str, Any]) -> None:
@@ -397,7 +461,10 @@ def scene_from_mapping(cfg: Mapping[str, Any]) -> Scene:
         if required not in cfg:
             raise InputError(f"scene is missing the [{required}] axis table")
     params = _params_from(cfg)
-    kwargs = {k: v for k, v in cfg.items() if k not in ("preset", "params", "K_over_M", "V")}
+    kwargs = {k: v for k, v in cfg.items() if k not in ("preset", "params", "K_over_M", "V", *EXTRA_AXES)}
+    axes = {n: _axis_from_toml(n, cfg[n]) for n in EXTRA_AXES if n in cfg}
+    if axes:
+        kwargs["axes"] = axes
     if "trajectory_tau" in kwargs and isinstance(kwargs["trajectory_tau"], Mapping):
         t = kwargs["trajectory_tau"]
         kwargs["trajectory_tau"] = (t.get("min"), t.get("max"), t.get("num"))

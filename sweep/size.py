@@ -123,13 +123,14 @@ def check_fits(scene: Scene, size: RunSize) -> None:
     available = available_memory()
     if available is None or size.memory <= available:
         return
-    n_k, n_v = scene.shape
+    n_k, rest = scene.shape[0], math.prod(scene.shape[1:])  # a K_over_M row: V and any extra axes
     per_point = size.memory / size.points
     fit = int(available // per_point)
-    k_rows = fit // n_v
+    k_rows = fit // rest
     split = (f"split the K_over_M axis into {math.ceil(n_k / k_rows)} scenes of at most {k_rows} values each (one "
              f"file each)" if k_rows >= 1 else
              f"split the grid into scenes of at most {fit:,} points each (one file each)")
-    raise InputError(f"the grid of {size.points:,} points ({n_k} K/M x {n_v} V) needs ~{human_bytes(size.memory)} of "
+    shape = " x ".join(f"{n} {name}" for n, name in zip(scene.shape, ("K/M", "V", *scene.dims[2:])))
+    raise InputError(f"the grid of {size.points:,} points ({shape}) needs ~{human_bytes(size.memory)} of "
                      f"memory (estimated from its shape), {human_bytes(available)} available: {split}, or run it on "
                      f"a machine with more memory")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from fit_reference import fisher_widths, relaxed_slip, slip_curve
+from scipy import stats
 
 import sweep
 from sweep.fit import Curve, RelaxedSlips
@@ -171,3 +172,136 @@ def test_twenty_curves_in_one_call_equal_twenty_separate_calls():
         for name in FREE:
             for suffix in ("", "_stderr") + (("_lower", "_upper") if with_profiles else ()):
                 assert float(together[name + suffix][i]) == float(alone[name + suffix][0]), (i, name + suffix)
+
+
+# --- noise estimated, K/M factor and D0 free, labels, profile rounds ------------------------------------------
+
+T60 = np.logspace(-1, 3.5, 60)
+SIGMA2 = 0.003 * relaxed_slip(SAMPLE2, KM2, 1e-6)  # m, one noise level for both curves below
+
+
+def _two_velocities(p=SAMPLE2, km_true=KM2, noise=True):
+    """Two curves (1 and 5 um/s) of reference data with Gaussian noise SIGMA2, labelled with the nominal K/M KM2
+    (the spring is ``km_true`` in truth)."""
+    out = []
+    for v, seed in ((1e-6, 11), (5e-6, 12)):
+        x = slip_curve(p, km_true, v, T60) + SIGMA2 * np.random.default_rng(seed).standard_normal(T60.size)
+        out.append(Curve(T60, np.abs(x), KM2, v, noise=SIGMA2 if noise else None, name=f"V{v:g}"))
+    return out
+
+
+def _half_widths(ds, name):
+    best = float(ds[name][0])
+    return best - float(ds[f"{name}_lower"][0]), float(ds[f"{name}_upper"][0]) - best
+
+
+def test_noise_estimated_from_the_residuals():
+    """No noise given: s = sqrt(RSS/(n - p)) comes out near the true noise, the estimates are those of the fit with
+    the noise given (the same minimum: the weights are one constant), and the intervals are those widths times
+    t_{0.975}(n - p) s / (1.96 sigma). Started 1.3x off the truth, so that a least-squares run that stops at its
+    start fails."""
+    start = _params({**SAMPLE2, **{k: 1.3 * SAMPLE2[k] for k in FREE}})
+    given = sweep.fit(_two_velocities(), free=FREE, params=start)
+    est = sweep.fit(_two_velocities(noise=False), free=FREE, params=start)
+    s = float(est["noise"][0])
+    print(f"noise: estimated {s:.4g} m, true {SIGMA2:.4g} m")
+    assert abs(s / SIGMA2 - 1) < 0.2
+    assert np.isnan(float(given["noise"][0]))
+    np.testing.assert_allclose(est["datum_noise"], s)
+    dof = 2 * T60.size - len(FREE)
+    assert int(est["degrees_of_freedom"][0]) == dof
+    scale = stats.t.ppf(0.975, dof) * s / (stats.norm.ppf(0.975) * SIGMA2)
+    for name in FREE:
+        assert _covers(est, name, SAMPLE2[name]), name
+        assert abs(float(est[name][0]) - float(given[name][0])) < 0.02 * float(given[f"{name}_stderr"][0]), name
+        assert float(est[f"{name}_stderr"][0]) == pytest.approx(float(given[f"{name}_stderr"][0]) * s / SIGMA2,
+                                                                 rel=0.02), name
+        for w_est, w_given in zip(_half_widths(est, name), _half_widths(given, name)):
+            assert w_est == pytest.approx(w_given * scale, rel=0.05), name
+
+
+def test_K_over_M_factor_free_recovers_a_miscalibrated_spring():
+    """The spring is 1.2x stiffer than its nominal K/M: with A known, the factor, m1 and m2 come out of two
+    velocities, well constrained, and the data's K/M in the output is the nominal times the fitted factor."""
+    free = ("K_over_M_factor", "m1", "m2")
+    ds = sweep.fit(_two_velocities(km_true=1.2 * KM2), free=free, params=_params(SAMPLE2))
+    truth = {"K_over_M_factor": 1.2, "m1": SAMPLE2["m1"], "m2": SAMPLE2["m2"]}
+    print({n: (float(ds[n][0]), float(ds[f"{n}_lower"][0]), float(ds[f"{n}_upper"][0])) for n in free})
+    for name in free:
+        assert _covers(ds, name, truth[name]), name
+        assert _label(ds, name) == WELL, name
+    np.testing.assert_allclose(ds["datum_K_over_M"], KM2 * float(ds["K_over_M_factor"][0]), rtol=1e-15)
+
+
+def test_D0_free_needs_two_velocities():
+    """D0 sets both the slip and the time scale of a curve (x = D0 xi(V t/D0)). With m2 known and a start at twice
+    the true D0: one curve gives A but leaves m1 and D0 poorly constrained (their intervals covering the truth);
+    two velocities determine A, m1 and D0."""
+    free = ("A", "m1", "D0")
+    start = _params({**SAMPLE2, "D0": 2 * SAMPLE2["D0"]})
+    curves = _two_velocities()
+    one = sweep.fit(curves[0], free=free, params=start)
+    two = sweep.fit(curves, free=free, params=start)
+    for ds in (one, two):
+        print({n: (float(ds[n][0]), float(ds[f"{n}_lower"][0]), float(ds[f"{n}_upper"][0])) for n in free})
+        for name in free:
+            assert _covers(ds, name, SAMPLE2[name]), name
+    assert [_label(one, n) for n in free] == [WELL, POOR, POOR]
+    assert [_label(two, n) for n in free] == [WELL, WELL, WELL]
+    assert two["D0"].attrs["units"] == "m"
+
+
+def test_a_flat_profile_is_labelled_not_identifiable():
+    """A curve depends on (A, m1, m2, K/M) only through chi/A, mu1/A and m2/A (reduced equations, docs/physics.md
+    2): scaling all four by one factor changes nothing. With all four free, the K/M factor's profile is flat over
+    its whole bound interval [0.5, 2] (the others follow it inside their own bounds): not identifiable. A's profile
+    is flat too, but only while the factor stays inside [0.5, 2]: its interval spans that factor 4 (A/best from
+    about 0.5/f to 2/f, f the best factor), poorly constrained (a coarse profile that interpolates across the flat part
+    reported it well constrained, +-1 %)."""
+    free = ("A", "m1", "m2", "K_over_M_factor")
+    ds = sweep.fit(_two_velocities()[0], free=free, params=_params(SAMPLE2))
+    prof = ds["K_over_M_factor_profile_misfit"].values[0]
+    crit = float(ds["K_over_M_factor_profile_misfit"].attrs["threshold_95"][0])
+    print("factor profile:", ds["K_over_M_factor_profile"].values[0], prof)
+    print({n: (float(ds[n][0]), float(ds[f"{n}_lower"][0]), float(ds[f"{n}_upper"][0]), _label(ds, n)) for n in free})
+    assert _label(ds, "K_over_M_factor") == NOT
+    assert np.nanmax(prof) < crit
+    assert float(ds["K_over_M_factor_lower"][0]) == 0.5 and float(ds["K_over_M_factor_upper"][0]) == 2.0
+    f, a = float(ds["K_over_M_factor"][0]), float(ds["A"][0])
+    assert _label(ds, "A") == POOR
+    assert 0.45 / f < float(ds["A_lower"][0]) / a < 0.6 / f and 1.8 / f < float(ds["A_upper"][0]) / a < 2.2 / f
+
+
+def test_an_interval_running_into_a_bound_is_labelled_not_identifiable():
+    """Truth m2 = 0 (sample1 with m2 = 0 has a finite relaxed slip: mu1 > 0) at m2's lower bound 0: the profile
+    stays below the threshold down to the bound, so m2 is not identifiable, while A and m1 (two velocities) stay
+    well constrained."""
+    p = {**SAMPLE1, "m2": 0.0}
+    curves = [_noisy(p, 3e5, v, T60, 0.002, s, name=f"V{v:g}") for v, s in ((1e-6, 21), (5e-6, 22))]
+    ds = sweep.fit(curves, free=FREE, params=_params(p), bounds={"m2": (0.0, 0.005)})
+    print({n: (float(ds[n][0]), float(ds[f"{n}_lower"][0]), float(ds[f"{n}_upper"][0])) for n in FREE})
+    assert float(ds["m2_lower"][0]) == 0.0
+    assert _label(ds, "m2") == NOT
+    for name in ("A", "m1"):
+        assert _covers(ds, name, p[name]), name
+        assert _label(ds, name) == WELL, name
+
+
+def test_profiles_are_extended_until_they_cross_the_threshold(monkeypatch):
+    """With a first profile round that reaches only 0.5 standard errors (far below the 95 % threshold), the second
+    round (EXTEND: 4..14 standard errors) must close every interval: the same intervals as the default rounds
+    (within 5 % of their half-widths; both interpolate a near-quadratic profile) and profile points beyond 3.9
+    standard errors on both sides."""
+    from sweep.fit import profiles
+
+    curves = _two_velocities()
+    default = sweep.fit(curves, free=FREE, params=_params(SAMPLE2))
+    monkeypatch.setattr(profiles, "OFFSETS", (0.25, 0.5))
+    short = sweep.fit(curves, free=FREE, params=_params(SAMPLE2))
+    for name in FREE:
+        assert _label(short, name) == WELL, name
+        best, se = float(short[name][0]), float(short[f"{name}_stderr"][0])
+        v = short[f"{name}_profile"].values[0]
+        assert np.nanmin(v) <= best - 3.9 * se and np.nanmax(v) >= best + 3.9 * se, name
+        for w_short, w_default in zip(_half_widths(short, name), _half_widths(default, name)):
+            assert w_short == pytest.approx(w_default, rel=0.05), name

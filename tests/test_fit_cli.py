@@ -52,3 +52,38 @@ def test_unknown_free_parameter_in_the_toml_is_one_line(tmp_path, capsys):
     assert main(["fit", str(tmp_path / "fit.toml")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "free parameter 'mu' does not exist" in err
+
+
+SAMPLE1 = dict(A=0.012, m1=0.010, m2=0.0014, D0=1.0e-6)
+
+
+def test_fit_command_on_relaxed_slips_csv_and_a_netcdf_curve(tmp_path, capsys):
+    """Fig. 3-style relaxed slips (CSV, nm and um/s) and a relaxation curve (netCDF, units in attributes) of one
+    sample (sample1), fitted together: A, m1 and m2 covered by their intervals and well constrained."""
+    rng = np.random.default_rng(31)
+    km, v = np.repeat([2e5, 5e5, 1.2e6], 3), np.tile([3e-6, 1e-5, 3e-5], 3)
+    dx = np.array([relaxed_slip(SAMPLE1, a, b) for a, b in zip(km, v)])
+    obs = dx * (1 + 0.01 * rng.standard_normal(dx.size))
+    rows = "".join(f"{float(a)!r},{float(b) * 1e6!r},{float(c) * 1e9!r},{0.01 * float(d) * 1e9!r}\n"
+                   for a, b, c, d in zip(km, v, obs, dx))
+    (tmp_path / "fig3.csv").write_text("# K_over_M: s-2\n# V: um/s\n# dx_inf: nm\n# noise: nm\n"
+                                       "K_over_M,V,dx_inf,noise\n" + rows)
+    t = np.logspace(-1, 3, 30)
+    sigma = 0.005 * relaxed_slip(SAMPLE1, 3e5, 1e-6)
+    x = np.abs(slip_curve(SAMPLE1, 3e5, 1e-6, t) + sigma * rng.standard_normal(t.size))
+    xr.Dataset({"t": ("time", t, {"units": "s"}), "x": ("time", x, {"units": "m"}),
+                "noise": ("time", np.full(t.size, sigma), {"units": "m"}),
+                "K_over_M": ((), 3e5, {"units": "s-2"}), "V": ((), 1e-6, {"units": "m s-1"})}
+               ).to_netcdf(tmp_path / "curve.nc")
+    (tmp_path / "fit.toml").write_text('preset = "sample1"\nfree = ["A", "m1", "m2"]\n'
+                                       '[[data]]\nfile = "fig3.csv"\n[[data]]\nfile = "curve.nc"\n')
+    out = tmp_path / "fit.nc"
+    assert main(["fit", str(tmp_path / "fit.toml"), "-o", str(out), "-q"]) == 0
+    with xr.open_dataset(out) as ds:
+        assert ds.sizes["sample"] == 1 and ds.sizes["datum"] == dx.size + t.size
+        assert sorted(set(ds["datum_set"].values.tolist())) == ["curve", "fig3"]
+        np.testing.assert_allclose(ds["observed"].values[:dx.size], obs, rtol=1e-12)  # nm -> m
+        for name in ("A", "m1", "m2"):
+            assert float(ds[f"{name}_lower"][0]) <= SAMPLE1[name] <= float(ds[f"{name}_upper"][0]), name
+            assert int(ds[f"{name}_label"][0]) == 0, name
+    assert out.with_suffix(".png").is_file()

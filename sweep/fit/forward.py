@@ -10,9 +10,8 @@ and what it returns is the slip x(t) = D0 xi(tau) [m] at the point's own times a
 Dx_inf = D0 xi_inf [m] (eq. 10 when m2 = 0; the engine's closed-form tail otherwise: the limit, not a horizon).
 
 The plan comes from :func:`sweep.plan.stop_plan_for_points` (the step rule, horizon and error estimates of a
-sweep, per point); points with sampled times run through the per-point kernel
-(:func:`sweep.integrate.batch.stop_batch`, each point with its own row of reduced times), relaxed-slip-only
-batches through the engine's lanes (:func:`sweep.engine.run_points`).
+sweep, per point) and :func:`sweep.engine.run_points` runs it: points with sampled times through the per-point
+kernel, each point with its own row of reduced times (``obs_tau``), relaxed-slip-only batches through the lanes.
 """
 
 from __future__ import annotations
@@ -24,9 +23,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import physics
-from ..engine import RawResult, mark_error_above_tol, run_points
-from ..integrate.batch import StopOutputs, stop_batch
-from ..integrate.stop_point import Method, StopPoints, Tolerances
+from ..engine import mark_error_above_tol, run_points
 from ..params import FrictionParams
 from ..plan import PointParams, stop_plan_for_points
 from ..scene import Scene
@@ -111,21 +108,9 @@ def forward(points: ForwardPoints, rtol: float = 1e-8, V0: float = 1e-6, g: floa
     m2 = np.broadcast_to(np.asarray(points.m2, dtype=float), (n,))
     scene = _settings(float(rtol), t.shape[1] > 0)
     plan = stop_plan_for_points(scene, PointParams(chi, mu1, A.copy(), m2.copy(), G))
-    if t.shape[1] == 0:
-        raw = run_points(scene, plan, np.arange(n))
-    else:
-        raw = _sampled(scene, plan, np.ascontiguousarray(V[:, None] * t / D0[:, None]))
+    raw = run_points(scene, plan, np.arange(n), obs_tau=V[:, None] * t / D0[:, None] if t.shape[1] else None)
     mark_error_above_tol(scene, raw)
     return ForwardResult(x=D0[:, None] * raw.xi_at, x_err=D0[:, None] * raw.xi_at_err, dx_inf=D0 * raw.xi_inf,
                          dx_inf_err=D0 * raw.xi_inf_err, status=raw.status,
                          stable=np.asarray(physics.stable_sliding(chi, mu1, A), dtype=bool))
 
-
-def _sampled(scene: Scene, plan, obs_tau: np.ndarray) -> RawResult:
-    """The per-point kernel over every point of ``plan``, point i sampled at its own reduced times obs_tau[i]
-    (what :func:`sweep.engine.run_points` does for a grid, whose sample times are shared along V; no t50/t90)."""
-    out = RawResult.empty(plan.n_points, obs_tau.shape[1])
-    stop_batch(Method.of(plan.tableau), StopPoints(plan.k, plan.a, plan.b, plan.s_c, plan.step), plan.finite,
-               Tolerances(scene.rtol, scene.atol["xi_inf"], plan.ctrl_tol), plan.max_steps, plan.tau_samples,
-               obs_tau, np.empty(0), StopOutputs(*(getattr(out, f) for f in StopOutputs._fields)))
-    return out

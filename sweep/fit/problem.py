@@ -1,8 +1,9 @@
 """One least-squares problem: the data sets of one sample and the parameter space they share.
 
 For a parameter set theta the residuals are r = (model - data)/noise over every sample of every data set, in the
-order of the data sets (curves: x(t_i); relaxed slips: Dx_inf at each (K/M, V)). With no noise given the weights
-are 1 [m-1]: the noise is then estimated from the residuals at the best fit (sweep.fit.uncertainty).
+order of the data sets (curves: x(t_i); relaxed slips: Dx_inf at each (K/M, V)). With no noise given, ``noise`` is
+a nominal NOMINAL_NOISE x the RMS of the sample's data [m], and the true noise is estimated from the residuals at
+the best fit in its units (sweep.fit.uncertainty).
 """
 
 from __future__ import annotations
@@ -19,6 +20,9 @@ from .space import ParamSpace
 
 __all__ = ["Problem", "make_problems"]
 
+NOMINAL_NOISE = 1e-3
+"""Where no noise is given, residuals are weighted by 1/(NOMINAL_NOISE x RMS of the data) [m-1] (not by 1 m-1):
+least_squares' gradient tolerance is absolute, and residuals in metres (~1e-9) stopped it at its first point."""
 MODEL_FAILED = 1e3
 """Residual [noise units] put where the engine returns no number (a parameter set the model cannot solve, e.g. no
 finite relaxed slip): large enough that least squares steps away from it."""
@@ -56,11 +60,17 @@ class Problem:
         return np.concatenate([d.x if isinstance(d, Curve) else d.dx_inf for d in self.data])
 
     @property
-    def weights(self) -> np.ndarray:
-        """1/noise per residual [m-1] (1 where no noise is given)."""
+    def noise(self) -> np.ndarray:
+        """Noise per residual [m]: as given, or (none given) the nominal NOMINAL_NOISE x RMS of the data, whose
+        multiple sqrt(s^2) is the estimated noise (sweep.fit.uncertainty.noise_variance)."""
         if not self.noise_given:
-            return np.ones(self.n_residuals)
-        return np.concatenate([1.0 / d.noise for d in self.data])
+            return np.full(self.n_residuals, NOMINAL_NOISE * float(np.sqrt(np.mean(self.observed ** 2))))
+        return np.concatenate([d.noise for d in self.data])
+
+    @property
+    def weights(self) -> np.ndarray:
+        """1/noise per residual [m-1]."""
+        return 1.0 / self.noise
 
     def stiffness_velocity(self) -> tuple[np.ndarray, np.ndarray]:
         """Nominal (K/M [s-2], V [m s-1]) of each forward row."""
@@ -128,6 +138,8 @@ def make_problems(data: Sequence[Data], space: ParamSpace, per_data_set: bool) -
     problems = [Problem(name, tuple(ds), space) for name, ds in groups.items()]
     for pr in problems:
         given = {d.noise is not None for d in pr.data}
+        if given == {False} and not np.any(pr.observed > 0):
+            raise InputError(f"sample {pr.name!r}: every data value is 0 and no noise is given; nothing to fit")
         if len(given) > 1:
             raise InputError(f"sample {pr.name!r}: give noise for every data set or for none (it is then estimated "
                              f"from the residuals)")

@@ -2,7 +2,12 @@
 
 Each free parameter of each problem is profiled at best +- OFFSETS standard errors (from the covariance), cut at
 its bounds (the bound itself then being the last point). A side whose profile has not crossed the 95 % threshold
-and has not reached its bound is extended to EXTEND standard errors in a second round. Every profile point of every
+and has not reached its bound is extended to EXTEND standard errors in a second round. Then, up to REFINE_ROUNDS
+times, a side whose threshold crossing lies in a bracket wider than REFINE_FRACTION x its distance from the best
+value gets the bracket's midpoint: the interval interpolates the crossing linearly in sqrt(misfit increase), exact
+for a quadratic misfit, but far off where a profile is flat and then steep (a parameter traded against others
+inside their bounds; the standard error is then useless and the points are (upper - lower)/6 apart). Every profile
+point of every
 parameter of every problem is one least-squares task: a round runs them all in lockstep, their engine runs merged
 (sweep.fit.lockstep). Each profile point starts from the best fit moved along the covariance's regression line
 (theta_k = best_k + C_kj/C_jj (value - best_j)), so a few iterations suffice.
@@ -18,12 +23,17 @@ from .local import refine
 from .lockstep import Lockstep
 from .problem import Problem
 
-__all__ = ["EXTEND", "OFFSETS", "Profile", "profile_all"]
+__all__ = ["EXTEND", "OFFSETS", "REFINE_FRACTION", "REFINE_ROUNDS", "Profile", "profile_all"]
 
 OFFSETS = (0.75, 1.5, 2.25, 3.0)
 """First round, in standard errors either side of the best value."""
 EXTEND = (4.0, 6.0, 9.0, 14.0)
 """Second round, on the sides still below the threshold."""
+REFINE_ROUNDS = 4
+"""Bisection rounds at most, on the sides whose crossing is poorly bracketed."""
+REFINE_FRACTION = 0.6
+"""A crossing bracketed by [v_in, v_out] is refined where |v_out - v_in| > REFINE_FRACTION |v_in - best| (default
+offsets on a quadratic profile: crossing at 1.96 in [1.5, 2.25] standard errors, 0.75 < 0.9: not refined)."""
 
 
 @dataclass
@@ -97,6 +107,23 @@ def profile_all(problems: list[Problem], best: list[np.ndarray], best_rss: list[
                 far = [v for v in _side_values(b, sigmas[q, j], sign, bound, EXTEND)]
                 tasks += [(q, j, v) for v in far]
     if tasks:
+        run(tasks)
+    for _ in range(REFINE_ROUNDS):
+        tasks = []
+        for (q, j), pts in points.items():
+            b = float(best[q][j])
+            for sign in (-1, 1):
+                side = sorted(((v, (r - best_rss[q]) / s2[q]) for v, r in pts if (v - b) * sign > 0),
+                              key=lambda vr: abs(vr[0] - b))
+                v_in = b
+                for v, delta in side:
+                    if delta >= crits[q]:
+                        if abs(v - v_in) > REFINE_FRACTION * abs(v_in - b):
+                            tasks.append((q, j, 0.5 * (v + v_in)))
+                        break
+                    v_in = v
+        if not tasks:
+            break
         run(tasks)
     out = []
     for q, pr in enumerate(problems):

@@ -127,7 +127,8 @@ def _netcdf(path: Path, where: str):
     try:
         ds = xr.open_dataset(path, decode_times=False)
     except (OSError, ValueError) as exc:
-        raise InputError(f"{where} is not a readable netCDF file: {exc}") from None
+        first = (str(exc).strip().splitlines() or [type(exc).__name__])[0].split(". ")[0]
+        raise InputError(f"{where} is not a readable netCDF file ({first})") from None
     with ds:
         columns, units, meta = {}, {}, {}
         curve = "t" in ds.variables

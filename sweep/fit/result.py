@@ -87,7 +87,8 @@ def _per_sample(out: FitOutcome) -> dict[str, xr.Variable]:
         "misfit": _v("sample", [f.rss / s for f, s in zip(out.fits, out.s2)], "1",
                      "sum of squared residuals over the noise variance at the best fit (chi^2)"),
         "degrees_of_freedom": _v("sample", np.array(n) - out.space.p, "1", "data values minus free parameters"),
-        "noise": _v("sample", [np.sqrt(s) if not pr.noise_given else np.nan for pr, s in zip(out.problems, out.s2)],
+        "noise": _v("sample", [np.sqrt(s) * pr.noise[0] if not pr.noise_given else np.nan
+                               for pr, s in zip(out.problems, out.s2)],
                     "m", "noise estimated from the residuals, sqrt(RSS/(n - p)) (NaN: noise given)"),
         "function_evaluations": _v("sample", [f.nfev for f in out.fits], "1", "least-squares function evaluations"),
         "stable_before_stop": _v("sample", np.array([f.stable for f in out.fits], np.int8), None,
@@ -110,7 +111,7 @@ def _data(out: FitOutcome) -> dict[str, xr.Variable]:
     cols: dict[str, list] = {k: [] for k in ("sample", "set", "t", "K_over_M", "V", "observed", "fitted", "residual",
                                               "noise")}
     for q, (pr, f) in enumerate(zip(out.problems, out.fits)):
-        noise = 1.0 / pr.weights if pr.noise_given else np.full(pr.n_residuals, np.sqrt(out.s2[q]))
+        noise = pr.noise * np.sqrt(out.s2[q])  # s2 = 1 where the noise is given
         fitted = pr.observed + f.residuals / pr.weights
         cols["observed"].append(pr.observed)
         cols["fitted"].append(fitted)

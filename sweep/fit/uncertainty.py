@@ -2,8 +2,9 @@
 
 With the noise given, the misfit is chi^2 = sum r^2 (r = weighted residuals) and the 95 % profile interval of a
 parameter is where chi^2_profile - chi^2_min <= 3.84 (chi^2 with one degree of freedom). With the noise estimated,
-s^2 = RSS/(n - p) [m^2], the covariance is s^2 (J^T J)^-1 and the interval uses the F threshold
-t_{0.975, n-p}^2 on (RSS_profile - RSS_min)/s^2 (Bates & Watts, Nonlinear Regression Analysis, 1988, ch. 6).
+s^2 = RSS/(n - p) (in units of the nominal noise of sweep.fit.problem, squared), the covariance is s^2 (J^T J)^-1
+and the interval uses the F threshold t_{0.975, n-p}^2 on (RSS_profile - RSS_min)/s^2 (Bates & Watts, Nonlinear
+Regression Analysis, 1988, ch. 6).
 
 Labels: ``not identifiable`` where the profile stays below the threshold up to a bound on either side (a flat
 profile, or an interval that runs into a bound); ``poorly constrained`` where the 95 % interval reaches further than
@@ -31,7 +32,8 @@ def threshold(noise_given: bool, dof: int) -> float:
 
 
 def noise_variance(rss: float, n: int, p: int, noise_given: bool) -> float:
-    """1 with the noise given (the residuals are already in its units), else s^2 = RSS/(n - p)."""
+    """1 with the noise given (the residuals are already in its units), else s^2 = RSS/(n - p) (residuals in units
+    of the nominal noise, Problem.noise)."""
     return 1.0 if noise_given else rss / max(n - p, 1)
 
 
