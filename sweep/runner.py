@@ -142,7 +142,7 @@ def stop_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.
             raw = RawResult.empty(points.size, n_t, 0)
             raw.status[~plan.finite[points]] = Status.NO_FINITE_LIMIT
         else:
-            raw = run_points(scene, plan, points, carried if scene.model == "auto" else None)
+            raw = run_points(scene, plan, points, correction=carried if scene.model == "auto" else None)
             mark_error_above_tol(scene, raw)
         choice = choose_stop_models(scene, plan, raw, points, correction=carried)
         mark_error_above_tol(scene, raw)
