@@ -38,6 +38,24 @@ def test_fit_command_writes_netcdf_and_png(tmp_path, capsys):
     assert "A = " in capsys.readouterr().out
 
 
+def test_fit_outputs_are_checked_before_any_work(tmp_path, capsys):
+    """An existing output is replaced only with --overwrite, and the output may not be the fit file it reads: both
+    refused in one line, exit 2, before the fit runs (the file on disk is untouched)."""
+    _write_curve(tmp_path / "c1.csv", 1e-6, 1)
+    config = tmp_path / "fit.toml"
+    config.write_text('preset = "sample2"\nfree = ["A"]\n[[data]]\nfile = "c1.csv"\n')
+    out = tmp_path / "fit.nc"
+    out.write_text("not to be lost")
+    assert main(["fit", str(config), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "exists" in err and "--overwrite" in err
+    assert out.read_text() == "not to be lost"
+    assert main(["fit", str(config), "-o", str(config)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "fit file" in err
+    assert config.read_text().startswith("preset")
+
+
 def test_missing_units_are_one_line_and_exit_2(tmp_path, capsys):
     _write_curve(tmp_path / "c1.csv", 1e-6, 1, units=False)
     (tmp_path / "fit.toml").write_text('preset = "sample2"\nfree = ["A"]\n[[data]]\nfile = "c1.csv"\n')

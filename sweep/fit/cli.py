@@ -23,17 +23,21 @@ def add_fit_command(add) -> None:
     fit.add_argument("config", help="fit TOML: preset/[params], free, [bounds], [start], [[data]] file = ...")
     fit.add_argument("-o", "--output", type=Path, default=DEFAULT_OUT, help=f"netCDF output (default {DEFAULT_OUT})")
     fit.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
+    fit.add_argument("--overwrite", action="store_true", help="replace existing output files")
     fit.set_defaults(func=_cmd_fit)
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
     from ..errors import InputError
+    from ..outputs import check_targets
     from .config import load_fit_config
     from .core import fit
     from .plot import plot_fit
     from .result import save_fit
 
     kwargs = load_fit_config(args.config)
+    png = args.png or args.output.with_suffix(".png")
+    check_targets({"data": args.output, "picture": png}, overwrite=args.overwrite, inputs={"fit file": args.config})
     t0 = time.perf_counter()
 
     def progress(line: str) -> None:
@@ -45,8 +49,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         ds = fit(**kwargs, progress=progress, history=history)
     except TypeError as exc:  # a wrongly typed TOML value
         raise InputError(f"fit file {args.config!r}: {exc}") from None
-    save_fit(ds, args.output)
-    png = args.png or args.output.with_suffix(".png")
+    save_fit(ds, args.output, overwrite=args.overwrite)
     plot_fit(ds, png)
     if not args.quiet:
         for name in ds["parameter"].values.tolist():

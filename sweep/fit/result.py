@@ -168,8 +168,9 @@ def build_fit_dataset(out: FitOutcome, history: str = "sweep.fit") -> xr.Dataset
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 
-def save_fit(ds: xr.Dataset, path: str | os.PathLike) -> Path:
-    """Write the fit's Dataset as netCDF4 (through sweep.io.save: written beside, then renamed into place)."""
+def save_fit(ds: xr.Dataset, path: str | os.PathLike, overwrite: bool = False) -> Path:
+    """Write the fit's Dataset as netCDF4 (through sweep.io.save: written beside, then renamed into place); an
+    existing file is replaced only with ``overwrite``."""
     from ..io import save
 
-    return save(ds, path)
+    return save(ds, path, overwrite=overwrite)
