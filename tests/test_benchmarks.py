@@ -25,18 +25,20 @@ ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "benchmarks"
 TIMEOUT_S = 600
 
-DRAWS = {"error_coverage", "hopf", "models", "peers", "scaling", "throughput", "work_precision"}
+DRAWS = {"error_coverage", "fit", "hopf", "models", "peers", "scaling", "throughput", "work_precision"}
 """Scripts that draw a PNG beside their JSON (run with --no-png)."""
 
 SMOKE_FLAG = {"compare_commits": "--self-test"}
 """The smoke-run flag of a script whose --quick is not seconds (default --quick)."""
 
 KEYS = {
+    "auto_cost": {"benchmark", "quick", "machine", "rows", "two_threads_over_one", "targets"},
     "calibrate_rk4": {"benchmark", "points", "reference_failures", "rows", "plan_constants", "versions"},
     "calibrate_stiff": {"what", "quick", "points", "reference_failures", "rows"},
     "compare_commits": {"benchmark", "self_test", "machine", "trees", "compile", "numbers", "speed", "verdict",
                         "commands"},
     "error_coverage": {"benchmark", "quick", "machine", "rows"},
+    "fit": {"benchmark", "machine", "settings", "one_curve", "many_curves", "scipy", "ratio_per_curve", "side_by_side"},
     "hopf": {"benchmark", "quick", "machine", "line", "inertial_line", "inertial_driven_deep_stick_slip",
              "driven_grid", "driven_grid_auto"},
     "models": {"benchmark", "quick", "machine", "cost", "accuracy_inertia_scene_model_tol_1e-2",
