@@ -3,7 +3,7 @@
     python benchmarks/error_coverage.py [--quick] [--methods auto,dp5] [--rtols 1e-4,1e-6,1e-8] [--out PATH]
 
 The table: A in {3e-4, 1e-3, 7e-3, 3e-2}, m2/A in {0, 0.5, 2}, m1 in {-0.02, 0.002, 0.02} (m1 < 0 only with
-m2 > 0, where a finite relaxed slip exists), each over K/M 1e1..1e7 (8 values) x V 1e-8..1e-3 (6 values): 1,248
+m2 > 0, where a finite relaxed slip exists), each over K/M 1e1..1e7 (8 values) x V 1e-8..1e-3 (6 values): 1,536
 points per rtol with small and large chi/A, mu1 < 0, the stiff corner and small A (``--quick``: A 1e-3 only, K/M
 1e5..1e7 (3) x V (3): a smoke run, ~10 s; the soft springs K/M <= 1e3 with mu1 < 0 cost the reference ~70 s of a
 4 x 3 grid's 72 s, so they are left out there). Every point is solved by the engine (``sweep.run_sweep``,
