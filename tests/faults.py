@@ -34,24 +34,26 @@ TRACE = "fault: computing a chunk"
 
 # --- in this process --------------------------------------------------------------------------------------------
 
-def interrupt_after(monkeypatch, chunks: int) -> None:
+def interrupt_after(monkeypatch, chunks: int) -> list[int]:
     """Make the next stop runs raise KeyboardInterrupt when chunk number ``chunks`` + 1 starts (the journal then holds
-    ``chunks`` chunks, as a run killed at that moment leaves it); undo with ``monkeypatch.undo()``."""
+    ``chunks`` chunks, as a run killed at that moment leaves it); undo with ``monkeypatch.undo()``. Returns the list
+    the sizes of the chunks computed before the interrupt go into."""
     import sweep.runner as runner
 
-    real, calls = runner.stop_chunk, [0]
+    real, sizes = runner.stop_chunk, []
 
     def stopped(scene, plan):
         compute = real(scene, plan)
 
         def counted(points):
-            if calls[0] == chunks:
+            if len(sizes) == chunks:
                 raise KeyboardInterrupt
-            calls[0] += 1
+            sizes.append(points.size)
             return compute(points)
         return counted
 
     monkeypatch.setattr(runner, "stop_chunk", stopped)
+    return sizes
 
 
 def trace_chunks(monkeypatch) -> None:

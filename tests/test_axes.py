@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 import xarray as xr
+from faults import interrupt_after
 from reference import reference_stop
 
 import sweep
@@ -100,19 +101,8 @@ def test_a_4d_sweep_resumes_to_the_same_numbers(tmp_path, monkeypatch):
     import sweep.runner as runner
 
     sc, out = scene({"A": [0.006, 0.009], "m1": [0.005, 0.0125]}, **TIME_RESOLVED), tmp_path / "r.nc"
-    real_chunk, calls = runner.stop_chunk, []
-
-    def interrupted_after_two(s, plan):
-        compute = real_chunk(s, plan)
-
-        def counted(points):
-            if len(calls) == 2:
-                raise KeyboardInterrupt
-            calls.append(points.size)
-            return compute(points)
-        return counted
-
-    monkeypatch.setattr(runner, "stop_chunk", interrupted_after_two)
+    real_chunk = runner.stop_chunk
+    interrupt_after(monkeypatch, 2)
     with pytest.raises(runner.Interrupted, match="2 of 4 chunks are saved"):
         sweep.run_sweep(sc, progress=False, output=out, chunk_size=7)
     monkeypatch.setattr(runner, "stop_chunk", real_chunk)

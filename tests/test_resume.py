@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from faults import interrupt_after
 
 import sweep
 from sweep.errors import InputError
@@ -97,20 +98,8 @@ def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, 
     import sweep.runner as runner
 
     scene, out = stop_scene(**kw), tmp_path / "s.nc"
-    calls = []
     real_chunk = runner.stop_chunk
-
-    def interrupted_after_three(sc, plan):
-        compute = real_chunk(sc, plan)
-
-        def counted(points):
-            if len(calls) == 3:
-                raise KeyboardInterrupt
-            calls.append(points.size)
-            return compute(points)
-        return counted
-
-    monkeypatch.setattr(runner, "stop_chunk", interrupted_after_three)
+    calls = interrupt_after(monkeypatch, 3)
     with pytest.raises(runner.Interrupted, match="3 of 8 chunks are saved"):
         sweep.run_sweep(scene, progress=False, output=out, chunk_size=50)
     monkeypatch.setattr(runner, "stop_chunk", real_chunk)
