@@ -44,7 +44,7 @@ def test_blow_up_is_caught_before_overflow():
     drives the exponent of E past EXP_MAX; the kernel flags the point nonfinite instead of returning inf/NaN."""
     none = np.empty(0)
     run = march(Method.of(RK4), Mesh(REPLAY, 2.0, np.full(1, 2.0), 1, 1), StopParams(29.5, 1.2, -84.3, 16.7, False),
-                Tolerances(1e-6, 0.0, 1e-6), 1000, False, Samples(none, none, none, none, none, none))
+                Tolerances(1e-6, 0.0, 1e-6), 1000, Samples(none, none, none, none, none, none, False))
     status, xi_inf, n = run.status, run.xi_inf, run.steps
     assert status == sweep.Status.NONFINITE and math.isnan(xi_inf) and n < 1000
 

@@ -62,8 +62,9 @@ def stop_batch(method, points, finite, tol, max_steps, tau_samples, obs_tau, fra
     each has a finite relaxed slip, ``tol`` the scene's :class:`Tolerances`, ``tau_samples`` the trajectory's reduced
     times, obs_tau[i, :] point i's extra reduced times (slip_at), ``fractions`` those of t50/t90 (empty: not asked
     for)."""
-    for i in prange(finite.size):
-        _solve_into(i, method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out)
+    for i in prange(finite.size):  # np.int64(i): prange's index is uint64 inside the parallel loop, int64 when
+        # the function is first typed; one type, one compile of the per-point function
+        _solve_into(np.int64(i), method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out)
 
 
 @njit(parallel=True, cache=True)

@@ -107,8 +107,10 @@ class Tolerances(NamedTuple):
 
 
 class Samples(NamedTuple):
-    """Where a run records: xi and u = ln psi at the increasing reduced times ``tau`` (into xi_at, u_at), tau and
-    dxi/dtau where xi crosses the increasing ``xi`` (into tau_at, rate_at)."""
+    """What a run records: xi and u = ln psi at the increasing reduced times ``tau`` (into xi_at, u_at), tau and
+    dxi/dtau where xi crosses the increasing ``xi`` (into tau_at, rate_at), and the relaxed slip if ``limit``. (A
+    field, not an argument of :func:`march`: a literal True or False passed to a numba function compiles it once
+    more, and march is the largest function of the per-point path.)"""
 
     tau: np.ndarray
     xi_at: np.ndarray
@@ -116,6 +118,7 @@ class Samples(NamedTuple):
     xi: np.ndarray
     tau_at: np.ndarray
     rate_at: np.ndarray
+    limit: bool
 
 
 class Continuation(NamedTuple):
@@ -269,7 +272,7 @@ def error_norm(ex, es, et, xi, xi1, s1, tau1, ctrl_tol, atol, with_tau):
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def march(method, plan_mesh, p, tol, max_steps, want_limit, samples):
+def march(method, plan_mesh, p, tol, max_steps, samples):
     """Integrate one stop point along a mesh (module docstring).
 
     ``method``: :class:`Method`; ``plan_mesh``: :class:`Mesh`; ``p``: :class:`sweep.models.stop.StopParams` (its
@@ -278,7 +281,7 @@ def march(method, plan_mesh, p, tol, max_steps, want_limit, samples):
     dxi/dtau where xi crosses each of its increasing slips; tau targets
     beyond the transient (E < TAIL_SAFETY rtol, relaxed slip known) come from the closed form. The closed-form
     tail is taken once its error bound is below TAIL_SAFETY (atol + TAIL_RTOL |xi|); stops when the tail is taken
-    (if ``want_limit``) and all targets are recorded.
+    (if ``samples.limit``) and all targets are recorded.
 
     Returns a :class:`Run` (status, xi_inf, steps, tail error bound, mesh, n_mesh, continuation, track, n_track,
     at_mesh):
@@ -291,7 +294,7 @@ def march(method, plan_mesh, p, tol, max_steps, want_limit, samples):
     fsal, q = method.fsal, method.q
     mode, h0, mesh, n_mesh, split = plan_mesh
     rtol, atol, ctrl_tol = tol
-    tau_targets, xi_at, u_at, xi_targets, tau_at, rate_at = samples
+    tau_targets, xi_at, u_at, xi_targets, tau_at, rate_at, want_limit = samples
     k, a, bb = p.k, p.a, p.b
     stages = method.b.size
     K = np.empty((stages, 3))
@@ -384,17 +387,16 @@ def march(method, plan_mesh, p, tol, max_steps, want_limit, samples):
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def richardson_pair(method, adaptive, h, p, tol, max_steps, want_limit, coarse_samples, fine_samples):
+def richardson_pair(method, adaptive, h, p, tol, max_steps, coarse_samples, fine_samples):
     """(coarse, fine) :class:`Run` of :func:`march`: the coarse run (adaptive from the first trial step h, building
     the mesh; fixed: step 2h) and the fine run on the same mesh halved, recording into ``coarse_samples`` and
     ``fine_samples``. Where the adaptive run fails on its first step there is no mesh, and the coarse result stands
     for both."""
     coarse = march(method, Mesh(ADAPTIVE if adaptive else REPLAY, h, np.full(1, 2.0 * h), 1, 1), p, tol, max_steps,
-                   want_limit, coarse_samples)
+                   coarse_samples)
     if coarse.n_mesh == 0:
         return coarse, coarse
-    fine = march(method, Mesh(REPLAY, h, coarse.mesh, coarse.n_mesh, 2), p, tol, max_steps, want_limit,
-                 fine_samples)
+    fine = march(method, Mesh(REPLAY, h, coarse.mesh, coarse.n_mesh, 2), p, tol, max_steps, fine_samples)
     return coarse, fine
 
 
@@ -403,8 +405,8 @@ def crossings(method, h, mesh, n_mesh, split, p, max_steps, targets, tau_at, rat
     """Status of a replay of ``mesh`` (``split`` substeps per step) recording tau and dxi/dtau where xi crosses the
     increasing ``targets``."""
     none = np.empty(0)
-    return march(method, Mesh(REPLAY, h, mesh, n_mesh, split), p, Tolerances(0.0, 0.0, 0.0), max_steps, False,
-                 Samples(none, none, none, targets, tau_at, rate_at)).status
+    return march(method, Mesh(REPLAY, h, mesh, n_mesh, split), p, Tolerances(0.0, 0.0, 0.0), max_steps,
+                 Samples(none, none, none, targets, tau_at, rate_at, False)).status
 
 
 @njit(cache=True, fastmath=FAST)
@@ -537,9 +539,9 @@ def solve_stop_point(method, h, p, tol, max_steps, finite, samples, times):
     tau_at_fraction_err[:] = math.nan
     # pass 1: the coarse run is returned, the fine one's samples go to (xf_at, uf_at)
     xf_at, uf_at = np.full(tau_targets.size, math.nan), np.full(tau_targets.size, math.nan)
-    ret, partner = richardson_pair(method, adaptive, h, p, run_tol, max_steps, finite,
-                                   Samples(tau_targets, xi_at, u_at, none, none, none),
-                                   Samples(tau_targets, xf_at, uf_at, none, none, none))
+    ret, partner = richardson_pair(method, adaptive, h, p, run_tol, max_steps,
+                                   Samples(tau_targets, xi_at, u_at, none, none, none, finite),
+                                   Samples(tau_targets, xf_at, uf_at, none, none, none, finite))
     mesh, n_mesh = ret.mesh, ret.n_mesh
     if n_mesh == 0:
         return PointResult(ret.status, math.nan, math.nan, 0)
@@ -564,9 +566,9 @@ def solve_stop_point(method, h, p, tol, max_steps, finite, samples, times):
     cond = np.max(fractions * x_r / (tau_at_fraction * rate_r)) if st2 == OK else 0.0
     if cond > 1.0:  # ill-conditioned crossings: the whole pair again with tolerances / cond
         h = h * cond ** (-1.0 / order)
-        nothing = Samples(none, none, none, none, none, none)
+        nothing = Samples(none, none, none, none, none, none, True)
         c3, f3 = richardson_pair(method, adaptive, h, p, Tolerances(run_tol.rtol, tol.atol / cond, tol.ctrl / cond),
-                                 max_steps, True, nothing, nothing)
+                                 max_steps, nothing, nothing)
         if c3.status != OK or f3.status != OK:
             return PointResult(c3.status if c3.status != OK else f3.status, x_r, xi_err, n)
         mesh, n_mesh, x_r, x_p = c3.mesh, c3.n_mesh, c3.xi_inf, f3.xi_inf
