@@ -11,14 +11,13 @@ of ``params`` (a preset or your own :class:`sweep.FrictionParams`), which are al
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import InputError
-from ..params import FrictionParams
+from ..params import FrictionParams, require_finite
 
 __all__ = ["FREE", "UNITS", "ParamSpace", "default_bounds", "make_space"]
 
@@ -107,7 +106,7 @@ def make_space(free: Sequence[str], params: FrictionParams, bounds: Mapping[str,
     for name, value in dict(start or {}).items():
         if name not in FREE:
             raise InputError(f"start names {name!r}, which does not exist; allowed: {list(FREE)}")
-        values[name] = _finite(f"start {name}", value)
+        values[name] = require_finite(f"start {name}", value)
     for name in dict(bounds or {}):
         if name not in free:
             raise InputError(f"bounds name {name!r}, which is not free; free: {list(free)}")
@@ -126,22 +125,12 @@ def make_space(free: Sequence[str], params: FrictionParams, bounds: Mapping[str,
                       values=values, V0=params.V0, g=params.g)
 
 
-def _finite(field: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{field} must be a number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise InputError(f"{field} must be finite, got {x!r}")
-    return x
-
-
 def _pair(name: str, spec) -> tuple[float, float]:
     try:
         lo, hi = spec
     except (TypeError, ValueError):
         raise InputError(f"bounds {name} must be [lower, upper], got {spec!r}") from None
-    lo, hi = _finite(f"bounds {name} lower", lo), _finite(f"bounds {name} upper", hi)
+    lo, hi = require_finite(f"bounds {name} lower", lo), require_finite(f"bounds {name} upper", hi)
     if not lo < hi:
         raise InputError(f"bounds {name} = [{lo!r}, {hi!r}]: the lower bound must be below the upper one")
     return lo, hi
