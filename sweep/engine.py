@@ -105,13 +105,14 @@ def _lane_runner(scene: Scene, plan: Plan, method: str, correction: np.ndarray |
     """run(points, steps) -> (xi_inf, tail bound, status, steps taken): one fixed-step run per entry, in lanes.
     With ``correction`` (an array over the points of the first call) the first call's runs also carry the first-order
     inertial correction into it: the ladder's coarsest run, so that model="auto" needs no run of its own."""
-    first = [correction is not None]
+    carry = correction is not None
 
     def run(points, steps):
-        out = lane_runs(plan, method, points, steps, scene.rtol, scene.atol["xi_inf"], correction=first[0])
-        if first[0]:
+        nonlocal carry
+        out = lane_runs(plan, method, points, steps, scene.rtol, scene.atol["xi_inf"], correction=carry)
+        if carry:
             correction[:] = out.correction
-            first[0] = False
+            carry = False
         return out.xi_inf, out.tail_err, out.status, out.steps
 
     return run

@@ -4,10 +4,10 @@ The model error (of neglecting inertia) is kept apart from the numerical error (
 
 * stop scene, per point: the quasi-static model's relative error on xi_inf is estimated by its first-order
   inertial correction, integrated along the point's own quasi-static solution (sweep/models/stop_inertial.py; in
-  the RK4 lanes beside the quasi-static state, the stiff points in the per-point RODAS3 module): a measurement per
-  point, not a coefficient (the gap per unit gamma/A ranges from ~1e-3 where mu1 < 0 to several where mu1/A is
-  large). Where the expansion is trusted (tau = gamma/A (1 + (chi + |mu1|)/A)
-  <= FIRST_ORDER_TRUST) the true gap is within a factor of the estimate that grows with tau (sweep/accuracy.py); a
+  the RK4 lanes beside the quasi-static state, the per-point RODAS3 module only where a lane run fails): a
+  measurement per point, not a coefficient (the gap per unit gamma/A ranges from ~1e-3 where mu1 < 0 to several
+  where mu1/A is large). Where the expansion is trusted (tau = gamma/A (1 + (chi + |mu1|)/A) <= FIRST_ORDER_TRUST)
+  the true gap is within a factor of the estimate that grows with tau (sweep/accuracy.py); a
   point keeps the quasi-static result where that factor (:func:`routing_margin`) x estimate <= model_tol.
   Every other point (estimate above the tolerance, not trusted, or failed) is solved with inertia, and its
   ``model_error`` is then the gap measured between the two models. With time-resolved observables (which the

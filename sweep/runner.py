@@ -137,12 +137,13 @@ def stop_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.
     n_t = n_samples(scene, plan)
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
-        carried = np.full(points.size, np.nan)  # the first-order correction, where the lanes carried it
+        # the first-order correction, where the lanes carry it (model="auto" only needs it)
+        carried = np.full(points.size, np.nan) if scene.model == "auto" else None
         if scene.model == "inertial":
             raw = RawResult.empty(points.size, n_t, 0)
             raw.status[~plan.finite[points]] = Status.NO_FINITE_LIMIT
         else:
-            raw = run_points(scene, plan, points, correction=carried if scene.model == "auto" else None)
+            raw = run_points(scene, plan, points, correction=carried)
             mark_error_above_tol(scene, raw)
         choice = choose_stop_models(scene, plan, raw, points, correction=carried)
         mark_error_above_tol(scene, raw)

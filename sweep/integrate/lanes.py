@@ -181,8 +181,8 @@ class LaneOutputs(NamedTuple):
 def make_lane_kernels(dtype, tableau, correction: bool = False):
     """(relax_runs, relax_batch) compiled for ``dtype`` (np.float64 or np.float32) and a fixed-step tableau
     (explicit: :func:`_explicit_step`; Rosenbrock: :func:`_rosenbrock_step`); with ``correction`` (explicit only)
-    each run also carries the first-order inertial correction of its relaxed slip, written to ``correction``
-    (G = gamma/A per point; both arrays are ignored by the kernels without it)."""
+    each run also carries the first-order inertial correction of its relaxed slip, written to
+    ``LaneOutputs.correction`` (from ``LanePoints.G``; both are ignored by the kernels without it)."""
     if correction and isinstance(tableau, RosenbrockTableau):
         raise ValueError(f"{tableau.name}: the first-order correction rides in the explicit lanes only")
     f = np.dtype(dtype).type
