@@ -20,7 +20,9 @@ import numpy as np
 from .integrate.batch import StopOutputs, slip_batch, stop_batch
 from .integrate.ladder import climb
 from .integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
+from .integrate.lanes_adaptive import AdaptiveOutputs, AdaptiveRuns, adaptive_lane_kernels
 from .integrate.stop_point import Method, StopPoints, Tolerances
+from .integrate.tolerance_ladder import climb_tolerances
 from .models.stop import NO_FINITE_LIMIT, OK
 from .physics import perturbation_growth
 from .plan import CHUNK_POINTS, Plan
@@ -118,6 +120,27 @@ def _lane_runner(scene: Scene, plan: Plan, method: str, correction: np.ndarray |
     return run
 
 
+def _adaptive_runner(plan: Plan, method: str, atol: float, correction: np.ndarray | None = None):
+    """run(points, tolerances, first steps) -> (xi_inf, fine xi_inf, tail bounds, status, attempts) in the adaptive
+    lanes of ``method``; the first call's runs carry the first-order inertial correction into ``correction`` if
+    given."""
+    carry = correction is not None
+
+    def run(points, tols, h0):
+        nonlocal carry
+        relax_batch = adaptive_lane_kernels(method, carry)[1]
+        out = AdaptiveOutputs.empty(points.size, carry)
+        relax_batch(LanePoints(plan.k, plan.a, plan.b, plan.s_c, plan.G),
+                    AdaptiveRuns(points, np.ascontiguousarray(tols, dtype=float), np.ascontiguousarray(h0, dtype=float),
+                                 atol, plan.max_steps), 4 * numba.get_num_threads(), out)
+        if carry:
+            correction[:] = out.correction
+            carry = False
+        return out.xi_inf, out.fine, out.tail_err, out.status, out.steps
+
+    return run
+
+
 def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray, correction: np.ndarray | None = None) -> RawResult:
     """Relaxed slip of the points g through the lane kernels (one per method of the plan), each point down its own
     step ladder (sweep/integrate/ladder.py: a pilot pair, then rungs until a checked estimate meets the tolerance).
@@ -131,10 +154,17 @@ def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray, correction: np.ndar
         if live.size == 0:
             continue
         pts = g[live]
-        carried = np.full(live.size, np.nan) if correction is not None and method == "rk4" else None
-        res = climb(_lane_runner(scene, plan, method, carried), pts, plan.step[pts], METHODS[method].order,
-                    scene.rtol, scene.atol["xi_inf"], plan.roundoff, fixed=plan.step_source == "override",
-                    growth=perturbation_growth(plan.k[pts], plan.a[pts], 1.0))
+        carried = (np.full(live.size, np.nan) if correction is not None and not METHODS[method].implicit
+                   else None)
+        growth = perturbation_growth(plan.k[pts], plan.a[pts], 1.0)
+        if plan.adaptive:
+            res = climb_tolerances(_adaptive_runner(plan, method, scene.atol["xi_inf"], carried), pts,
+                                   plan.step[pts], plan.ctrl_tol, scene.rtol, scene.atol["xi_inf"], plan.roundoff,
+                                   growth)
+        else:
+            res = climb(_lane_runner(scene, plan, method, carried), pts, plan.step[pts], METHODS[method].order,
+                        scene.rtol, scene.atol["xi_inf"], plan.roundoff, fixed=plan.step_source == "override",
+                        growth=growth)
         out.xi_inf[live], out.xi_inf_err[live], out.status[live], out.steps[live], out.work[live] = (
             res.xi, res.error, res.status, res.steps, res.work)
         if carried is not None:

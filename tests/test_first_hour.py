@@ -415,9 +415,10 @@ for d in gc.get_objects():
 
 def test_a_stop_scene_compiles_only_the_kernels_its_model_needs():
     """Every kernel compiled (or loaded from numba's cache) in a fresh process after a stop scene: the quasi-static
-    model uses the relaxed-slip lanes and none of the driven or inertial kernels; "auto" adds one lane kernel (the
-    lanes that carry the first-order inertial correction, its model choice) and, on this grid where no point needs
-    inertia or the per-point fallback, no inertial kernel; never the driven one."""
+    model uses the relaxed-slip lanes and none of the driven or inertial kernels; "auto" at most one lane kernel
+    more (the lanes that carry the first-order inertial correction, its model choice: with the adaptive lanes that
+    run is the point's first, so it compiles instead of the plain kernel where no point needs a second run) and, on
+    this grid where no point needs inertia or the per-point fallback, no inertial kernel; never the driven one."""
     used = {}
     for model in ("quasistatic", "auto"):
         proc = subprocess.run([sys.executable, "-c", KERNELS_USED, model], capture_output=True, text=True, timeout=600)
@@ -432,7 +433,7 @@ def test_a_stop_scene_compiles_only_the_kernels_its_model_needs():
                        for name in names), names
     lanes = {model: sum(name.startswith("sweep.integrate.batch.lanes_batch") for name in names)
              for model, names in used.items()}
-    assert lanes["auto"] == lanes["quasistatic"] + 1, lanes
+    assert 1 <= lanes["auto"] <= lanes["quasistatic"] + 1, lanes
 
 
 KERNELS_COMPILED = """

@@ -1,0 +1,87 @@
+"""The adaptive lanes (sweep/integrate/lanes_adaptive.py) and their estimate (sweep/integrate/tolerance_ladder.py)
+against the independent scipy reference (tests/reference.py): the premise of the estimate (the fine twin on the mesh
+halved is at least twice as accurate as the run), the per-lane independence of the results, the step limit, and the
+branch-free log2 of the step-size controller."""
+
+import functools
+
+import numpy as np
+import pytest
+from cases import STOP_CASES, case_params
+from reference import reference_stop
+
+import sweep
+from sweep.engine import _adaptive_runner
+from sweep.integrate.lanes_adaptive import _log2_approx
+from sweep.plan import make_plan
+from sweep.status import Status
+
+FINITE_CASES = [c for c in STOP_CASES if c.expect_finite]
+REFERENCE_REL = 1e-12
+"""Relative accuracy trusted of the reference's xi_inf (tests/test_error_estimates.py)."""
+
+
+@functools.cache
+def reference(name):
+    case = next(c for c in STOP_CASES if c.name == name)
+    return reference_stop(case.chi, case.A, case.mu1, case.m2).xi_inf
+
+
+def case_scene(case, rtol, **kw):
+    c = case_params(case)
+    params = sweep.FrictionParams(A=c["A"], m1=c["m1"], m2=c["m2"], D0=c["D0"])
+    return sweep.Scene(protocol="stop", params=params, K_over_M=[c["K_over_M"]], V=[c["V"]], model="quasistatic",
+                       rtol=rtol, **kw)
+
+
+def case_plan(case, rtol, **kw):
+    return make_plan(case_scene(case, rtol, **kw))
+
+
+@pytest.mark.parametrize("rtol", [1e-3, 1e-6, 1e-9])
+def test_the_fine_twin_is_at_least_twice_as_accurate(rtol):
+    """The estimate 2 |fine - run| bounds the run's error if the fine twin's error is at most half of it: checked
+    against the reference on every finite case of the table, at the first run's own tolerance."""
+    for case in FINITE_CASES:
+        plan = case_plan(case, rtol)
+        assert plan.point_methods == ("dop853",), plan.point_methods
+        run = _adaptive_runner(plan, "dop853", sweep.scene.DEFAULT_ATOL["xi_inf"])
+        x, fine, _, status, _ = run(np.array([0]), np.array([plan.ctrl_tol]), plan.step[:1])
+        exact = reference(case.name)
+        floor = REFERENCE_REL * exact + sweep.scene.DEFAULT_ATOL["xi_inf"]
+        assert status[0] == Status.OK, case.name
+        assert abs(fine[0] - exact) <= max(0.5 * abs(x[0] - exact), floor), case.name
+
+
+def test_results_do_not_depend_on_the_lane_or_its_neighbours():
+    """Every lane keeps its own step and accept/reject decisions: the same runs in another order, and alone, give
+    bitwise the same numbers."""
+    s = sweep.Scene(protocol="stop", params=sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0033, D0=0.7e-6),
+                    K_over_M=np.logspace(2, 7, 9), V=np.logspace(-8, -3, 7), model="quasistatic", rtol=1e-7)
+    plan = make_plan(s)
+    run = _adaptive_runner(plan, "dop853", s.atol["xi_inf"])
+    points = np.flatnonzero(plan.finite)
+    tols = np.full(points.size, plan.ctrl_tol)
+    forward = run(points, tols, plan.step[points])
+    order = np.random.default_rng(7).permutation(points.size)
+    shuffled = run(points[order], tols[order], plan.step[points[order]])
+    alone = run(points[:1], tols[:1], plan.step[points[:1]])
+    for a, b, c in zip(forward, shuffled, alone):
+        np.testing.assert_array_equal(a[order], b)
+        np.testing.assert_array_equal(a[:1], c)
+
+
+def test_a_run_past_max_steps_is_flagged_not_silent():
+    """A point that needs more attempts than max_steps comes back max_steps, with no value."""
+    case = next(c for c in FINITE_CASES if c.name == "s2_KM1e4_V100um_corner")
+    s = case_scene(case, 1e-8, max_steps=5)
+    out = sweep.runner.execute(s, make_plan(s), progress=False)
+    assert out.status[0] == Status.MAX_STEPS and np.isnan(out.xi_inf[0])
+
+
+def test_branch_free_log2_is_good_enough_for_a_step_factor():
+    """The controller's log2 (bits and a quadratic, so that the lane loop vectorises) is within 0.006 of log2 over
+    the whole positive normal range: a step factor err^(-1/6) off by 2^(0.006/6) = 0.07 %."""
+    x = np.logspace(-300, 300, 20001)
+    approx = np.array([_log2_approx(v) for v in x])
+    assert np.max(np.abs(approx - np.log2(x))) < 0.006
