@@ -32,6 +32,7 @@ SMOKE_FLAG = {"compare_commits": "--self-test"}
 """The smoke-run flag of a script whose --quick is not seconds (default --quick)."""
 
 KEYS = {
+    "axes": {"benchmark", "quick", "machine", "settings", "grids", "throughput_ratios", "target"},
     "auto_cost": {"benchmark", "quick", "machine", "rows", "two_threads_over_one", "targets"},
     "calibrate_rk4": {"benchmark", "points", "reference_failures", "rows", "plan_constants", "versions"},
     "calibrate_stiff": {"what", "quick", "points", "reference_failures", "rows"},

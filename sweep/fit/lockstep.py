@@ -11,6 +11,7 @@ exactly the path it would take alone: many curves in one call give the same esti
 from __future__ import annotations
 
 import threading
+from dataclasses import fields
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -32,15 +33,33 @@ def _pad(t: np.ndarray, n_t: int) -> np.ndarray:
     return np.concatenate((t, np.repeat(t[:, -1:], n_t - t.shape[1], axis=1)), axis=1)
 
 
+def unique_points(points: ForwardPoints) -> tuple[ForwardPoints, np.ndarray]:
+    """(the distinct points of ``points``, the index of each point among them): equal inputs give equal outputs,
+    since a point's numbers do not depend on its batch. Curves of one campaign often share (K/M, V), times and
+    bounds, so their global grids are the same parameter sets (100 such curves: the global stage solves one grid,
+    not 100); profile and perturbed sets repeat too."""
+    n = points.n
+    t = np.asarray(points.t, dtype=float).reshape(n, -1)
+    _, t_row = np.unique(t, axis=0, return_inverse=True)  # rows of times, then the 6 parameters: keys of 7 numbers
+    keys = np.column_stack([np.broadcast_to(np.asarray(getattr(points, f), dtype=float), (n,))
+                            for f in ForwardPoints._fields[:-1]] + [t_row.reshape(n).astype(float)])
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    kept = ForwardPoints(*(np.broadcast_to(np.asarray(getattr(points, f), dtype=float), (n,))[first]
+                           for f in ForwardPoints._fields[:-1]), t=t[first])
+    return kept, inverse.reshape(n)
+
+
 def run_merged(requests: Sequence[ForwardPoints], rtol: float, V0: float, g: float) -> list[ForwardResult]:
-    """Run every request's points in one engine call; each gets its own rows back (times padded with their last
-    value to a common width, then cut back)."""
+    """Run every request's points in one engine call, each distinct point once (:func:`unique_points`); each
+    request gets its own rows back (times padded with their last value to a common width, then cut back)."""
     sizes = [r.n for r in requests]
     n_t = max(np.shape(r.t)[1] for r in requests)
     merged = ForwardPoints(*(np.concatenate([np.atleast_1d(getattr(r, f)) for r in requests])
                              for f in ForwardPoints._fields[:-1]),
                            t=np.concatenate([_pad(np.asarray(r.t, dtype=float), n_t) for r in requests]))
-    res = forward(merged, rtol=rtol, V0=V0, g=g)
+    distinct, where = unique_points(merged)
+    once = forward(distinct, rtol=rtol, V0=V0, g=g)
+    res = ForwardResult(*(getattr(once, f.name)[where] for f in fields(ForwardResult)))
     out, start = [], 0
     for req, n in zip(requests, sizes):
         cols = np.shape(req.t)[1]

@@ -25,15 +25,18 @@ from .problem import Problem
 
 __all__ = ["EXTEND", "OFFSETS", "REFINE_FRACTION", "REFINE_ROUNDS", "Profile", "profile_all"]
 
-OFFSETS = (0.75, 1.5, 2.25, 3.0)
-"""First round, in standard errors either side of the best value."""
+OFFSETS = (1.5, 2.25, 3.0)
+"""First round, in standard errors either side of the best value. No point at 0.75: on a near-quadratic profile the
+crossing (1.96) lies in [1.5, 2.25], which interpolates it exactly; where it lies below 1.5 instead, the bracket
+[best, 1.5] is bisected by the refinement rounds (REFINE_FRACTION), which is what a point at 0.75 was for."""
 EXTEND = (4.0, 6.0, 9.0, 14.0)
 """Second round, on the sides still below the threshold."""
 REFINE_ROUNDS = 4
 """Bisection rounds at most, on the sides whose crossing is poorly bracketed."""
 REFINE_FRACTION = 0.6
 """A crossing bracketed by [v_in, v_out] is refined where |v_out - v_in| > REFINE_FRACTION |v_in - best| (default
-offsets on a quadratic profile: crossing at 1.96 in [1.5, 2.25] standard errors, 0.75 < 0.9: not refined)."""
+offsets on a quadratic profile: crossing at 1.96 in [1.5, 2.25] standard errors, 0.75 < 0.9: not refined; a
+crossing in [best, 1.5] always is)."""
 
 
 @dataclass
