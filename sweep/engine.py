@@ -123,13 +123,15 @@ def _lane_runner(scene: Scene, plan: Plan, method: str, correction: np.ndarray |
 def _adaptive_runner(plan: Plan, method: str, atol: float, correction: np.ndarray | None = None):
     """run(points, tolerances, first steps) -> (xi_inf, fine xi_inf, tail bounds, status, attempts) in the adaptive
     lanes of ``method``; the first call's runs carry the first-order inertial correction into ``correction`` if
-    given."""
-    carry = correction is not None
+    given. The later calls (the few points run again at a tighter tolerance) use the same kernel, so that a run of
+    model "auto" compiles one adaptive kernel, not two (~14 s each from an empty cache)."""
+    with_correction = correction is not None
+    carry = with_correction
 
     def run(points, tols, h0):
         nonlocal carry
-        relax_batch = adaptive_lane_kernels(method, carry)[1]
-        out = AdaptiveOutputs.empty(points.size, carry)
+        relax_batch = adaptive_lane_kernels(method, with_correction)[1]
+        out = AdaptiveOutputs.empty(points.size, with_correction)
         relax_batch(LanePoints(plan.k, plan.a, plan.b, plan.s_c, plan.G),
                     AdaptiveRuns(points, np.ascontiguousarray(tols, dtype=float), np.ascontiguousarray(h0, dtype=float),
                                  atol, plan.max_steps), 4 * numba.get_num_threads(), out)

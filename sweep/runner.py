@@ -126,8 +126,11 @@ def warm_up(scene: Scene, plan: Plan) -> float:
     """Compile the kernels (or load them from numba's on-disk cache) on one point per method of the plan;
     returns the seconds taken."""
     t0 = time.perf_counter()
-    firsts = [int(np.argmax(plan.point_method == m)) for m in range(len(plan.point_methods))]
-    execute(scene, plan, np.array(firsts), progress=False)
+    firsts = np.array([int(np.argmax(plan.point_method == m)) for m in range(len(plan.point_methods))])
+    if scene.model == "auto" and plan.lanes:  # the run's own lanes: those that carry the first-order correction
+        run_points(scene, plan.take(firsts), np.arange(firsts.size), correction=np.full(firsts.size, np.nan))
+    else:
+        execute(scene, plan, firsts, progress=False)
     return time.perf_counter() - t0
 
 
