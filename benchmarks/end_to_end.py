@@ -16,9 +16,10 @@ package is not changed; a wrapper costs ~1 us a call, a few hundred calls a run)
 * ``ladder_numpy``: the step ladder (sweep/integrate/ladder.py ``climb``) less its kernel calls: the serial numpy
   between two kernel calls;
 * ``model_choice`` (less its kernels), ``chunk_other`` (the rest of the chunks' computing: error marks, the
-  assembling of each chunk's arrays), ``journal`` (``Journal.write``: each chunk's checksum and atomic write, or
-  waiting for it where it is written in the background), ``consolidate`` (the rest of the chunk loop: chunks into
-  the flat arrays, the progress bar);
+  assembling of each chunk's arrays), ``journal`` (``Journal.write``: each chunk's checksum and atomic write, in
+  the helper thread of ``Journal.background`` where the package has it), ``journal_wait`` (handing a chunk to that
+  thread, waiting for it where it is behind, and for the last chunks at the end), ``consolidate`` (the rest of the
+  chunk loop: chunks into the flat arrays, the progress bar);
 * ``planning`` (``make_plan``), ``prepare_other`` (the checks before the work, the journal's opening),
   ``warm_up`` (kernels loaded, one point each), ``dataset`` (``build_dataset``), ``netcdf`` (``io.write``),
   ``png`` (``plot_file``), ``cli_other`` (the rest: imports, summaries, the journal's removal);
@@ -61,7 +62,7 @@ import sweep.runner  # noqa: E402
 DEFAULT_OUT = HERE / "results" / "end_to_end.json"
 TARGET_RATIO = 1.3
 SIDES = {"full": (1000, 1000), "quick": (20, 10)}
-PARTS = ("kernel", "ladder_numpy", "model_choice", "chunk_other", "journal", "consolidate", "planning",
+PARTS = ("kernel", "ladder_numpy", "model_choice", "chunk_other", "journal", "journal_wait", "consolidate", "planning",
          "prepare_other", "warm_up", "dataset", "netcdf", "png", "cli_other")
 """The parts of the breakdown, in the order of a run (module docstring)."""
 
@@ -121,12 +122,16 @@ def instrumented(watch: Stopwatch):
         (sweep.plot, "plot_file", "png"),
     ]
     lane_kernels = sweep.engine.lane_kernels
+    if hasattr(sweep.journal.Journal, "background"):  # chunks journaled in a helper thread
+        patches.append((sweep.journal.Journal, "background", "journal_wait"))
     saved = [(owner, name, getattr(owner, name)) for owner, name, _ in patches]
     try:
         for owner, name, key in patches:
             original = getattr(owner, name)
             if name == "prepare_run":  # a context manager: time its setup (entering) only
                 setattr(owner, name, _timed_enter(watch, original, key))
+            elif name == "background":  # a context manager yielding keep(index, arrays): time keep and the exit
+                setattr(owner, name, _timed_background(watch, original, key))
             else:
                 setattr(owner, name, watch.wrap(original, key))
         sweep.engine.lane_kernels = lambda *a, **k: _lane_kernels_timed(watch, lane_kernels, *a, **k)
@@ -157,6 +162,24 @@ def _timed_enter(watch: Stopwatch, prepare_run, key: str):
                 raise
         else:
             manager.__exit__(None, None, None)
+
+    return timed
+
+
+def _timed_background(watch: Stopwatch, background, key: str):
+    """Journal.background whose keep() calls and whose end (waiting for the last writes) are timed as ``key``."""
+    @contextlib.contextmanager
+    def timed(journal):
+        manager = background(journal)
+        keep = manager.__enter__()
+        try:
+            yield watch.wrap(keep, key)
+        except BaseException:
+            if not manager.__exit__(*sys.exc_info()):
+                raise
+        else:
+            with watch.section(key):
+                manager.__exit__(None, None, None)
 
     return timed
 
