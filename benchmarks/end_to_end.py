@@ -74,6 +74,8 @@ class Stopwatch:
     def __init__(self) -> None:
         self.own: dict[str, float] = {}
         self.calls: dict[str, int] = {}
+        self.helper: set[str] = set()
+        """Sections timed in a thread other than the main one (overlapped with it)."""
         self._lock = threading.Lock()
         self._local = threading.local()
 
@@ -92,6 +94,8 @@ class Stopwatch:
             with self._lock:
                 self.own[key] = self.own.get(key, 0.0) + spent - inner
                 self.calls[key] = self.calls.get(key, 0) + 1
+                if threading.current_thread() is not threading.main_thread():
+                    self.helper.add(key)
 
     def wrap(self, fn, key: str):
         @functools.wraps(fn)
@@ -205,6 +209,7 @@ def one_run(toml: Path, out: Path) -> dict:
     parts["cli_other"] = max(0.0, total - sum(parts.values()))
     overlapped = max(0.0, sum(parts.values()) - total)
     return {"total_s": total, "parts_s": parts, "calls": watch.calls, "overlapped_s": overlapped,
+            "in_helper_threads": sorted(watch.helper),
             "ratio_total_over_kernel": total / parts["kernel"] if parts["kernel"] > 0 else None,
             "netcdf_bytes": out.stat().st_size, "loadavg_before": load, "loadavg_after": loadavg()}
 
@@ -229,8 +234,12 @@ def plot(result: dict, path: Path) -> str:
     best = result["best"]
     seconds = [best["parts_s"][k] for k in PARTS]
     fig, ax = plt.subplots(figsize=(8.0, 4.8), dpi=110, layout="constrained")
-    colours = ["C2" if k == "kernel" else "C0" for k in PARTS]
+    helper = set(best.get("in_helper_threads", ()))
+    colours = ["C2" if k == "kernel" else "0.65" if k in helper else "C0" for k in PARTS]
     ax.barh(PARTS[::-1], seconds[::-1], color=colours[::-1])
+    if helper:
+        ax.barh([], [], color="0.65", label="in a helper thread, overlapped with the main one (wall time there, "
+                                           "waiting for the GIL included)")
     for i, s in enumerate(seconds[::-1]):
         ax.annotate(f"{s:.2f} s", (s, i), xytext=(3, 0), textcoords="offset points", va="center", fontsize=8)
     ax.axvline(best["parts_s"]["kernel"] * (TARGET_RATIO - 1.0), color="0.5", ls=":", lw=1,
