@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import threading
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, contextmanager
@@ -98,9 +99,16 @@ class PreparedRun:
     imap: Callable[..., Iterator[tuple[int, dict[str, np.ndarray]]]]
     """The backend's map over chunks (sweep/backends.py: open_backend)."""
 
-    def finish(self, progress: bool | None = None, history: str = "") -> xr.Dataset:
+    def finish(self, progress: bool | None = None, history: str = "",
+               picture: Callable[[xr.Dataset], None] | None = None) -> xr.Dataset:
         """Compute the chunks not yet in the journal, build the Dataset and write it to the output (then remove the
-        journal); returns the Dataset (see :func:`run_sweep`)."""
+        journal); returns the Dataset (see :func:`run_sweep`).
+
+        ``picture(ds)`` (the command line's drawing) is called once with the Dataset: where it holds every variable,
+        in this thread while the file is written in another (the netCDF library compresses without holding
+        Python's lock, so on two cores the drawing costs little more than the writing alone); where the variables
+        sampled in time stayed in the journal, after the write, with the Dataset read from the file. The write is
+        always waited for: the file is whole or absent when this returns or raises."""
         scene, plan, size, journal = self.scene, self.plan, self.chunk_size, self.journal
         flat, seconds = run_chunks(scene, plan, size, journal, progress, self.imap)
         # with a journal the arrays sampled in time stayed there: written into the file chunk by chunk, never held
@@ -118,17 +126,52 @@ class PreparedRun:
         if scene.simulated_hopf_line:  # asked for: the driven kernel is compiled only then
             ds = with_simulated_line(ds, scene.params, scene.model, scene.model_tol, scene.state_law)
         if journal is None:
+            if picture is not None:
+                picture(ds)
             return ds
         if self.output.exists() and not self.overwrite:  # checked before the work: someone wrote it meanwhile
             raise OutputError(f"{self.output} appeared during the run; the finished chunks are kept in {journal.path}: "
                               "run the same command with --resume --overwrite (resume=True, overwrite=True) to "
                               "replace it, or move it away and --resume")
         try:
-            write(ds, self.output, blocks=blocks)
+            _write_during(ds, self.output, blocks, picture if blocks is None else None, journal.remove)
         except OSError as exc:
             raise write_failed(exc, self.output, journal.path, len(journal.done())) from None
-        journal.remove()
-        return ds if blocks is None else open_dataset(self.output, load=False)
+        if blocks is None:
+            return ds
+        ds = open_dataset(self.output, load=False)
+        if picture is not None:
+            picture(ds)
+        return ds
+
+
+def _write_during(ds: xr.Dataset, output: Path, blocks, during: Callable[[xr.Dataset], None] | None,
+                  written: Callable[[], None]) -> None:
+    """io.write(ds, output, blocks), then ``written()`` once the file is in place; with ``during``, the write runs in a
+    helper thread while during(ds) runs in this one. The write is waited for even when ``during`` raises (Ctrl-C
+    while drawing), so the file is whole or absent afterwards; the write's error is raised first (OSError: the
+    caller's OutputError), then during's."""
+    if during is None:
+        write(ds, output, blocks=blocks)
+        written()
+        return
+    failed: list[BaseException] = []
+
+    def target() -> None:
+        try:
+            write(ds, output, blocks=blocks)  # (the module's name: a test's fault injected into api.write applies)
+        except BaseException as exc:  # noqa: BLE001 (raised in the caller's thread below)
+            failed.append(exc)
+
+    thread = threading.Thread(target=target, name="sweep-netcdf")
+    thread.start()
+    try:
+        during(ds)
+    finally:
+        thread.join()
+        if failed:
+            raise failed[0]
+        written()
 
 
 @contextmanager

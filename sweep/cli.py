@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import os
 import shlex
+import shutil
 import signal
 import sys
 import threading
@@ -42,22 +43,60 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if scene.protocol == "driven":
         return _run_driven(scene, args)
     from .compile_notice import SLOW_S
-    from .plot import plot_file
 
-    ds, compile_s, elapsed = _run_to_file(scene, args, warm=True)
-    out = args.output
-    print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, {scene.n_points / max(elapsed, 1e-9):,.0f} "
-          f"points/s; kernel {'compiled' if compile_s > SLOW_S else 'loaded'} in {compile_s:.1f} s beforehand)")
-    print(_flag_summary(ds, "status"))
-    print(_model_summary(ds))
+    picture = _StagedPicture(_png(args))
     try:
-        for png in plot_file(ds, _png(args)):
+        ds, compile_s, elapsed = _run_to_file(scene, args, warm=True, picture=picture)
+        out = args.output
+        print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, {scene.n_points / max(elapsed, 1e-9):,.0f} "
+              f"points/s; kernel {'compiled' if compile_s > SLOW_S else 'loaded'} in {compile_s:.1f} s beforehand)")
+        print(_flag_summary(ds, "status"))
+        print(_model_summary(ds))
+        for png in picture.publish():
             print(f"wrote {png}")
-    except Exception as exc:  # the results are safe on disk; a failed picture must not hide that
+    finally:
+        picture.discard()
+    if picture.error is not None:  # the results are safe on disk; a failed picture must not hide that
+        exc = picture.error
         print(f"sweep: could not draw the picture ({type(exc).__name__}: {exc}); the data are in {out}",
               file=sys.stderr)
         return 1
     return _most_failed(ds, out)
+
+
+class _StagedPicture:
+    """``sweep run``'s picture(s), drawn while the data file is written (api.PreparedRun.finish: ``picture``) into a
+    hidden folder beside them, and moved into place by :meth:`publish` once the data are safe: a run whose file
+    could not be written leaves no new picture and keeps an old one. A failed drawing is kept in ``error``."""
+
+    def __init__(self, png: Path) -> None:
+        self.png, self.folder, self.drawn, self.error = Path(png), None, [], None
+
+    def __call__(self, ds) -> None:
+        import tempfile
+
+        from .plot import plot_file
+
+        try:
+            self.png.parent.mkdir(parents=True, exist_ok=True)
+            self.folder = Path(tempfile.mkdtemp(prefix=f".{self.png.name}.", dir=self.png.parent))
+            self.drawn = plot_file(ds, self.folder / self.png.name)
+        except Exception as exc:  # noqa: BLE001 (reported after the data are written)
+            self.error = exc
+
+    def publish(self) -> list[Path]:
+        """Move the pictures drawn into place; returns their paths."""
+        placed = [self.png.parent / path.name for path in self.drawn]
+        for path, target in zip(self.drawn, placed):
+            os.replace(path, target)
+        self.drawn = []
+        return placed
+
+    def discard(self) -> None:
+        """Remove the hidden folder (and what was not published)."""
+        if self.folder is not None:
+            shutil.rmtree(self.folder, ignore_errors=True)
+            self.folder = None
 
 
 def _png(args: argparse.Namespace) -> Path:
@@ -154,10 +193,11 @@ def _most_failed(ds, out: Path) -> int:
                  "or inaccurate: check the units (K_over_M [s-2], V [m/s]) and ranges", 1)
 
 
-def _run_to_file(scene, args: argparse.Namespace, warm: bool):
+def _run_to_file(scene, args: argparse.Namespace, warm: bool, picture=None):
     """run_sweep into args.output, journaled (resumable with --resume), through api.prepare_run: every check, the
     lock and the journal's check before the kernels are loaded (``warm``: separately, timed; a dask run always
-    warms up before its fan-out). Returns (Dataset, seconds warming up, seconds running)."""
+    warms up before its fan-out); ``picture(ds)`` drawn while the file is written (api.PreparedRun.finish).
+    Returns (Dataset, seconds warming up, seconds running, the picture included)."""
     from .api import prepare_run, warm_up_kernels
     from .compile_notice import timed
 
@@ -170,7 +210,7 @@ def _run_to_file(scene, args: argparse.Namespace, warm: bool):
                 warm_up_kernels(scene, run.plan)
         compile_s = time.perf_counter() - t_warm
         t0 = time.perf_counter()
-        ds = run.finish(progress=None if not args.quiet else False, history=_history())
+        ds = run.finish(progress=None if not args.quiet else False, history=_history(), picture=picture)
     return ds, compile_s, time.perf_counter() - t0
 
 

@@ -23,18 +23,29 @@ What binds a journal to its run:
   over (``overwrite``: the old journal is deleted). The exception is a journal holding nothing but its manifest (a
   run stopped before its first chunk, e.g. Ctrl-C while compiling): nothing to lose, so it is started afresh.
 
+A running sweep hands its chunks to :meth:`Journal.background`, which writes them in order in one helper thread while
+the next chunks compute (the checksum, the file write and the fsyncs need no kernel), at most
+:data:`PENDING_CHUNKS` waiting; each write is the same atomic write as :meth:`Journal.write`, so a crash leaves whole
+chunks only, as before. Leaving the ``with`` block waits for every chunk handed over, also when the run is
+interrupted, so the journal then holds every chunk computed.
+
 Write failures (disk full, permission) become :class:`~sweep.errors.OutputError` lines that say the finished
 chunks are kept (sweep/outputs.py); the temporary file of the failed write is removed.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
 import re
 import shutil
+import threading
 import warnings
+from collections import deque
+from collections.abc import Callable, Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -50,6 +61,9 @@ MANIFEST = "manifest.json"
 JOURNAL_RECORD = "__journal__"
 """The member of a chunk's .npz that holds its record (JSON text)."""
 CHUNK = re.compile(r"chunk-(\d{6,})\.npz")
+PENDING_CHUNKS = 2
+"""Most chunks handed to :meth:`Journal.background` and not yet written: the computing waits beyond that (a slow disk
+must not fill the memory with chunks)."""
 TEMPORARY = re.compile(r"(chunk-\d{6,}\.npz|manifest\.json)\.tmp")
 """Leftovers of a write interrupted before its rename: never whole, so removed."""
 
@@ -268,6 +282,40 @@ class Journal:
         except OSError as exc:
             raise write_failed(exc, self._chunk(index), self.path, len(self._done)) from None
         self._done.add(index)
+
+    @contextlib.contextmanager
+    def background(self) -> Iterator[Callable[[int, dict[str, np.ndarray]], None]]:
+        """``with journal.background() as keep: keep(index, arrays)``: :meth:`write` in one helper thread, chunks
+        written in the order handed over (module docstring). A failed write is raised (its :class:`OutputError`) by
+        the next ``keep`` or when the block ends, and no chunk is written after it; the block's end waits for every
+        chunk handed over. ``arrays`` may not change after the call, the dict itself may (the caller's ``seconds`` is
+        popped while the chunk is written: the chunk keeps it)."""
+        pending: deque[Future] = deque()
+        failed = threading.Event()
+
+        def write(index: int, arrays: dict[str, np.ndarray]) -> None:
+            if failed.is_set():  # after a failed write none is tried: the error's count of kept chunks stays true
+                return
+            try:
+                self.write(index, arrays)
+            except BaseException:
+                failed.set()
+                raise
+
+        def keep(index: int, arrays: dict[str, np.ndarray]) -> None:
+            while pending and (pending[0].done() or len(pending) >= PENDING_CHUNKS):
+                pending.popleft().result()  # a failed write raises here
+            pending.append(executor.submit(write, index, dict(arrays)))
+
+        executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="sweep-journal")
+        try:
+            yield keep
+        except BaseException:
+            executor.shutdown(wait=True)  # the chunks computed are kept; the block's own error is the one raised
+            raise
+        executor.shutdown(wait=True)
+        while pending:
+            pending.popleft().result()
 
     def read(self, index: int) -> dict[str, np.ndarray]:
         """The arrays of chunk ``index``, checked against its record; a chunk that changed on disk since it was

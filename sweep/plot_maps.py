@@ -9,6 +9,8 @@ import xarray as xr
 from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm
 
 from . import physics
+from .log import LOGGER
+from .plot_blocks import block_edges, block_means, block_size, reduction_note
 from .plot_style import (
     KM_LABEL,
     V_LABEL,
@@ -31,13 +33,26 @@ CMAPS = {"xi_inf": "viridis", "stress_relaxation": "cividis", "amplitude": "magm
 
 def draw_map(fig, ax, ds: xr.Dataset, variable: str) -> None:
     """``variable`` over (K/M, V), log colour scale, with the Hopf lines, the stick-slip side (steady sliding
-    unstable, ``stable`` = 0) hatched, the V range without a Hopf line marked and failed points crossed."""
+    unstable, ``stable`` = 0) hatched, the V range without a Hopf line marked and failed points crossed. A grid with
+    more than plot_blocks.MAX_CELLS points along an axis is drawn in blocks of points, which the map's title says
+    (sweep/plot_blocks.py)."""
     km, v_um = ds["K_over_M"].values, um_per_s(ds)
     z = ds[variable].values.T  # rows: V, columns: K/M
     finite = z[np.isfinite(z) & (z > 0)]
+    # the colour scale spans every point's value, also where the map is drawn in blocks (sweep/plot_blocks.py)
     norm = LogNorm(finite.min(), finite.max()) if finite.size and finite.max() > finite.min() else None
-    mesh = ax.pcolormesh(km, v_um, np.ma.masked_where(~(np.isfinite(z) & (z > 0)), z), shading="nearest",
-                         cmap=CMAPS.get(variable, "viridis"), norm=norm)
+    style = dict(cmap=CMAPS.get(variable, "viridis"), norm=norm)
+    s_km, s_v = block_size(km.size), block_size(v_um.size)
+    note = reduction_note((km.size, v_um.size), (s_km, s_v))
+    if note is None:
+        mesh = ax.pcolormesh(km, v_um, np.ma.masked_where(~(np.isfinite(z) & (z > 0)), z), shading="nearest",
+                             **style)
+    else:
+        shown = block_means(z, s_v, s_km)
+        mesh = ax.pcolormesh(block_edges(km, s_km), block_edges(v_um, s_v), np.ma.masked_invalid(shown),
+                             shading="flat", **style)
+        ax.set_title(note, fontsize=7)
+        LOGGER.info("map of %s: %s", variable, note)
     fig.colorbar(mesh, ax=ax, label=label(ds, variable))
     _hatch_unstable(ax, ds)
     _hopf_lines(ax, ds, v_um)

@@ -1,5 +1,6 @@
 """Running a scene chunk by chunk: one progress bar for the whole sweep, each finished chunk journaled when the
-run writes a file (sweep/journal.py: a SIGKILL or Ctrl-C loses at most the chunks in flight), then the chunks
+run writes a file (sweep/journal.py, in a helper thread while the next chunks compute: a SIGKILL loses at most the
+chunks in flight and the journal.PENDING_CHUNKS not yet written, Ctrl-C only those in flight), then the chunks
 consolidated into flat per-point arrays.
 
 A chunk is a fixed set of points (engine.chunk_points: the same layout for a given number of points and chunk
@@ -9,6 +10,7 @@ chunking, the order in which chunks finish, or how many runs it took.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import time
 from collections.abc import Callable, Iterable, Iterator
@@ -91,14 +93,16 @@ def run_chunks(scene: Scene, plan: Plan, chunk_size: int | None, journal: Journa
             flat[name][points] = value
 
     todo = ((i, points) for i, points in enumerate(chunks) if i not in done)
+    # journaled in a helper thread while the next chunks compute; every chunk handed over is on disk when it ends
+    writes = journal.background() if journal is not None else contextlib.nullcontext(lambda i, arrays: None)
     with Progress(n, enabled=progress) as bar:
         bar.update(sum(chunks[i].size for i in done))
         try:
-            for i, arrays in imap(scene, plan, todo):
-                if journal is not None:
-                    journal.write(i, arrays)
-                consolidate(chunks[i], arrays)  # into the flat arrays at once: no second copy of the chunks
-                bar.update(chunks[i].size)
+            with writes as keep:
+                for i, arrays in imap(scene, plan, todo):
+                    keep(i, arrays)
+                    consolidate(chunks[i], arrays)  # into the flat arrays at once: no second copy of the chunks
+                    bar.update(chunks[i].size)
         except KeyboardInterrupt:
             if journal is None:
                 raise

@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "benchmarks"
 TIMEOUT_S = 600
 
-DRAWS = {"error_coverage", "fit", "hopf", "models", "peers", "scaling", "throughput", "work_precision"}
+DRAWS = {"end_to_end", "error_coverage", "fit", "hopf", "models", "peers", "scaling", "throughput", "work_precision"}
 """Scripts that draw a PNG beside their JSON (run with --no-png)."""
 
 SMOKE_FLAG = {"compare_commits": "--self-test"}
@@ -38,6 +38,7 @@ KEYS = {
     "calibrate_stiff": {"what", "quick", "points", "reference_failures", "rows"},
     "compare_commits": {"benchmark", "self_test", "machine", "trees", "compile", "numbers", "speed", "verdict",
                         "commands"},
+    "end_to_end": {"benchmark", "quick", "machine", "scene", "runs", "best", "ratio_total_over_kernel", "target"},
     "error_coverage": {"benchmark", "quick", "machine", "rows"},
     "fit": {"benchmark", "machine", "settings", "one_curve", "many_curves", "scipy", "ratio_per_curve", "side_by_side"},
     "hopf": {"benchmark", "quick", "machine", "line", "inertial_line", "inertial_driven_deep_stick_slip",

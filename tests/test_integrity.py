@@ -466,6 +466,14 @@ def fill(disk: Path) -> Path:
     return ballast
 
 
+def chunks_on_disk(out: Path, n: int, timeout: float = 60.0) -> None:
+    """Wait until the journal of ``out`` holds ``n`` chunk files (written by the run's helper thread)."""
+    t0 = time.perf_counter()
+    while len(list(journal_path(out).glob("chunk-*.npz"))) < n:
+        assert time.perf_counter() - t0 < timeout, f"{n} chunks not journaled after {timeout} s"
+        time.sleep(0.005)
+
+
 @pytest.mark.parametrize("when", ["chunks", "netcdf"])
 def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeypatch, capsys, reference, when):
     """A tmpfs just large enough for the checks, filled by another file after 5 chunks, or just before the netCDF
@@ -489,7 +497,9 @@ def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeyp
 
             def filling(sc, plan):
                 compute = real(sc, plan)
-                return lambda points: (computed_.append(1), len(computed_) == 6 and fill(disk), compute(points))[-1]
+                # the disk fills once the first 5 chunks are on disk (journaled in a helper thread: waited for)
+                return lambda points: (computed_.append(1), len(computed_) == 6
+                                       and (chunks_on_disk(out, 5), fill(disk)), compute(points))[-1]
 
             monkeypatch.setattr(runner, "stop_chunk", filling)
         else:
