@@ -98,7 +98,8 @@ def main(argv=None) -> None:
         for name, sc in grids.items():
             before = common.loadavg()
             wall, cpu, work[name] = run_once(sc)
-            runs[name].append({"wall_s": wall, "cpu_s": cpu, "loadavg_before": before, "loadavg_after": common.loadavg()})
+            runs[name].append({"wall_s": wall, "cpu_s": cpu, "loadavg_before": before,
+                               "loadavg_after": common.loadavg()})
             print(f"repeat {r}: {name:16s} {sc.n_points} points, wall {wall:.2f} s, cpu {cpu:.2f} s, "
                   f"load {before[0] if before else '?'}", flush=True)
     rows = {}

@@ -11,10 +11,10 @@ time is the result, every run is kept with its load average (the machine is shar
 The breakdown comes from timing wrappers put around the package's functions for the duration of the run (the
 package is not changed; a wrapper costs ~1 us a call, a few hundred calls a run):
 
-* ``kernel``: inside the compiled batch kernels (the lane kernels of the step ladder, the per-point and slip
+* ``kernel``: inside the compiled batch kernels (the lane kernels, fixed-step and adaptive, the per-point and slip
   batches, the inertial points of the model choice), wherever they are called from in the chunk loop;
-* ``ladder_numpy``: the step ladder (sweep/integrate/ladder.py ``climb``) less its kernel calls: the serial numpy
-  between two kernel calls;
+* ``ladder_numpy``: the step ladder or the adaptive lanes' tolerance ladder (sweep/integrate/ladder.py ``climb``,
+  tolerance_ladder.py ``climb_tolerances``) less its kernel calls: the serial numpy between two kernel calls;
 * ``model_choice`` (less its kernels), ``chunk_other`` (the rest of the chunks' computing: error marks, the
   assembling of each chunk's arrays), ``journal`` (``Journal.write``: each chunk's checksum and atomic write, in
   the helper thread of ``Journal.background`` where the package has it), ``journal_wait`` (handing a chunk to that
@@ -111,6 +111,7 @@ def instrumented(watch: Stopwatch):
     """The package's functions wrapped in ``watch``'s sections (module docstring) for the duration of the block."""
     patches = [
         (sweep.engine, "climb", "ladder_numpy"),
+        (sweep.engine, "climb_tolerances", "ladder_numpy"),
         (sweep.engine, "stop_batch", "kernel"),
         (sweep.engine, "slip_batch", "kernel"),
         (sweep.model_choice, "relax_points", "kernel"),
@@ -125,7 +126,7 @@ def instrumented(watch: Stopwatch):
         (sweep.api, "write", "netcdf"),
         (sweep.plot, "plot_file", "png"),
     ]
-    lane_kernels = sweep.engine.lane_kernels
+    lane_kernels, adaptive_kernels = sweep.engine.lane_kernels, sweep.engine.adaptive_lane_kernels
     if hasattr(sweep.journal.Journal, "background"):  # chunks journaled in a helper thread
         patches.append((sweep.journal.Journal, "background", "journal_wait"))
     saved = [(owner, name, getattr(owner, name)) for owner, name, _ in patches]
@@ -139,15 +140,17 @@ def instrumented(watch: Stopwatch):
             else:
                 setattr(owner, name, watch.wrap(original, key))
         sweep.engine.lane_kernels = lambda *a, **k: _lane_kernels_timed(watch, lane_kernels, *a, **k)
+        sweep.engine.adaptive_lane_kernels = lambda *a, **k: _lane_kernels_timed(watch, adaptive_kernels, *a, **k)
         yield
     finally:
-        sweep.engine.lane_kernels = lane_kernels
+        sweep.engine.lane_kernels, sweep.engine.adaptive_lane_kernels = lane_kernels, adaptive_kernels
         for owner, name, original in saved:
             setattr(owner, name, original)
 
 
 def _lane_kernels_timed(watch: Stopwatch, lane_kernels, *args, **kwargs):
-    """sweep.integrate.lanes.lane_kernels with its batch (element 1, what engine.lane_runs calls) timed as kernel."""
+    """A lane kernel factory (sweep.integrate.lanes.lane_kernels, lanes_adaptive.adaptive_lane_kernels) with its batch
+    (element 1, what the engine calls) timed as kernel."""
     kernels = lane_kernels(*args, **kwargs)
     return (kernels[0], watch.wrap(kernels[1], "kernel"), *kernels[2:])
 

@@ -6,8 +6,9 @@ every function evaluation posts theta and its 2q perturbed sets as ONE batch, so
 round. A profile point (``hold``) uses forward differences (q + 1 sets, not 2q + 1): only its optimum's misfit is
 kept, which the Jacobian's accuracy does not change (it steers the steps only), and with HOLD_TOLERANCES it took
 76 evaluations of 3 sets for benchmarks/fit.py's 18 profile points against 65 of 5 with central differences, the
-same misfits to 1e-4; the best fit's Jacobian, which gives the covariance, stays central. With the engine at rtol 1e-6 (the default) the derivative carries a relative error ~rtol/FD_STEP ~ 1e-3 and
-a truncation error ~FD_STEP^2 ~ 1e-6, far below what the noise of a measured curve (>~1e-3) resolves.
+same misfits to 1e-4; the best fit's Jacobian, which gives the covariance, stays central. With the engine at
+rtol 1e-6 (the default) the derivative carries a relative error ~rtol/FD_STEP ~ 1e-3 and a truncation error
+~FD_STEP^2 ~ 1e-6, far below what the noise of a measured curve (>~1e-3) resolves.
 
 Some parameters may be held fixed (``hold``): the profile likelihoods (sweep.fit.profiles) minimise over the
 others at fixed values of one.

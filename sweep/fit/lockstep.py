@@ -11,8 +11,8 @@ exactly the path it would take alone: many curves in one call give the same esti
 from __future__ import annotations
 
 import threading
-from dataclasses import fields
 from collections.abc import Callable, Sequence
+from dataclasses import fields
 from typing import Any
 
 import numpy as np
