@@ -163,7 +163,7 @@ def choose_method(scene: Scene) -> tuple[str, str]:
                               "(benchmarks/peers.py: 2-10x fewer evaluations than the rk4 step ladder)")
     for method, rtol_min in AUTO_METHOD:
         if scene.rtol >= rtol_min:
-            return method, f"auto: cheapest measured method for rtol >= {rtol_min:g} (benchmarks/work_precision.py)"
+            return method, f"auto: cheapest measured method of the time-resolved path for rtol >= {rtol_min:g}"
     raise AssertionError("AUTO_METHOD covers every rtol")
 
 
