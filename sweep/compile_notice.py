@@ -15,7 +15,9 @@ Re-measured once the inertial stop family also held the lanes that carry the fir
 the time-resolved stop once each of its functions compiled once (no literal specialisations): 17.2 s (25.4 s before,
 same conditions). Re-measured once relaxed slip ran in the adaptive dop853 lanes (model "auto" compiles only the
 variant that carries the correction; 2026-11-25, load 2.5 from other work): relaxed slip (model "quasistatic") 14.6 s,
-a cold default `sweep run` 17.4 s of kernels, 20.2 s in all.
+a cold default `sweep run` 17.4 s of kernels, 20.2 s in all; with the fine twin's steps written once in a loop of
+their own (load 0.8): relaxed slip 11.9 s, a cold default `sweep run` 17.9 s of kernels (the inertial family,
+compiled beside it, takes longest), 21.1 s in all.
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ __all__ = ["COLD_COMPILE_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "dri
            "inertial_stop_compiled_aside", "kernel_families", "timed"]
 
 
-COLD_COMPILE_S = {"relaxed-slip engine": 14, "time-resolved stop": 18, "inertial stop": 18, "slip-law stop": 6,
+COLD_COMPILE_S = {"relaxed-slip engine": 12, "time-resolved stop": 18, "inertial stop": 18, "slip-law stop": 6,
                   "driven quasi-static": 8, "driven inertial": 16}
 """Seconds to compile each kernel family from an empty cache on the 2-core development machine (module docstring)."""
 SLOW_S = 3.0
