@@ -153,8 +153,10 @@ def test_fig4a_eq12_is_the_tangent_at_small_tau_and_slip_grows_with_v(out):
     xi_inf = ds["xi_inf"].values[0]
     assert xi_inf[1] > xi_inf[0]  # V = 10 um/s relaxes further than 1 um/s (m2 > 0)
     for j in range(2):
-        xi = ds["xi"].values[0, j]
-        assert np.all(np.diff(xi) >= 0) and np.all(np.diff(xi[tau < 10]) > 0)  # flat to rounding once relaxed
+        xi, err = ds["xi"].values[0, j], ds["xi_error"].values[0, j]
+        # non-decreasing within the samples' error estimates once relaxed (dp5, auto's time-resolved method at this
+        # rtol, locates samples inside its steps: a -8e-12 step at tau = 282 with estimates of 9e-10 there)
+        assert np.all(np.diff(xi) >= -(err[1:] + err[:-1])) and np.all(np.diff(xi[tau < 10]) > 0)
         assert xi[-1] == pytest.approx(xi_inf[j], rel=1e-3)
         gap = np.abs(xi / early(tau, float(ds["chi"][0]), S2.A) - 1)
         small = tau <= 0.1
