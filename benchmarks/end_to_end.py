@@ -27,8 +27,11 @@ package is not changed; a wrapper costs ~1 us a call, a few hundred calls a run)
 
 Parts that run in other threads at the same time (the netCDF written while the picture is drawn, chunks journaled
 in the background) are timed in their own thread, so their sum can exceed ``total``; ``overlapped_s`` says by how
-much. Writes JSON (machine, versions, load average) and a PNG bar chart of the best run's breakdown under
-benchmarks/results/.
+much. Chunks computed side by side (sweep/concurrent_chunks.py: one chunk per numba thread, N at once) count their
+parts at 1/N of their time in each thread: ``kernel`` is then the kernels' thread-seconds over the N threads, the
+wall time the kernels alone would take on them with nothing serial between (one chunk at a time on N numba threads,
+it is the wall time inside the kernel calls, as before). Writes JSON (machine, versions, load average) and a PNG
+bar chart of the best run's breakdown under benchmarks/results/.
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ import threading
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
@@ -60,6 +64,8 @@ import sweep.plot  # noqa: E402
 import sweep.runner  # noqa: E402
 
 DEFAULT_OUT = HERE / "results" / "end_to_end.json"
+CHUNK_THREAD = "sweep-chunk"
+"""Name prefix of the threads that compute chunks side by side (sweep/concurrent_chunks.py)."""
 TARGET_RATIO = 1.3
 SIDES = {"full": (1000, 1000), "quick": (20, 10)}
 PARTS = ("kernel", "ladder_numpy", "model_choice", "chunk_other", "journal", "journal_wait", "consolidate", "planning",
@@ -71,7 +77,9 @@ class Stopwatch:
     """Seconds per named section; a section's own time leaves out the timed sections called inside it (per thread,
     so a section timed in a helper thread is not subtracted from its caller's)."""
 
-    def __init__(self) -> None:
+    def __init__(self, workers: int = 1) -> None:
+        self.workers = workers
+        """Chunks computed side by side (the run's numba threads, sweep/concurrent_chunks.py)."""
         self.own: dict[str, float] = {}
         self.calls: dict[str, int] = {}
         self.helper: set[str] = set()
@@ -91,10 +99,13 @@ class Stopwatch:
             inner = stack.pop()
             if stack:
                 stack[-1] += spent
+            thread = threading.current_thread()
+            # a chunk computed side by side with others (sweep/concurrent_chunks.py) holds 1/workers of the machine
+            share = 1.0 / self.workers if thread.name.startswith(CHUNK_THREAD) else 1.0
             with self._lock:
-                self.own[key] = self.own.get(key, 0.0) + spent - inner
+                self.own[key] = self.own.get(key, 0.0) + (spent - inner) * share
                 self.calls[key] = self.calls.get(key, 0) + 1
-                if threading.current_thread() is not threading.main_thread():
+                if thread is not threading.main_thread() and share == 1.0:
                     self.helper.add(key)
 
     def wrap(self, fn, key: str):
@@ -199,7 +210,7 @@ def scene_for(quick: bool) -> sweep.Scene:
 
 def one_run(toml: Path, out: Path) -> dict:
     """``sweep run`` of ``toml`` into ``out`` (and out.png) with the breakdown (module docstring)."""
-    watch = Stopwatch()
+    watch = Stopwatch(numba.get_num_threads())
     load = loadavg()
     argv = ["run", str(toml), "-o", str(out), "--overwrite", "-q"]
     with instrumented(watch), open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):

@@ -63,9 +63,26 @@ def kernel_task(scene: Scene, plan: Plan, points: np.ndarray) -> dict[str, np.nd
 
 
 def in_process(scene: Scene, plan: Plan, todo: Iterable[tuple[int, np.ndarray]], task=chunk_task):
-    """The threads backend: the chunks one after another in this process (numba's threads inside each)."""
+    """The threads backend (sweep/concurrent_chunks.py): with one numba thread, or a threading layer that is not
+    safe to enter from two threads at once, the chunks one after another in this thread (numba's threads inside
+    each); else the first chunk so, then the others side by side, one chunk per numba thread."""
+    from .concurrent_chunks import side_by_side
+
+    todo = iter(todo)
     for i, points in todo:
         yield i, task(scene, plan.take(points), points)
+        workers = side_by_side()
+        if workers > 1:
+            yield from concurrently(scene, plan, todo, task, workers)
+            return
+
+
+def concurrently(scene: Scene, plan: Plan, todo: Iterator[tuple[int, np.ndarray]], task, workers: int):
+    """:func:`in_process`'s side-by-side part: ``task`` on the chunks of ``todo`` in ``workers`` threads
+    (sweep/concurrent_chunks.py), as they complete."""
+    from .concurrent_chunks import as_completed_in_threads
+
+    yield from as_completed_in_threads(lambda points: task(scene, plan.take(points), points), todo, workers)
 
 
 def run_chunks(scene: Scene, plan: Plan, chunk_size: int | None, journal: Journal | None,

@@ -61,7 +61,7 @@ def trace_chunks(monkeypatch) -> None:
     command, in this process)."""
     import sweep.runner as runner
 
-    monkeypatch.setattr(runner, "stop_chunk", _wrapped(runner.stop_chunk, lambda: print(TRACE, file=sys.stderr)))
+    monkeypatch.setattr(runner, "stop_chunk", _wrapped(runner.stop_chunk, lambda: sys.stderr.write(TRACE + "\n")))
 
 
 def truncate(path: Path, keep: float = 0.5) -> None:
@@ -191,7 +191,8 @@ def install(spec: str) -> None:
     elif name == "mkdir-output":
         _folder_in_the_way(Path(arg))
     else:
-        _before_each_chunk(lambda: print(TRACE, file=sys.stderr, flush=True))
+        # one write a line: chunks computed side by side print from two threads at once
+        _before_each_chunk(lambda: (sys.stderr.write(TRACE + "\n"), sys.stderr.flush()))
 
 
 def command(faults: list[str], args: list[str]) -> list[str]:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import errno
 import json
 import os
+import re
 import shutil
 import socket
 import subprocess
@@ -415,10 +416,13 @@ def test_a_chunk_write_failing_mid_run_keeps_the_journal_for_resume(tmp_path, co
     proc = cli("run", config, "-o", out, "--chunk-size", CHUNK, "-q", faults_=(fault,), cwd=tmp_path)
     line = refused(proc, code=3)
     journal = journal_path(out)
-    assert line == (f"sweep: error: could not write {journal / 'chunk-000005.npz'} ({cause}); the 5 finished chunks "
-                    f"are kept in {journal}: {fix}, then run the same command with --resume (resume=True) to "
-                    "finish"), line
-    assert {p.name for p in journal.iterdir()} == {"manifest.json", *(f"chunk-00000{i}.npz" for i in range(5))}
+    # chunks may finish, and be journaled, in any order (computed side by side: sweep/concurrent_chunks.py)
+    kept = sorted(p.name for p in journal.iterdir() if p.name != "manifest.json")
+    failed = re.fullmatch(rf"sweep: error: could not write {re.escape(str(journal))}/(chunk-\d{{6}}\.npz) \(.*", line)
+    assert failed and line == (f"sweep: error: could not write {journal / failed[1]} ({cause}); the 5 finished chunks "
+                               f"are kept in {journal}: {fix}, then run the same command with --resume (resume=True) "
+                               "to finish"), line
+    assert len(kept) == 5 and failed[1] not in kept and all(re.fullmatch(r"chunk-\d{6}\.npz", k) for k in kept), kept
     assert not out.exists() and not lock_path(out).exists()
     assert main(["run", str(config), "-o", str(out), "--chunk-size", str(CHUNK), "-q", "--resume"]) == 0
     assert_same_file(out, reference)
@@ -513,7 +517,9 @@ def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeyp
         assert "free some space on that disk, then run the same command with --resume" in line, line
         monkeypatch.undo()
         kept = len(list(journal_path(out).glob("chunk-*.npz")))
-        assert kept == (5 if when == "chunks" else 15) and not list(disk.glob("**/*.tmp"))
+        # with chunks computed side by side (sweep/concurrent_chunks.py), the other thread's chunk may reach the disk
+        # while the 6th fills it
+        assert (5 <= kept < 15 if when == "chunks" else kept == 15) and not list(disk.glob("**/*.tmp"))
         assert not list(disk.glob("*.part"))
         (disk / "ballast").unlink()
         assert main(args + ["--resume"]) == 0

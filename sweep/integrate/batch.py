@@ -55,7 +55,7 @@ def _solve_into(i, method, points, finite, tol, max_steps, tau_samples, obs_tau,
         out.xi_at_err[i, order_t[j]], out.u_at_err[i, order_t[j]] = xe[j], ue[j]
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, nogil=True, cache=True)
 def stop_batch(method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out):
     """Solve a flat batch of stop points one by one (:func:`solve_stop_point`) into ``out`` (:class:`StopOutputs`):
     ``method`` a :class:`Method`, ``points`` a :class:`StopPoints` record of per-point arrays, ``finite`` whether
@@ -67,7 +67,7 @@ def stop_batch(method, points, finite, tol, max_steps, tau_samples, obs_tau, fra
         _solve_into(np.int64(i), method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out)
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, nogil=True, cache=True)
 def relax_batch(k, a, b, G, inertial, rtol, atol, max_steps, xi_inf, correction, status, steps, s_handover):
     """:func:`relax` over flat arrays of points (in parallel); results written into the output arrays."""
     for i in prange(k.size):
@@ -86,7 +86,7 @@ def relax_points(k: np.ndarray, a: np.ndarray, b: np.ndarray, G: np.ndarray, ine
     return out
 
 
-@njit(parallel=True, cache=True)
+@njit(parallel=True, nogil=True, cache=True)
 def slip_batch(k, a, b, rtol, atol, max_steps, xi_inf, xi_inf_err, status, steps):
     """Every point of the flat arrays k, a, b at three local tolerances (module docstring)."""
     for i in prange(k.size):
@@ -114,7 +114,7 @@ def driven_batch(law: str = "aging", inertia: bool = False):
     ``inertia``. The batch loop is where a target other than the CPU threads would plug in."""
     point = point_kernel(law, inertia)
 
-    @njit(parallel=True, cache=cached(inertia))
+    @njit(parallel=True, nogil=True, cache=cached(inertia))
     def batch(points, k, a, b, g, settings, out):
         for j in prange(points.size):
             i = points[j]
@@ -128,7 +128,7 @@ def lanes_batch(relax_runs, lanes: int):
     LaneOutputs) through the lanes kernel ``relax_runs``, in ``groups`` strided groups, each stepped in lanes by one
     thread."""
 
-    @njit(parallel=True, cache=True)
+    @njit(parallel=True, nogil=True, cache=True)
     def relax_batch(pts, job, groups, out):
         groups = max(1, min(groups, job.point.size // lanes))
         for g in prange(groups):
