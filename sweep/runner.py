@@ -65,15 +65,16 @@ def kernel_task(scene: Scene, plan: Plan, points: np.ndarray) -> dict[str, np.nd
 def in_process(scene: Scene, plan: Plan, todo: Iterable[tuple[int, np.ndarray]], task=chunk_task):
     """The threads backend (sweep/concurrent_chunks.py): with one numba thread, or a threading layer that is not
     safe to enter from two threads at once, the chunks one after another in this thread (numba's threads inside
-    each); else the first chunk so, then the others side by side, one chunk per numba thread."""
+    each); else the first chunk so, then the others side by side, one chunk per numba thread (where there are enough
+    of them: concurrent_chunks.MIN_CHUNKS_PER_THREAD)."""
     from .concurrent_chunks import side_by_side
 
-    todo = iter(todo)
-    for i, points in todo:
+    todo = list(todo)
+    for n, (i, points) in enumerate(todo):
         yield i, task(scene, plan.take(points), points)
-        workers = side_by_side()
+        workers = side_by_side(len(todo) - n - 1)
         if workers > 1:
-            yield from concurrently(scene, plan, todo, task, workers)
+            yield from concurrently(scene, plan, iter(todo[n + 1:]), task, workers)
             return
 
 

@@ -33,7 +33,8 @@ SMOKE_FLAG = {"compare_commits": "--self-test"}
 
 KEYS = {
     "axes": {"benchmark", "quick", "machine", "settings", "grids", "throughput_ratios", "target"},
-    "auto_cost": {"benchmark", "quick", "machine", "rows", "two_threads_over_one", "targets"},
+    "auto_cost": {"benchmark", "quick", "machine", "rows", "two_threads_over_one", "machine_two_threads_over_one",
+                  "targets"},
     "calibrate_rk4": {"benchmark", "points", "reference_failures", "rows", "plan_constants", "versions"},
     "calibrate_stiff": {"what", "quick", "points", "reference_failures", "rows"},
     "compare_commits": {"benchmark", "self_test", "machine", "trees", "compile", "numbers", "speed", "verdict",

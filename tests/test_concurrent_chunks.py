@@ -81,13 +81,41 @@ def test_side_by_side_gives_the_same_bits_as_one_chunk_at_a_time(observables):
     threads = numba.get_num_threads()
     try:
         numba.set_num_threads(1)
-        alone = sweep.run_sweep(scene, progress=False, chunk_size=60)
+        alone = sweep.run_sweep(scene, progress=False, chunk_size=20)
         numba.set_num_threads(2)
-        together = sweep.run_sweep(scene, progress=False, chunk_size=60)
-        assert side_by_side() == (2 if numba.threading_layer() in ("omp", "tbb") else 1)
+        together = sweep.run_sweep(scene, progress=False, chunk_size=20)  # 24 chunks
+        assert side_by_side(100) == (2 if numba.threading_layer() in ("omp", "tbb") else 1) and side_by_side(3) == 1
     finally:
         numba.set_num_threads(threads)
     mixed = alone["model"].values if observables == ("xi_inf",) else alone["status"].values
     assert np.unique(mixed).size == 2  # the points of both kinds are there
     for name in alone.data_vars:
         np.testing.assert_array_equal(alone[name].values, together[name].values, err_msg=name)
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 numba threads (2 cores)")
+def test_a_run_interrupted_side_by_side_resumes_to_the_uninterrupted_file(tmp_path, monkeypatch):
+    """Chunks journaled out of order (side by side), Ctrl-C in the middle of one: every chunk finished before the
+    interrupt is in the journal, and --resume computes the rest into the same numbers as a run never interrupted."""
+    from faults import interrupt_after
+
+    import sweep.runner as runner
+    from sweep.journal import journal_path
+
+    scene = dataclasses.replace(sweep.default_scene(), K_over_M=np.logspace(3, 6, 24), V=np.logspace(-7, -4, 20),
+                                model="quasistatic", observables=("xi_inf", "trajectory"))
+    out = tmp_path / "s.nc"
+    threads = numba.get_num_threads()
+    try:
+        numba.set_num_threads(2)
+        started = interrupt_after(monkeypatch, 12)
+        with pytest.raises(runner.Interrupted):
+            sweep.run_sweep(scene, progress=False, output=out, chunk_size=20)
+        monkeypatch.undo()
+        assert len(list(journal_path(out).glob("chunk-*.npz"))) == len(started) == 12
+        resumed = sweep.run_sweep(scene, progress=False, output=out, chunk_size=20, resume=True).load()
+    finally:
+        numba.set_num_threads(threads)
+    whole = sweep.run_sweep(scene, progress=False)
+    for name in whole.data_vars:
+        np.testing.assert_array_equal(resumed[name].values, whole[name].values, err_msg=name)
