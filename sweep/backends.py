@@ -1,4 +1,5 @@
-"""Where the chunks of a sweep run: in this process (numba's own threads) or on a dask.distributed cluster.
+"""Where the chunks of a sweep run: in this process (numba's own threads; past the first chunk, chunks side by side
+in threads of one numba thread each: sweep/concurrent_chunks.py) or on a dask.distributed cluster.
 
 Either way a chunk is the same task, :func:`sweep.runner.chunk_task` (the chunk's share of the plan made once by the
 driver for the whole scene, the chunk's points, the same compiled kernels), and its results come back to the driver, the
