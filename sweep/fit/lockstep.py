@@ -94,15 +94,19 @@ class Lockstep:
         self._cond = threading.Condition()
         self._posted: dict[int, ForwardPoints] = {}
         self._answers: dict[int, ForwardResult] = {}
+        self._waiting: dict[int, threading.Event] = {}
         self._running = 0
 
     def _evaluate(self, points: ForwardPoints) -> ForwardResult:
-        token = threading.get_ident()
+        token, answered = threading.get_ident(), threading.Event()
         with self._cond:
             self._posted[token] = points
-            self._cond.notify_all()
-            while token not in self._answers:
-                self._cond.wait()
+            self._waiting[token] = answered
+            self._cond.notify_all()  # only the coordinator waits on the condition
+        # each task waits on its own event: a shared condition woke every waiting task at every post and answer
+        # (256 tasks: ~65,000 wake-ups a round)
+        answered.wait()
+        with self._cond:
             return self._answers.pop(token)
 
     def map(self, fn: Callable[[Any, Callable[[ForwardPoints], ForwardResult]], Any], items: Sequence[Any]) -> list:
@@ -146,7 +150,8 @@ class Lockstep:
                 self.on_round(self.rounds, sum(r.n for r in requests))
             with self._cond:
                 self._answers.update(zip(tokens, answers))
-                self._cond.notify_all()
+                for token in tokens:
+                    self._waiting.pop(token).set()
         for th in threads:
             th.join()
         if errors:
