@@ -51,9 +51,11 @@ def as_completed_in_threads(compute: Callable[[np.ndarray], dict[str, np.ndarray
                             todo: Iterator[tuple[int, np.ndarray]], workers: int
                             ) -> Iterator[tuple[int, dict[str, np.ndarray]]]:
     """(i, compute(points)) for every (i, points) of ``todo``, computed in ``workers`` threads with one numba thread
-    each, yielded as they complete (at most IN_FLIGHT_PER_WORKER x ``workers`` submitted ahead). When the consumer
-    stops (an exception, Ctrl-C in the waiting thread), the chunks not started are cancelled and those running are
-    waited for, so no thread is left writing once this returns."""
+    each, yielded as they complete (at most IN_FLIGHT_PER_WORKER x ``workers`` submitted ahead). A chunk that fails,
+    or Ctrl-C while this waits for chunks, cancels the chunks not started; those running still finish and are
+    yielded (nothing finished is lost), then the failure is raised. When the consumer stops (an exception of its
+    own), the chunks not started are cancelled and those running waited for, so no thread is left writing once this
+    returns."""
 
     def one(i: int, points: np.ndarray) -> tuple[int, dict[str, np.ndarray]]:
         numba.set_num_threads(1)  # thread-local: this thread's kernels run on it alone
@@ -72,7 +74,13 @@ def as_completed_in_threads(compute: Callable[[np.ndarray], dict[str, np.ndarray
             for _ in range(IN_FLIGHT_PER_WORKER * workers):
                 submit_next()
             while pending:
-                done, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
+                try:
+                    done, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
+                except KeyboardInterrupt as exc:  # Ctrl-C while waiting: the running chunks still come back
+                    failed = failed or exc
+                    for other in pending:
+                        other.cancel()
+                    continue
                 for future in done:
                     pending.discard(future)
                     if future.cancelled():

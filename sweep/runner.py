@@ -1,6 +1,7 @@
 """Running a scene chunk by chunk: one progress bar for the whole sweep, each finished chunk journaled when the
 run writes a file (sweep/journal.py, in a helper thread while the next chunks compute: a SIGKILL loses at most the
-chunks in flight and the journal.PENDING_CHUNKS not yet written, Ctrl-C only those in flight), then the chunks
+chunks in flight, computing or finished and not yet handed over, and the journal.PENDING_CHUNKS not yet written;
+Ctrl-C only those still computing: side by side, the running ones finish and are journaled first), then the chunks
 consolidated into flat per-point arrays.
 
 A chunk is a fixed set of points (engine.chunk_points: the same layout for a given number of points and chunk

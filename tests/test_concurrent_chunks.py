@@ -4,6 +4,7 @@ chunk handed back before a failure is raised, nothing left running when the cons
 from __future__ import annotations
 
 import dataclasses
+import signal
 import threading
 import time
 
@@ -53,6 +54,30 @@ def test_a_failing_chunk_is_raised_after_the_chunks_already_running_come_back():
             got.append(i)
     assert sorted(got) == sorted(finished)  # every chunk that finished was handed back
     assert 3 in started and 3 not in got and len(started) < 20  # and the rest were not started
+
+
+def test_ctrl_c_while_waiting_hands_back_every_chunk_that_finished():
+    """SIGINT to the main thread while it waits for chunks (where it spends its time): the chunks running then still
+    finish and come back, then KeyboardInterrupt (the journal keeps every finished chunk)."""
+    finished = []
+
+    def compute(points):
+        time.sleep(0.05)
+        finished.append(int(points[0]) // 3)
+        return {}
+
+    got = []
+    ctrl_c = threading.Timer(0.12, lambda: signal.pthread_kill(threading.main_thread().ident, signal.SIGINT))
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        ctrl_c.start()
+        with pytest.raises(KeyboardInterrupt):
+            for i, _ in as_completed_in_threads(compute, _chunks(40), workers=2):
+                got.append(i)
+    finally:
+        ctrl_c.cancel()
+        signal.signal(signal.SIGINT, previous)
+    assert sorted(got) == sorted(finished) and 2 <= len(got) < 40
 
 
 def test_a_consumer_that_stops_leaves_no_chunk_running():
