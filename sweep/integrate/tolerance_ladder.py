@@ -20,11 +20,21 @@ rounding bound of :func:`sweep.integrate.ladder.rounding_error` carries it.
 
 A point whose estimate exceeds its tolerance is run again at tol / TOL_RATIO (at most MAX_RUNS runs, none where
 rounding alone exceeds the tolerance).
+
+Samples at given times (:mod:`sweep.integrate.lanes_sampled`) are mesh points of the run and of its twin, so each
+gets the same estimate,
+
+    xi:  COARSE_GAIN |xi_fine - xi| (+ 2 x both tails' bounds if continued in closed form) + rounding,
+    u:   COARSE_GAIN |u_fine - u| + both continuations' bounds in u + rounding of u = s - xi,           (2)
+
+(:class:`SampleEstimates`), and a point is run again where any of them exceeds its tolerance (rtol |xi| + atol of
+the trajectory; rtol for u = ln psi, whose error is the relative error of psi).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -39,11 +49,14 @@ entry."""
 
 
 def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, tol0: float, rtol: float, atol: float,
-                     roundoff: float, growth: np.ndarray | float = 0.0) -> LadderResult:
+                     roundoff: float, growth: np.ndarray | float = 0.0, samples: SampleEstimates | None = None
+                     ) -> LadderResult:
     """Run ``points`` at the control tolerance ``tol0`` (first trial steps ``h0``), and again TOL_RATIO times tighter
     where the estimate (1) exceeds the tolerance. ``LadderResult.step`` holds the returned run's control tolerance,
     ``work`` counts 3 steps per attempt (a step and two half steps); ``growth``: see
-    :func:`sweep.integrate.ladder.rounding_error`."""
+    :func:`sweep.integrate.ladder.rounding_error`. With ``samples`` the runner returns a sixth item, the runs'
+    samples (:class:`sweep.integrate.lanes_sampled.SampledOutputs`), kept there with their estimates (2); a point
+    is then run again also where a sample's estimate exceeds its tolerance."""
     n = points.size
     out = LadderResult(np.full(n, np.nan), np.full(n, np.inf), np.zeros(n, np.int8), np.zeros(n, np.int32),
                        np.full(n, float(tol0)), np.zeros(n, np.int8), np.zeros(n, np.int64))
@@ -51,7 +64,7 @@ def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, to
     todo = np.ones(n, bool)
     while todo.any():
         i = np.flatnonzero(todo)
-        x, fine, tail, status, attempts = run(points[i], out.step[i], h0[i])
+        x, fine, tail, status, attempts, *sampled = run(points[i], out.step[i], h0[i])
         rounding = rounding_error(roundoff, 2 * attempts, x, growth[i])  # the fine run's steps round too
         estimate = COARSE_GAIN * np.abs(fine - x) + 2.0 * tail + rounding
         estimate = np.where(np.isfinite(estimate), estimate, np.inf)  # a run went non-finite: the next rung
@@ -60,10 +73,49 @@ def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, to
         out.status[i] = np.where(status != OK, status, np.where(np.isfinite(estimate), OK, NONFINITE))
         out.runs[i] += 1
         out.work[i] += 3 * attempts.astype(np.int64)
-        more = ((status != MAX_STEPS) & ~(estimate <= tol_x) & (rounding <= tol_x) & (out.runs[i] < MAX_RUNS)
+        within = estimate <= tol_x
+        if samples is not None:
+            within &= samples.keep(i, sampled[0], attempts, growth[i], tail)
+        more = ((status != MAX_STEPS) & ~within & (rounding <= tol_x) & (out.runs[i] < MAX_RUNS)
                 & (out.step[i] / TOL_RATIO >= LANE_TOL_FLOOR))
         todo[:] = False
         todo[i[more]] = True
         out.step[i[more]] /= TOL_RATIO
     out.error[out.status != OK] = np.nan
     return out
+
+
+@dataclass
+class SampleEstimates:
+    """The samples of the points of a :func:`climb_tolerances` (n points x n_t times, in the order of each point's
+    targets row) with their estimates (2), filled run by run: a point's rerun overwrites its row."""
+
+    xi: np.ndarray
+    u: np.ndarray
+    xi_err: np.ndarray
+    u_err: np.ndarray
+    rtol: float
+    atol: float
+    """Absolute floor of the slip samples' tolerance [1]."""
+    roundoff: float
+
+    @classmethod
+    def empty(cls, n: int, n_t: int, rtol: float, atol: float, roundoff: float) -> SampleEstimates:
+        nan = lambda: np.full((n, n_t), np.nan)  # noqa: E731
+        return cls(nan(), nan(), nan(), nan(), rtol, atol, roundoff)
+
+    def keep(self, entries: np.ndarray, runs, attempts: np.ndarray, growth: np.ndarray, tail: np.ndarray
+             ) -> np.ndarray:
+        """Store the samples of ``runs`` (SampledOutputs of the points ``entries``) with their estimates (2);
+        returns, per entry, whether every estimate is within its tolerance."""
+        n_t = runs.xi_at.shape[1]
+        continued = np.arange(n_t)[None, :] >= runs.first_continued[:, None]
+        steps = 2 * attempts[:, None]
+        xi_err = (COARSE_GAIN * np.abs(runs.xi_fine - runs.xi_at) + np.where(continued, 2.0 * tail[:, None], 0.0)
+                  + rounding_error(self.roundoff, steps, runs.xi_at, growth[:, None]))
+        u_err = (COARSE_GAIN * np.abs(runs.u_fine - runs.u_at) + runs.cont_err
+                 + self.roundoff * steps * (np.abs(runs.u_at) + np.abs(runs.xi_at)))
+        self.xi[entries], self.u[entries], self.xi_err[entries], self.u_err[entries] = (runs.xi_at, runs.u_at, xi_err,
+                                                                                        u_err)
+        within = (xi_err <= self.rtol * np.abs(runs.xi_at) + self.atol) & (u_err <= self.rtol)
+        return np.all(within, axis=1)
