@@ -79,20 +79,15 @@ def _step_lines(tableau, p: str, start: tuple[str, ...], h: str, correction: boo
     {p}dxe, {p}dse, E {p}Ee and exponent {p}oe; o_max takes the largest exponent. With ``correction`` the stages
     also carry y from ({p}y1, {p}dy1), ending in {p}ye, {p}dye.
 
-    With ``tau`` (:mod:`sweep.integrate.lanes_sampled`) the state is (x, s, t) with t = tau and ``start`` six
-    expressions (x, s, t, dx, ds, dt: derivatives in sigma); the lane's mode ``m`` (1: the step is taken in tau,
-    ``h`` a step in tau, so that it ends exactly on a sample time; 0: in sigma) scales every stage's derivative
-    (``rate_t``), and the end's derivative {p}dxe, {p}dse, {p}dte is returned in sigma whatever the mode."""
+    With ``tau`` (:mod:`sweep.integrate.lanes_sampled`) the state is (x, s, t) with t = tau, ``start`` six
+    expressions (x, s, t, dx, ds, dt), the right-hand side ``rate_t`` and the end's derivative {p}dxe, {p}dse,
+    {p}dte."""
     c, A, b, e = tableau.arrays()
     last = b.size - 1 if tableau.fsal else b.size  # stages evaluated before the step's end
-    if tau and tableau.fsal:
-        raise ValueError("steps in tau need the end's derivative in sigma: a tableau without FSAL")
     if tau:
         x0, s0, t0, dx0, ds0, dt0 = start
-        lines = [f"        {p}inv = m / {dt0} + (one - m)",  # m is 0 or 1 (a division in a select is not if-converted)
-                 f"        {p}x1, {p}s1, {p}t1 = {x0}, {s0}, {t0}",
-                 f"        {p}dx1, {p}ds1, {p}dt1 = {dx0} * {p}inv, {ds0} * {p}inv, {dt0} * {p}inv"]
-        evaluate = "{p}dx{i}, {p}ds{i}, {p}dt{i}, {p}E{i}, {p}o{i} = rate_t({p}x{i}, {p}s{i}, k, a, bb, s_c, m)"
+        lines = [f"        {p}x1, {p}s1, {p}t1, {p}dx1, {p}ds1, {p}dt1 = {x0}, {s0}, {t0}, {dx0}, {ds0}, {dt0}"]
+        evaluate = "{p}dx{i}, {p}ds{i}, {p}dt{i}, {p}E{i}, {p}o{i} = rate_t({p}x{i}, {p}s{i}, k, a, bb, s_c)"
     else:
         x0, s0, dx0, ds0 = start
         lines = [f"        {p}x1, {p}s1, {p}dx1, {p}ds1 = {x0}, {s0}, {dx0}, {ds0}"]
@@ -110,7 +105,7 @@ def _step_lines(tableau, p: str, start: tuple[str, ...], h: str, correction: boo
               f"        {p}se = {p}s1 + {h} * ({_combination(b, p + 'ds', last)})"]
     if tau:
         lines += [f"        {p}te = {p}t1 + {h} * ({_combination(b, p + 'dt', last)})",
-                  f"        {p}dxe, {p}dse, {p}dte, {p}Ee, {p}oe = rate_t({p}xe, {p}se, k, a, bb, s_c, zero)"]
+                  f"        {p}dxe, {p}dse, {p}dte, {p}Ee, {p}oe = rate_t({p}xe, {p}se, k, a, bb, s_c)"]
     else:
         lines += [f"        {p}dxe, {p}dse, {p}Ee, {p}oe = rate({p}xe, {p}se, k, a, bb, s_c)"]
     lines += [f"        o_max = max(o_max, {p}oe)"]
@@ -119,6 +114,7 @@ def _step_lines(tableau, p: str, start: tuple[str, ...], h: str, correction: boo
                   f"        {p}dye = correction_rate({p}xe, {p}se, {p}ye, k, a, bb, G, {p}dse, {p}Ee, {p}oe)"]
     if tableau.fsal:
         lines += [f"        {p}dx{b.size}, {p}ds{b.size} = {p}dxe, {p}dse"]
+        lines += [f"        {p}dt{b.size} = {p}dte"] if tau else []
     return lines
 
 
