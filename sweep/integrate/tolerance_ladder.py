@@ -33,12 +33,16 @@ the trajectory; rtol for u = ln psi, whose error is the relative error of psi).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from ..accuracy import COARSE_GAIN, LANE_TOL_FLOOR, MAX_RUNS, TOL_RATIO
+from ..jitcache import pin_module
+from ..solvers.fastmath import FAST
 from ..models.stop import MAX_STEPS, NONFINITE, OK
 from .ladder import LadderResult, rounding_error
 
@@ -108,14 +112,36 @@ class SampleEstimates:
              ) -> np.ndarray:
         """Store the samples of ``runs`` (SampledOutputs of the points ``entries``) with their estimates (2);
         returns, per entry, whether every estimate is within its tolerance."""
-        n_t = runs.xi_at.shape[1]
-        continued = np.arange(n_t)[None, :] >= runs.first_continued[:, None]
-        steps = 2 * attempts[:, None]
-        xi_err = (COARSE_GAIN * np.abs(runs.xi_fine - runs.xi_at) + np.where(continued, 2.0 * tail[:, None], 0.0)
-                  + rounding_error(self.roundoff, steps, runs.xi_at, growth[:, None]))
-        u_err = (COARSE_GAIN * np.abs(runs.u_fine - runs.u_at) + runs.cont_err
-                 + self.roundoff * steps * (np.abs(runs.u_at) + np.abs(runs.xi_at)))
+        xi_err, u_err = np.empty_like(runs.xi_at), np.empty_like(runs.u_at)
+        within = np.empty(entries.size, np.bool_)
+        _sample_estimates(runs.xi_at, runs.xi_fine, runs.u_at, runs.u_fine, runs.cont_err, runs.first_continued,
+                          2 * attempts.astype(np.int64), np.ascontiguousarray(growth, dtype=float), tail,
+                          self.roundoff, self.rtol, self.atol, xi_err, u_err, within)
         self.xi[entries], self.u[entries], self.xi_err[entries], self.u_err[entries] = (runs.xi_at, runs.u_at, xi_err,
                                                                                         u_err)
-        within = (xi_err <= self.rtol * np.abs(runs.xi_at) + self.atol) & (u_err <= self.rtol)
-        return np.all(within, axis=1)
+        return within
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def _sample_estimates(x, xf, u, uf, cont_err, first_continued, steps, growth, tail, roundoff, rtol, atol, xi_err,
+                      u_err, within):
+    """The estimates (2) of every sample into xi_err, u_err, and per run whether all are within tolerance (one pass:
+    as numpy expressions over the (runs x samples) arrays they cost 6 us a 200-sample point, a quarter of its
+    solve). The rounding of a sample is bounded with its row's largest |xi| in the growth factor
+    (:func:`sweep.integrate.ladder.rounding_error`: the exponential is monotonic in |xi|; one exp a run)."""
+    for r in range(x.shape[0]):
+        largest = 0.0
+        for j in range(x.shape[1]):
+            largest = max(largest, abs(x[r, j]))
+        amplified = steps[r] + math.exp(min(growth[r] * largest, 700.0))
+        ok = True
+        for j in range(x.shape[1]):
+            continued = 2.0 * tail[r] if j >= first_continued[r] else 0.0
+            xi_err[r, j] = COARSE_GAIN * abs(xf[r, j] - x[r, j]) + continued + roundoff * amplified * abs(x[r, j])
+            u_err[r, j] = (COARSE_GAIN * abs(uf[r, j] - u[r, j]) + cont_err[r, j]
+                           + roundoff * steps[r] * (abs(u[r, j]) + abs(x[r, j])))
+            ok = ok and xi_err[r, j] <= rtol * abs(x[r, j]) + atol and u_err[r, j] <= rtol
+        within[r] = ok
+
+
+pin_module(__name__)
