@@ -229,11 +229,8 @@ def _samples_of_lanes(scene: Scene, plan: Plan, g: np.ndarray, targets: np.ndarr
     h0 = np.full(g.size, min(0.5, ctrl ** (1.0 / (METHODS[LANES_METHOD].error_order + 1))))
     res = climb_tolerances(lambda entries, tols, h: run(g[entries], entries, tols, h), rows, h0, ctrl, scene.rtol,
                            atol, plan.roundoff, perturbation_growth(plan.k[g], plan.a[g], 1.0), samples)
-    out = RawResult.empty(g.size, n_t)
-    out.xi_inf[:], out.xi_inf_err[:], out.status[:], out.steps[:], out.work[:] = (res.xi, res.error, res.status,
-                                                                                 res.steps, res.work)
-    out.xi_at[:], out.u_at[:], out.xi_at_err[:], out.u_at_err[:] = samples.xi, samples.u, samples.xi_err, samples.u_err
-    return out
+    return RawResult(res.xi, res.error, res.status, res.steps, samples.xi, samples.u, samples.xi_err, samples.u_err,
+                     np.full((g.size, FRACTIONS.size), np.nan), np.full((g.size, FRACTIONS.size), np.nan), res.work)
 
 
 def _per_point(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray) -> RawResult:

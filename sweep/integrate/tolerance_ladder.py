@@ -105,29 +105,27 @@ class SampleEstimates:
 
     @classmethod
     def empty(cls, n: int, n_t: int, rtol: float, atol: float, roundoff: float) -> SampleEstimates:
-        nan = lambda: np.full((n, n_t), np.nan)  # noqa: E731
-        return cls(nan(), nan(), nan(), nan(), rtol, atol, roundoff)
+        """For n points of n_t samples, uninitialised: the first run of every point fills its row."""
+        blank = lambda: np.empty((n, n_t))  # noqa: E731
+        return cls(blank(), blank(), blank(), blank(), rtol, atol, roundoff)
 
     def keep(self, entries: np.ndarray, runs, attempts: np.ndarray, growth: np.ndarray, tail: np.ndarray
              ) -> np.ndarray:
         """Store the samples of ``runs`` (SampledOutputs of the points ``entries``) with their estimates (2);
         returns, per entry, whether every estimate is within its tolerance."""
-        xi_err, u_err = np.empty_like(runs.xi_at), np.empty_like(runs.u_at)
         within = np.empty(entries.size, np.bool_)
         _sample_estimates(runs.xi_at, runs.xi_fine, runs.u_at, runs.u_fine, runs.cont_err, runs.first_continued,
                           2 * attempts.astype(np.int64), np.ascontiguousarray(growth, dtype=float), tail,
-                          self.roundoff, self.rtol, self.atol, xi_err, u_err, within)
-        self.xi[entries], self.u[entries], self.xi_err[entries], self.u_err[entries] = (runs.xi_at, runs.u_at, xi_err,
-                                                                                        u_err)
+                          self.roundoff, self.rtol, self.atol, entries, self.xi, self.u, self.xi_err, self.u_err, within)
         return within
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def _sample_estimates(x, xf, u, uf, cont_err, first_continued, steps, growth, tail, roundoff, rtol, atol, xi_err,
-                      u_err, within):
-    """The estimates (2) of every sample into xi_err, u_err, and per run whether all are within tolerance (one pass:
-    as numpy expressions over the (runs x samples) arrays they cost 6 us a 200-sample point, a quarter of its
-    solve). The rounding of a sample is bounded with its row's largest |xi| in the growth factor
+def _sample_estimates(x, xf, u, uf, cont_err, first_continued, steps, growth, tail, roundoff, rtol, atol, entries,
+                      x_to, u_to, x_err_to, u_err_to, within):
+    """Run r's samples and their estimates (2) into row entries[r] of x_to, u_to, x_err_to, u_err_to, and
+    per run whether all are within tolerance (one pass: as numpy expressions over the (runs x samples) arrays they
+    cost 6 us a 200-sample point, a quarter of its solve). The rounding of a sample is bounded with its row's largest |xi| in the growth factor
     (:func:`sweep.integrate.ladder.rounding_error`: the exponential is monotonic in |xi|; one exp a run)."""
     for r in range(x.shape[0]):
         largest = 0.0
@@ -135,12 +133,14 @@ def _sample_estimates(x, xf, u, uf, cont_err, first_continued, steps, growth, ta
             largest = max(largest, abs(x[r, j]))
         amplified = steps[r] + math.exp(min(growth[r] * largest, 700.0))
         ok = True
+        e = entries[r]
         for j in range(x.shape[1]):
             continued = 2.0 * tail[r] if j >= first_continued[r] else 0.0
-            xi_err[r, j] = COARSE_GAIN * abs(xf[r, j] - x[r, j]) + continued + roundoff * amplified * abs(x[r, j])
-            u_err[r, j] = (COARSE_GAIN * abs(uf[r, j] - u[r, j]) + cont_err[r, j]
-                           + roundoff * steps[r] * (abs(u[r, j]) + abs(x[r, j])))
-            ok = ok and xi_err[r, j] <= rtol * abs(x[r, j]) + atol and u_err[r, j] <= rtol
+            xi_err = COARSE_GAIN * abs(xf[r, j] - x[r, j]) + continued + roundoff * amplified * abs(x[r, j])
+            u_err = (COARSE_GAIN * abs(uf[r, j] - u[r, j]) + cont_err[r, j]
+                     + roundoff * steps[r] * (abs(u[r, j]) + abs(x[r, j])))
+            x_to[e, j], u_to[e, j], x_err_to[e, j], u_err_to[e, j] = x[r, j], u[r, j], xi_err, u_err
+            ok = ok and xi_err <= rtol * abs(x[r, j]) + atol and u_err <= rtol
         within[r] = ok
 
 
