@@ -11,6 +11,7 @@ point down its own step ladder (integrate/ladder.py).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -254,7 +255,8 @@ def _time_resolved(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray)
     finite relaxed slip, failures of the lanes) and every other scene one per thread."""
     if not samples_in_lanes(scene, plan):
         return _per_point(scene, plan, g, obs_tau)
-    targets = np.concatenate((np.broadcast_to(plan.tau_samples, (g.size, plan.tau_samples.size)), obs_tau), axis=1)
+    targets = (np.concatenate((np.broadcast_to(plan.tau_samples, (g.size, plan.tau_samples.size)), obs_tau), axis=1)
+               if plan.tau_samples.size else obs_tau)
     live = np.flatnonzero(plan.finite[g])
     out = None if live.size == g.size else RawResult.empty(g.size, targets.shape[1])
     if live.size:
@@ -270,7 +272,8 @@ def _time_resolved(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray)
             out = part
         else:
             out.assign(live, part)
-    rest = np.flatnonzero(~plan.finite[g] | np.isin(out.status, LANE_FAILURES))
+    failed = functools.reduce(np.logical_or, (out.status == code for code in LANE_FAILURES))  # np.isin: 150 us
+    rest = np.flatnonzero(~plan.finite[g] | failed)
     if rest.size:
         out.assign(rest, _per_point(scene, plan, g[rest], obs_tau[rest]))
     return out
