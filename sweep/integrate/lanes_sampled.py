@@ -67,13 +67,17 @@ _COMPONENTS = ("x", "s", "t")
 NEWTON_MAX = 8
 """Newton iterations at most for a sample's theta (:func:`sample_in_piece`)."""
 TAU_INTEGRATED = 1e12
-"""Samples up to this reduced time are integrated (read off the steps' interpolants), later ones come from the
-closed-form continuation once E < TAIL_SAFETY TAIL_TIGHTENING rtol. The continuation costs ~8 transcendental calls a
-sample for the run and as many for its twin (and its bound two more): continuing every sample past the transient, as
-the per-point path does, took 14 of the 24 us of a 200-sample curve (sample2 at 1 um/s, t = 0.1 .. 3160 s, rtol
-1e-6), while a decade of tau costs a few steps of the tail (u grows by 2.3), whose samples cost ~7 ns each."""
-THETA_STEP = 1e-8
-"""A Newton step on theta below this ends the iteration (quadratic convergence: the next would be ~1e-16)."""
+"""Samples beyond this reduced time come from the closed-form continuation once E < TAIL_SAFETY TAIL_TIGHTENING
+rtol (the steps of the tail grow slowly there: u ~ ln tau)."""
+SAMPLES_PER_EFOLD = 4.0
+"""Below it, samples per e-fold of tau still to come, the rest come from the closed-form continuation once E is
+negligible; denser ones are integrated and read off the steps' interpolants. A continued sample costs ~16
+transcendental calls for the run and its twin with their bounds (~0.3 us), a sample off an interpolant ~40 ns, and an
+e-fold of tau (u grows by 1) a step or so of the tail (~0.4 us an attempt). Measured (1 thread, rtol 1e-6): the fit's
+200 samples over 4.5 decades (19 an e-fold), all continued 32 us a point, all integrated 26 us; a 61-sample trajectory
+over 1e-3..1e6 (3 an e-fold), all integrated 31 us, continued past 1e3 28 us; to 1e11, 33 and 29 us."""
+THETA_MISS = 1e-4
+"""What a sample's theta may miss by, relative to rtol (:func:`newton_step_for`)."""
 
 
 def make_rate_t(f):
@@ -190,6 +194,14 @@ def _attempt(tableau, fine, split: int):
     return pin(njit(fastmath=FAST, error_model="numpy")(namespace["attempt_all"]), tableau.name, fine.name, split)
 
 
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def newton_step_for(rtol):
+    """The Newton step on a sample's theta below which it has converged: quadratic convergence leaves ~ its square
+    (times |tau''/tau'| <~ 3 over a step), so sqrt(THETA_MISS rtol) leaves ~1e-4 rtol, at most 1e-8 (what is left
+    then is rounding): one iteration fewer than a fixed 1e-8 at rtol >= 1e-8."""
+    return max(1e-8, math.sqrt(THETA_MISS * rtol))
+
+
 @njit(inline="always", fastmath=FAST, error_model="numpy", cache=True)
 def _basis(theta):
     """The polynomials of dense_dop853 (1) written out, y = y0 + sum_r F_r P_r(theta): P0 = theta, then alternately
@@ -214,12 +226,12 @@ def _combine(st, offset, P):
 
 
 @njit(inline="always", fastmath=FAST, error_model="numpy", cache=True)
-def sample_in_piece(st, piece, lane, target, theta):
+def sample_in_piece(st, piece, lane, target, theta, theta_step):
     """(xi, u, theta, dtau/dtheta there) where the tau part of the interpolant stored at field ``piece`` equals
     ``target``: Newton on theta from the guess ``theta`` (the previous sample's Newton step continued, or the run's
     theta for the twin). tau is increasing in sigma; a target just outside [0, 1], where the twin's tau differs from
     the run's by their errors, is reached by the polynomial continued that far. Converged once a Newton step is below
-    THETA_STEP: what is left is of its square, ~1e-16."""
+    ``theta_step`` (:func:`newton_step_for`): what is left is of the order of its square."""
     base = piece * LANES + lane
     comp = (INTERPOLATOR_POWER + 1) * LANES
     t_row = base + 2 * comp
@@ -232,7 +244,7 @@ def sample_in_piece(st, piece, lane, target, theta):
             break
         step = (miss0 + _combine(st, t_row, P)) / dt
         theta -= step
-        if abs(step) <= THETA_STEP:
+        if abs(step) <= theta_step:
             break
     P, _ = _basis(theta)
     x = st[base + INTERPOLATOR_POWER * LANES] + _combine(st, base, P)
@@ -352,6 +364,7 @@ def make_sampled_lane_kernels(tableau, fine, split: int):
         queued, busy = 0, 0
         atol, max_steps = job.atol, job.max_steps
         e_continue = TAIL_SAFETY * TAIL_TIGHTENING * job.rtol
+        theta_step = newton_step_for(job.rtol)
         for lane in range(W):
             queued = take_next(st, lane, lane_run, next_j, runs, queued, pts, job, out)
             busy += lane_run[lane] >= 0
@@ -385,11 +398,13 @@ def make_sampled_lane_kernels(tableau, fine, split: int):
                         (_RUN + 2 * (INTERPOLATOR_POWER + 1) + 1) * W + lane]
                     while j < n_t and row[j] <= t_end:  # samples inside this step, from the interpolants
                         guess = theta + (row[j] - t_prev) / slope if slope > 0.0 else 0.5
-                        out.xi_at[r, j], out.u_at[r, j], theta, slope = sample_in_piece(st, _RUN, lane, row[j], guess)
+                        out.xi_at[r, j], out.u_at[r, j], theta, slope = sample_in_piece(st, _RUN, lane, row[j], guess,
+                                                                                         theta_step)
                         t_prev = row[j]
                         second = row[j] > t_mid  # in the twin's second half step
                         out.xi_fine[r, j], out.u_fine[r, j], _, _ = sample_in_piece(
-                            st, _HALF + _PIECE if second else _HALF, lane, row[j], 2.0 * theta - (1.0 if second else 0.0))
+                            st, _HALF + _PIECE if second else _HALF, lane, row[j], 2.0 * theta - (1.0 if second else 0.0),
+                            theta_step)
                         out.cont_err[r, j] = zero
                         j += 1
                     next_j[lane] = j
@@ -399,8 +414,9 @@ def make_sampled_lane_kernels(tableau, fine, split: int):
                             out.xi_inf[r], out.fine[r] = xi + tail_slip(k, a, bb, u, E), xf + tail_slip(k, a, bb, uf, Ef)
                             out.tail_err[r] = bound + tail_error(k, a, bb, uf, Ef)
                             tail_done[lane] = True
-                    if (tail_done[lane] and j < n_t and row[j] > TAU_INTEGRATED and E < e_continue
-                            and Ef < e_continue):
+                    if (tail_done[lane] and j < n_t and E < e_continue and Ef < e_continue
+                            and (row[j] > TAU_INTEGRATED
+                                 or n_t - j < SAMPLES_PER_EFOLD * math.log(row[n_t - 1] / t_end))):
                         continue_samples(st, lane, r, j, k, a, bb, job, out)
                         j = n_t
                         next_j[lane] = j
