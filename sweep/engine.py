@@ -211,11 +211,12 @@ def _sampled_runner(plan: Plan, method: str, targets: np.ndarray, atol: float, r
     return run
 
 
-def samples_in_lanes(scene: Scene, plan: Plan) -> bool:
+def samples_in_lanes(scene: Scene, plan: Plan | None = None) -> bool:
     """Whether the time-resolved points of ``scene`` go through the sampled adaptive lanes: method "auto" in float64
-    with no step given, samples only (t50/t90 and explicitly named methods keep the per-point path)."""
-    return (scene.method == "auto" and scene.step is None and plan.dtype == np.float64 and plan.state_law == "aging"
-            and not {"t50", "t90"} & set(scene.observables))
+    with no step given, aging law, samples only (t50/t90 and explicitly named methods keep the per-point path).
+    Decided from the scene alone (``plan`` is accepted for the callers that hold one)."""
+    return (scene.method == "auto" and scene.step is None and scene.precision == "float64"
+            and scene.state_law == "aging" and not {"t50", "t90"} & set(scene.observables))
 
 
 def _samples_of_lanes(scene: Scene, plan: Plan, g: np.ndarray, targets: np.ndarray) -> RawResult:
