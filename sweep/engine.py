@@ -6,7 +6,8 @@ preallocated flat arrays, one point written once by one thread. The costly point
 are visited in a fixed pseudo-random order: every thread's share of it then mixes cheap and costly points
 (2 threads: 1.2x -> 1.96x speed-up on the default scene). Results do not depend on the order. Sweeps of the
 relaxed slip alone go through the lane kernels instead (16 runs in flight per thread, integrate/lanes.py), each
-point down its own step ladder (integrate/ladder.py).
+point down its own step ladder (integrate/ladder.py); time-resolved points of method "auto" through the sampled
+adaptive lanes (integrate/lanes_sampled.py, :func:`samples_in_lanes`), the rest one point per thread.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from .accuracy import lane_control_tolerance
 from .integrate.batch import StopOutputs, slip_batch, stop_batch
 from .integrate.ladder import climb
 from .integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
@@ -27,7 +29,6 @@ from .integrate.stop_point import Method, StopPoints, Tolerances
 from .integrate.tolerance_ladder import SampleEstimates, climb_tolerances
 from .models.stop import MAX_STEPS, NO_FINITE_LIMIT, NONFINITE, OK
 from .physics import perturbation_growth
-from .accuracy import lane_control_tolerance
 from .plan import CHUNK_POINTS, LANES_METHOD, Plan
 from .scene import Scene
 from .solvers import METHODS

@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..accuracy import TAIL_RTOL, TAIL_TIGHTENING
+from ..accuracy import SAMPLES_PER_EFOLD, TAIL_RTOL, TAIL_TIGHTENING, TAU_INTEGRATED, THETA_MISS
 from ..jitcache import pin, pin_module
 from ..models.stop import (
     EXP_MAX,
@@ -50,7 +50,7 @@ from ..solvers import EXPLICIT_METHODS
 from ..solvers.controllers import ERR_FLOOR, MAX_FACTOR, MIN_FACTOR, NONFINITE_FACTOR, PI_CONTROLLER, SAFETY
 from ..solvers.vmath import exp_f64
 from .batch import lanes_batch
-from .dense_dop853 import D, EXTRA_A, INTERPOLATOR_POWER
+from .dense_dop853 import EXTRA_A, INTERPOLATOR_POWER, D
 from .lanes_adaptive import _LN2, LANE_TWINS, LANES, _combination, _log2_approx, _step_lines
 from .stop_point import U_ROUNDING
 
@@ -66,18 +66,6 @@ _N_FIELDS = _HALF + 2 * _PIECE
 _COMPONENTS = ("x", "s", "t")
 NEWTON_MAX = 8
 """Newton iterations at most for a sample's theta (:func:`sample_in_piece`)."""
-TAU_INTEGRATED = 1e12
-"""Samples beyond this reduced time come from the closed-form continuation once E < TAIL_SAFETY TAIL_TIGHTENING
-rtol (the steps of the tail grow slowly there: u ~ ln tau)."""
-SAMPLES_PER_EFOLD = 4.0
-"""Below it, samples per e-fold of tau still to come, the rest come from the closed-form continuation once E is
-negligible; denser ones are integrated and read off the steps' interpolants. A continued sample costs ~16
-transcendental calls for the run and its twin with their bounds (~0.3 us), a sample off an interpolant ~40 ns, and an
-e-fold of tau (u grows by 1) a step or so of the tail (~0.4 us an attempt). Measured (1 thread, rtol 1e-6): the fit's
-200 samples over 4.5 decades (19 an e-fold), all continued 32 us a point, all integrated 26 us; a 61-sample trajectory
-over 1e-3..1e6 (3 an e-fold), all integrated 31 us, continued past 1e3 28 us; to 1e11, 33 and 29 us."""
-THETA_MISS = 1e-4
-"""What a sample's theta may miss by, relative to rtol (:func:`newton_step_for`)."""
 
 
 def make_rate_t(f):
@@ -105,7 +93,8 @@ def _dense_lines(p: str, h: str, piece: str, n_stages: int) -> list[str]:
         for c in ("x", "s"):
             terms = " + ".join(f"{v!r} * {stage(c, j)}" for j, v in row.items())
             lines.append(f"        {p}{c}x{s_} = {p}{c}1 + {h} * ({terms})")
-        lines += [f"        {p}dxx{s_}, {p}dsx{s_}, {p}dtx{s_}, _, {p}ox{s_} = rate_t({p}xx{s_}, {p}sx{s_}, k, a, bb, s_c)",
+        lines += [f"        {p}dxx{s_}, {p}dsx{s_}, {p}dtx{s_}, _, {p}ox{s_} = "
+                  f"rate_t({p}xx{s_}, {p}sx{s_}, k, a, bb, s_c)",
                   f"        o_max = max(o_max, {p}ox{s_})"]
     for i, c in enumerate(_COMPONENTS):
         at = lambda r: f"st[{piece} + {(i * (INTERPOLATOR_POWER + 1) + r) * LANES} + l]"  # noqa: E731, B023
@@ -350,7 +339,8 @@ def make_sampled_lane_kernels(tableau, fine, split: int):
             E = st[(base + _E - _X) * W + lane]
             continue_in_closed_form(k, a, bb, x_inf, s - x, tau, row[j:], x_at[j:], u_at[j:])
             for i in range(j, row.size):
-                out.cont_err[r, i] = (out.cont_err[r, i] if base == _XF else 0.0) + continuation_error(E, a + 2.0 * bb * (s - x), u_at[i] - (s - x))
+                bound = continuation_error(E, a + 2.0 * bb * (s - x), u_at[i] - (s - x))
+                out.cont_err[r, i] = (out.cont_err[r, i] if base == _XF else 0.0) + bound  # run, then + twin
         out.first_continued[r] = j
 
     @njit(cache=True, fastmath=FAST, error_model="numpy")
@@ -403,15 +393,16 @@ def make_sampled_lane_kernels(tableau, fine, split: int):
                         t_prev = row[j]
                         second = row[j] > t_mid  # in the twin's second half step
                         out.xi_fine[r, j], out.u_fine[r, j], _, _ = sample_in_piece(
-                            st, _HALF + _PIECE if second else _HALF, lane, row[j], 2.0 * theta - (1.0 if second else 0.0),
-                            theta_step)
+                            st, _HALF + _PIECE if second else _HALF, lane, row[j],
+                            2.0 * theta - (1.0 if second else 0.0), theta_step)
                         out.cont_err[r, j] = zero
                         j += 1
                     next_j[lane] = j
                     if not tail_done[lane]:
                         bound = tail_error(k, a, bb, u, E)
                         if bound <= TAIL_SAFETY * (TAIL_RTOL * xi + atol):  # negligible: see TAIL_RTOL
-                            out.xi_inf[r], out.fine[r] = xi + tail_slip(k, a, bb, u, E), xf + tail_slip(k, a, bb, uf, Ef)
+                            out.xi_inf[r] = xi + tail_slip(k, a, bb, u, E)
+                            out.fine[r] = xf + tail_slip(k, a, bb, uf, Ef)
                             out.tail_err[r] = bound + tail_error(k, a, bb, uf, Ef)
                             tail_done[lane] = True
                     if (tail_done[lane] and j < n_t and E < e_continue and Ef < e_continue

@@ -42,8 +42,8 @@ from numba import njit
 
 from ..accuracy import COARSE_GAIN, LANE_TOL_FLOOR, MAX_RUNS, TOL_RATIO
 from ..jitcache import pin_module
-from ..solvers.fastmath import FAST
 from ..models.stop import MAX_STEPS, NONFINITE, OK
+from ..solvers.fastmath import FAST
 from .ladder import LadderResult, rounding_error
 
 AdaptiveRunner = Callable[[np.ndarray, np.ndarray, np.ndarray],
@@ -116,17 +116,19 @@ class SampleEstimates:
         within = np.empty(entries.size, np.bool_)
         _sample_estimates(runs.xi_at, runs.xi_fine, runs.u_at, runs.u_fine, runs.cont_err, runs.first_continued,
                           2 * attempts.astype(np.int64), np.ascontiguousarray(growth, dtype=float), tail,
-                          self.roundoff, self.rtol, self.atol, entries, self.xi, self.u, self.xi_err, self.u_err, within)
+                          self.roundoff, self.rtol, self.atol, entries, self.xi, self.u, self.xi_err, self.u_err,
+                          within)
         return within
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
 def _sample_estimates(x, xf, u, uf, cont_err, first_continued, steps, growth, tail, roundoff, rtol, atol, entries,
                       x_to, u_to, x_err_to, u_err_to, within):
-    """Run r's samples and their estimates (2) into row entries[r] of x_to, u_to, x_err_to, u_err_to, and
-    per run whether all are within tolerance (one pass: as numpy expressions over the (runs x samples) arrays they
-    cost 6 us a 200-sample point, a quarter of its solve). The rounding of a sample is bounded with its row's largest |xi| in the growth factor
-    (:func:`sweep.integrate.ladder.rounding_error`: the exponential is monotonic in |xi|; one exp a run)."""
+    """Run r's samples and their estimates (2) into row entries[r] of x_to, u_to, x_err_to, u_err_to, and per run
+    whether all are within tolerance (one pass: as numpy expressions over the (runs x samples) arrays they cost 6 us
+    a 200-sample point, a quarter of its solve). The rounding of a sample is bounded with its row's largest |xi| in
+    the growth factor (:func:`sweep.integrate.ladder.rounding_error`: the exponential is monotonic in |xi|; one exp
+    a run)."""
     for r in range(x.shape[0]):
         largest = 0.0
         for j in range(x.shape[1]):
