@@ -195,7 +195,7 @@ def lane_groups(n: int) -> int:
     return max(1, min(4 * threads, max(threads, n // (4 * LANES))))
 
 
-def _sampled_runner(plan: Plan, method: str, targets: np.ndarray, atol: float, rtol: float):
+def _sampled_runner(plan: Plan, method: str, targets: np.ndarray, atol: float, rtol: float, with_psi: bool):
     """run(points, rows, tolerances, first steps) -> (xi_inf, fine xi_inf, tail bounds, status, attempts, samples)
     in the sampled adaptive lanes of ``method`` (sweep/integrate/lanes_sampled.py): run r solves the plan point
     ``points[r]`` with the sorted sample times ``targets[rows[r]]``; the samples are a SampledOutputs."""
@@ -205,7 +205,8 @@ def _sampled_runner(plan: Plan, method: str, targets: np.ndarray, atol: float, r
         out = SampledOutputs.empty(points.size, targets.shape[1])
         sample_batch(LanePoints(plan.k, plan.a, plan.b, plan.s_c, plan.G),
                      SampledRuns(points, rows, np.ascontiguousarray(tols, dtype=float),
-                                 np.ascontiguousarray(h0, dtype=float), targets, atol, rtol, plan.max_steps),
+                                 np.ascontiguousarray(h0, dtype=float), targets, atol, rtol, plan.max_steps,
+                                 with_psi),
                      lane_groups(points.size), out)
         return out.xi_inf, out.fine, out.tail_err, out.status, out.steps, out
 
@@ -225,8 +226,9 @@ def _samples_of_lanes(scene: Scene, plan: Plan, g: np.ndarray, targets: np.ndarr
     sampled adaptive lanes (dop853 with its fine twin), each point down the tolerance ladder (tolerance_ladder.py)."""
     n_t = targets.shape[1]
     atol = scene.atol["xi_inf"]
-    samples = SampleEstimates.empty(g.size, n_t, scene.rtol, scene.atol["trajectory"], plan.roundoff)
-    run = _sampled_runner(plan, LANES_METHOD, targets, atol, scene.rtol)
+    with_psi = plan.tau_samples.size > 0  # the trajectory's psi; slip_at alone needs xi only
+    samples = SampleEstimates.empty(g.size, n_t, scene.rtol, scene.atol["trajectory"], plan.roundoff, with_psi)
+    run = _sampled_runner(plan, LANES_METHOD, targets, atol, scene.rtol, with_psi)
     rows = np.arange(g.size)
     ctrl = lane_control_tolerance(scene.rtol)
     h0 = np.full(g.size, min(0.5, ctrl ** (1.0 / (METHODS[LANES_METHOD].error_order + 1))))

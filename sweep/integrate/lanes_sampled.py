@@ -3,12 +3,12 @@
 The adaptive lanes of :mod:`sweep.integrate.lanes_adaptive` return the relaxed slip; here every run also records
 xi and u = ln psi at its point's own increasing reduced times tau (a row of ``targets``). The state carries tau = int
 e^u ds as a third component (docs/physics.md 3a, :mod:`sweep.models.stop`), tau is a component of the error norm,
-relative, as on the per-point path (:func:`sweep.integrate.stop_point.error_norm`: a sample's slip error includes
-xi' times the error of tau), and the steps are the controller's alone: samples never shorten a step. Each accepted
-step carries DOP853's continuous extension of order 7 (:mod:`sweep.integrate.dense_dop853`: three more stages, in
-the same lane loop, straight-line code); a sample inside the step is the interpolant at the theta where its tau
-part equals the sample's time (Newton on the polynomial, in the scalar per-lane loop: no more evaluations of the
-equations).
+relative, as on the per-point path (:func:`sweep.integrate.stop_point.error_norm`), where psi is wanted (the
+trajectory; :class:`SampledRuns` for slip_at alone), and the steps are the controller's alone: samples never
+shorten a step. Each accepted step carries DOP853's continuous extension of order 7
+(:mod:`sweep.integrate.dense_dop853`: three more stages, in the same lane loop, straight-line code); a sample inside
+the step is the interpolant at the theta where its tau part equals the sample's time (Newton on the polynomial, in
+the scalar per-lane loop: no more evaluations of the equations).
 
 The fine twin takes every step as two half steps, each with its own continuous extension, and finds the sample on
 its own interpolant at its own tau. The estimate 2 |fine - run| of :mod:`sweep.integrate.tolerance_ladder` then
@@ -110,16 +110,17 @@ def _dense_lines(p: str, h: str, piece: str, n_stages: int) -> list[str]:
 
 
 def _sampled_source(tableau, fine, split: int) -> str:
-    """Source of attempt_all(st, atol) for the sampled lanes (module docstring): the fine twin's ``split`` steps in
-    one lane loop written once (as in lanes_adaptive._lane_source), each storing its interpolant, then the run's
-    step and interpolant, its error norm over (xi, u, tau), the accept mask and the PI controller, as selects."""
+    """Source of attempt_all(st, atol, tau_weight, norm) for the sampled lanes (module docstring): the fine twin's
+    ``split`` steps in one lane loop written once (as in lanes_adaptive._lane_source), each storing its
+    interpolant, then the run's step and interpolant, its error norm over (xi, u, and tau with the weight
+    ``tau_weight``; ``norm`` = 1 / (2 + tau_weight)), the accept mask and the PI controller, as selects."""
     _, _, b, e = tableau.arrays()
     n = b.size
     W = LANES
     field = lambda f: f"st[{f * W} + l]"  # noqa: E731
     tentative = tuple(field(f) for f in (_TX, _TS, _TT, _TDX, _TDS, _TDT))
     lines = [
-        "def attempt_all(st, atol):",
+        "def attempt_all(st, atol, tau_weight, norm):",
         "    for l in range(W):",
         f"        {', '.join(tentative)}, {field(_TO)} = {field(_XF)}, {field(_SF)}, {field(_TF)}, {field(_DXF)}, "
         f"{field(_DSF)}, {field(_DTF)}, {field(_EXPO)}",
@@ -142,10 +143,10 @@ def _sampled_source(tableau, fine, split: int) -> str:
         f"        es = h * ({_combination(e, 'ds', n)})",
         f"        et = h * ({_combination(e, 'dt', n)})",
         # stop_point.error_norm with tau: xi relative with the atol floor, u relative to min(s, max(1, u)), tau
-        # relative
+        # relative where psi is sampled (tau_weight 1, norm 1/3; 0 and 1/2 for slip alone: SampledRuns)
         "        sx = atol + tol * max(abs(x1), abs(xe))",
         "        su = tol * min(abs(se), max(one, abs(se - xe))) + u_rounding * abs(se)",
-        "        err2 = third * ((ex / sx) ** 2 + ((es - ex) / su) ** 2 + (et / (tol * te)) ** 2)",
+        "        err2 = norm * ((ex / sx) ** 2 + ((es - ex) / su) ** 2 + tau_weight * (et / (tol * te)) ** 2)",
         # as in lanes_adaptive._lane_source
         "        finite = o_max <= exp_max and err2 == err2",
         "        accept = finite and err2 <= one",
@@ -168,11 +169,11 @@ def _sampled_source(tableau, fine, split: int) -> str:
 
 
 def _attempt(tableau, fine, split: int):
-    """attempt_all(st, atol) of the sampled lanes, float64, compiled into sample_runs (generated source has no file
-    to cache it by)."""
+    """attempt_all(st, atol, tau_weight, norm) of the sampled lanes, float64, compiled into sample_runs (generated
+    source has no file to cache it by)."""
     f = np.float64
     namespace = {"rate_t": make_rate_t(f), "exp_f64": exp_f64, "_log2_approx": _log2_approx, "W": LANES,
-                 "one": f(1.0), "zero": f(0.0), "half": f(0.5), "third": f(1.0 / 3.0), "exp_max": f(EXP_MAX),
+                 "one": f(1.0), "zero": f(0.0), "half": f(0.5), "exp_max": f(EXP_MAX),
                  "u_rounding": f(U_ROUNDING), "safety": f(SAFETY), "max_factor": f(MAX_FACTOR),
                  "min_factor": f(MIN_FACTOR), "nonfinite_factor": f(NONFINITE_FACTOR), "floor2": f(ERR_FLOOR ** 2),
                  "pi_now": f(-_LN2 * PI_CONTROLLER.alpha / (2.0 * (tableau.error_order + 1))),
@@ -245,7 +246,11 @@ class SampledRuns(NamedTuple):
     """The runs of one call of the sampled lanes: run r solves point ``point[r]`` (of the LanePoints) at the control
     tolerance ``tol[r]`` from the first trial step ``h0[r]``, recording at the increasing reduced times
     ``targets[row[r]]``; the tail test as in :class:`sweep.integrate.lanes_adaptive.AdaptiveRuns` (``atol``),
-    samples continued in closed form once E < TAIL_SAFETY TAIL_TIGHTENING ``rtol``; at most ``max_steps`` attempts."""
+    samples continued in closed form once E < TAIL_SAFETY TAIL_TIGHTENING ``rtol``; at most ``max_steps`` attempts.
+    ``with_psi``: psi (u = ln psi) is wanted at the samples, and tau enters the error norm. Without it (slip_at
+    alone) the steps are those of xi and u, which the slip at a given time needs: tau's relative error, in the
+    norm, set the steps of the tail, 1.3x the cost of a fit's forward solve for the same slip estimates; with psi
+    wanted it must stay, or psi's estimates fell below its error (1.18e-5 against 1.01e-5, rtol 1e-4)."""
 
     point: np.ndarray
     row: np.ndarray
@@ -255,6 +260,7 @@ class SampledRuns(NamedTuple):
     atol: float
     rtol: float
     max_steps: int
+    with_psi: bool
 
 
 class SampledOutputs(NamedTuple):
@@ -355,11 +361,13 @@ def make_sampled_lane_kernels(tableau, fine, split: int):
         atol, max_steps = job.atol, job.max_steps
         e_continue = TAIL_SAFETY * TAIL_TIGHTENING * job.rtol
         theta_step = newton_step_for(job.rtol)
+        tau_weight = 1.0 if job.with_psi else 0.0
+        norm = 1.0 / (2.0 + tau_weight)
         for lane in range(W):
             queued = take_next(st, lane, lane_run, next_j, runs, queued, pts, job, out)
             busy += lane_run[lane] >= 0
         while busy > 0:
-            attempt_all(st, atol)
+            attempt_all(st, atol, tau_weight, norm)
             for lane in range(W):
                 r = lane_run[lane]
                 if r < 0:

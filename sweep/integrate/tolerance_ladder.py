@@ -102,12 +102,16 @@ class SampleEstimates:
     atol: float
     """Absolute floor of the slip samples' tolerance [1]."""
     roundoff: float
+    with_psi: bool
+    """Whether psi is wanted at the samples; without it u carries no estimate (NaN) and no tolerance (the runs did
+    not control tau: :class:`sweep.integrate.lanes_sampled.SampledRuns`)."""
 
     @classmethod
-    def empty(cls, n: int, n_t: int, rtol: float, atol: float, roundoff: float) -> SampleEstimates:
+    def empty(cls, n: int, n_t: int, rtol: float, atol: float, roundoff: float, with_psi: bool = True
+              ) -> SampleEstimates:
         """For n points of n_t samples, uninitialised: the first run of every point fills its row."""
         blank = lambda: np.empty((n, n_t))  # noqa: E731
-        return cls(blank(), blank(), blank(), blank(), rtol, atol, roundoff)
+        return cls(blank(), blank(), blank(), blank(), rtol, atol, roundoff, with_psi)
 
     def keep(self, entries: np.ndarray, runs, attempts: np.ndarray, growth: np.ndarray, tail: np.ndarray
              ) -> np.ndarray:
@@ -116,14 +120,14 @@ class SampleEstimates:
         within = np.empty(entries.size, np.bool_)
         _sample_estimates(runs.xi_at, runs.xi_fine, runs.u_at, runs.u_fine, runs.cont_err, runs.first_continued,
                           2 * attempts.astype(np.int64), np.ascontiguousarray(growth, dtype=float), tail,
-                          self.roundoff, self.rtol, self.atol, entries, self.xi, self.u, self.xi_err, self.u_err,
-                          within)
+                          self.roundoff, self.rtol, self.atol, self.with_psi, entries, self.xi, self.u, self.xi_err,
+                          self.u_err, within)
         return within
 
 
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def _sample_estimates(x, xf, u, uf, cont_err, first_continued, steps, growth, tail, roundoff, rtol, atol, entries,
-                      x_to, u_to, x_err_to, u_err_to, within):
+def _sample_estimates(x, xf, u, uf, cont_err, first_continued, steps, growth, tail, roundoff, rtol, atol, with_psi,
+                      entries, x_to, u_to, x_err_to, u_err_to, within):
     """Run r's samples and their estimates (2) into row entries[r] of x_to, u_to, x_err_to, u_err_to, and per run
     whether all are within tolerance (one pass: as numpy expressions over the (runs x samples) arrays they cost 6 us
     a 200-sample point, a quarter of its solve). The rounding of a sample is bounded with its row's largest |xi| in
@@ -140,9 +144,9 @@ def _sample_estimates(x, xf, u, uf, cont_err, first_continued, steps, growth, ta
             continued = 2.0 * tail[r] if j >= first_continued[r] else 0.0
             xi_err = COARSE_GAIN * abs(xf[r, j] - x[r, j]) + continued + roundoff * amplified * abs(x[r, j])
             u_err = (COARSE_GAIN * abs(uf[r, j] - u[r, j]) + cont_err[r, j]
-                     + roundoff * steps[r] * (abs(u[r, j]) + abs(x[r, j])))
+                     + roundoff * steps[r] * (abs(u[r, j]) + abs(x[r, j]))) if with_psi else math.nan
             x_to[e, j], u_to[e, j], x_err_to[e, j], u_err_to[e, j] = x[r, j], u[r, j], xi_err, u_err
-            ok = ok and xi_err <= rtol * abs(x[r, j]) + atol and u_err <= rtol
+            ok = ok and xi_err <= rtol * abs(x[r, j]) + atol and (u_err <= rtol or not with_psi)
         within[r] = ok
 
 
