@@ -189,6 +189,21 @@ TAIL_RTOL = 2.0**-52
 the tail series cancel (up to 1e3x the true tail error), stays negligible next to any integration error."""
 TAIL_TIGHTENING = 0.01
 """Samples beyond the transient come from the closed-form continuation once E < TAIL_SAFETY TAIL_TIGHTENING rtol."""
+TAU_INTEGRATED = 1e12
+"""Sampled adaptive lanes (sweep/integrate/lanes_sampled.py): samples beyond this reduced time come from the
+closed-form continuation once E < TAIL_SAFETY TAIL_TIGHTENING rtol (the steps of the tail grow slowly there: u ~ ln
+tau)."""
+SAMPLES_PER_EFOLD = 4.0
+"""Below it, samples per e-fold of tau still to come, the rest come from the closed-form continuation once E is
+negligible; denser ones are integrated and read off the steps' interpolants. A continued sample costs ~16
+transcendental calls for the run and its twin with their bounds (~0.3 us), a sample off an interpolant ~40 ns, and an
+e-fold of tau (u grows by 1) a step or so of the tail (~0.4 us an attempt). Measured (1 thread, rtol 1e-6): the fit's
+200 samples over 4.5 decades (19 an e-fold), all continued 32 us a point, all integrated 26 us; a 61-sample trajectory
+over 1e-3..1e6 (3 an e-fold), all integrated 31 us, continued past 1e3 28 us; to 1e11, 33 and 29 us."""
+THETA_MISS = 1e-4
+"""What a sample's theta may miss by, relative to rtol (sweep/integrate/lanes_sampled.py newton_step_for): a Newton
+step below sqrt(THETA_MISS rtol) ends the iteration, one fewer than a fixed 1e-8 at rtol >= 1e-8 (the kernel 14.7 us
+a 200-sample curve instead of 17-22 at rtol 1e-6)."""
 
 # ---------------------------------------------------------------------------------------------------------------
 # The choice of model per point (sweep/model_choice.py)

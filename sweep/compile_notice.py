@@ -17,7 +17,9 @@ same conditions). Re-measured once relaxed slip ran in the adaptive dop853 lanes
 variant that carries the correction; 2026-11-25, load 2.5 from other work): relaxed slip (model "quasistatic") 14.6 s,
 a cold default `sweep run` 17.4 s of kernels, 20.2 s in all; with the fine twin's steps written once in a loop of
 their own (load 0.8): relaxed slip 11.9 s, a cold default `sweep run` 17.9 s of kernels (the inertial family,
-compiled beside it, takes longest), 21.1 s in all.
+compiled beside it, takes longest), 21.1 s in all. The sampled adaptive lanes (time-resolved, method "auto": the
+"time-resolved lanes" family; 2026-11-26, load 2.6 from other work): 45-49 s for one point's first run (the
+generated attempt alone 26 s, the relaxed lanes' 18 s in the same conditions), the relaxed lanes 13 s beside it.
 """
 
 from __future__ import annotations
@@ -35,8 +37,8 @@ __all__ = ["COLD_COMPILE_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "dri
            "inertial_stop_compiled_aside", "kernel_families", "timed"]
 
 
-COLD_COMPILE_S = {"relaxed-slip engine": 12, "time-resolved stop": 18, "inertial stop": 18, "slip-law stop": 6,
-                  "driven quasi-static": 8, "driven inertial": 16}
+COLD_COMPILE_S = {"relaxed-slip engine": 12, "time-resolved stop": 18, "time-resolved lanes": 45, "inertial stop": 18,
+                  "slip-law stop": 6, "driven quasi-static": 8, "driven inertial": 16}
 """Seconds to compile each kernel family from an empty cache on the 2-core development machine (module docstring)."""
 SLOW_S = 3.0
 """A warm-up still running after this many seconds is compiling, not loading: say so."""
@@ -61,10 +63,19 @@ def _has_index(folder: Path, must_contain: str = "") -> bool:
     return folder.is_dir() and any(must_contain in str(p) for p in folder.rglob("*.nbi"))
 
 
+def _samples_in_lanes(scene) -> bool:
+    """:func:`sweep.engine.samples_in_lanes` from the scene alone (imported here: the engine loads numba)."""
+    from .engine import samples_in_lanes
+
+    return samples_in_lanes(scene)
+
+
 def kernel_families(scene=None) -> list[str]:
     """The kernel families (keys of :data:`COLD_COMPILE_S`) a scene compiles on first use; every family without a
     scene. The stop scene: the relaxed-slip engine, or the per-point path for time-resolved observables, the
-    slip law's own march, the inertial kernels where the model can be inertial; the driven scene: the quasi-static
+    slip law's own march, the inertial kernels where the model can be inertial (time-resolved: the sampled lanes
+    where :func:`sweep.engine.samples_in_lanes` takes them; their points without a finite relaxed slip compile the
+    per-point path besides, which the scene alone does not tell); the driven scene: the quasi-static
     and/or inertial variant; the simulated Hopf line adds the driven variant of the scene's model."""
     if scene is None:
         return list(COLD_COMPILE_S)
@@ -73,7 +84,8 @@ def kernel_families(scene=None) -> list[str]:
         if scene.state_law == "slip":
             families.append("slip-law stop")
         elif scene.model != "inertial":
-            families.append("relaxed-slip engine" if scene.observables == ("xi_inf",) else "time-resolved stop")
+            families.append("relaxed-slip engine" if scene.observables == ("xi_inf",) else
+                            "time-resolved lanes" if _samples_in_lanes(scene) else "time-resolved stop")
         if scene.model != "quasistatic":
             families.append("inertial stop")
     if scene.protocol == "driven" or scene.simulated_hopf_line:

@@ -6,26 +6,30 @@ preallocated flat arrays, one point written once by one thread. The costly point
 are visited in a fixed pseudo-random order: every thread's share of it then mixes cheap and costly points
 (2 threads: 1.2x -> 1.96x speed-up on the default scene). Results do not depend on the order. Sweeps of the
 relaxed slip alone go through the lane kernels instead (16 runs in flight per thread, integrate/lanes.py), each
-point down its own step ladder (integrate/ladder.py).
+point down its own step ladder (integrate/ladder.py); time-resolved points of method "auto" through the sampled
+adaptive lanes (integrate/lanes_sampled.py, :func:`samples_in_lanes`), the rest one point per thread.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 import numba
 import numpy as np
 
+from .accuracy import lane_control_tolerance
 from .integrate.batch import StopOutputs, slip_batch, stop_batch
 from .integrate.ladder import climb
 from .integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
 from .integrate.lanes_adaptive import AdaptiveOutputs, AdaptiveRuns, adaptive_lane_kernels
+from .integrate.lanes_sampled import LANES, SampledOutputs, SampledRuns, sampled_lane_kernels
 from .integrate.stop_point import Method, StopPoints, Tolerances
-from .integrate.tolerance_ladder import climb_tolerances
-from .models.stop import NO_FINITE_LIMIT, OK
+from .integrate.tolerance_ladder import SampleEstimates, climb_tolerances
+from .models.stop import MAX_STEPS, NO_FINITE_LIMIT, NONFINITE, OK
 from .physics import perturbation_growth
-from .plan import CHUNK_POINTS, Plan
+from .plan import CHUNK_POINTS, LANES_METHOD, Plan
 from .scene import Scene
 from .solvers import METHODS
 from .status import Status
@@ -183,21 +187,60 @@ def _relax_general(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
     return out
 
 
-def run_points(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray | None = None,
-               correction: np.ndarray | None = None) -> RawResult:
-    """Run the plan's points ``g`` (one chunk: one call of a compiled batch) and return their flat outputs, in the
-    order of ``g``. A point's numbers do not depend on the other points of the chunk.
+def lane_groups(n: int) -> int:
+    """Groups of runs for the sampled lanes (each group stepped by one thread, 16 runs in flight): up to 4 per thread
+    for the load balance, but at least 4 x 16 runs a group, so that a lane rarely waits idle for its group's last
+    runs (a forward solve of 100 runs at 1 thread: 4 groups of 25 left each group's second wave 9/16 full)."""
+    threads = numba.get_num_threads()
+    return max(1, min(4 * threads, max(threads, n // (4 * LANES))))
 
-    ``obs_tau`` (shape (g.size, n_t), reduced times tau = V t/D0 [1]): each point's own sample times of slip_at,
-    instead of the scene's t_obs (shared along V); for plans whose points do not lie on a grid (sweep.fit). Only the
-    per-point path samples in time: a relaxed-slip plan (lanes, other state laws) has no sampled times.
-    ``correction`` (over g, NaN-filled): where the relaxed-slip lanes run, the first-order inertial correction of
-    their rk4 points is written there."""
-    if plan.state_law != "aging":
-        return _relax_general(scene, plan, g)
-    if plan.lanes:
-        return _relax_in_lanes(scene, plan, g, correction)
-    obs_tau = _obs_tau(scene, plan.flat_index(g)) if obs_tau is None else np.ascontiguousarray(obs_tau, float)
+
+def _sampled_runner(plan: Plan, method: str, targets: np.ndarray, atol: float, rtol: float, with_psi: bool):
+    """run(points, rows, tolerances, first steps) -> (xi_inf, fine xi_inf, tail bounds, status, attempts, samples)
+    in the sampled adaptive lanes of ``method`` (sweep/integrate/lanes_sampled.py): run r solves the plan point
+    ``points[r]`` with the sorted sample times ``targets[rows[r]]``; the samples are a SampledOutputs."""
+
+    def run(points, rows, tols, h0):
+        sample_batch = sampled_lane_kernels(method)[1]
+        out = SampledOutputs.empty(points.size, targets.shape[1])
+        sample_batch(LanePoints(plan.k, plan.a, plan.b, plan.s_c, plan.G),
+                     SampledRuns(points, rows, np.ascontiguousarray(tols, dtype=float),
+                                 np.ascontiguousarray(h0, dtype=float), targets, atol, rtol, plan.max_steps,
+                                 with_psi),
+                     lane_groups(points.size), out)
+        return out.xi_inf, out.fine, out.tail_err, out.status, out.steps, out
+
+    return run
+
+
+def samples_in_lanes(scene: Scene, plan: Plan | None = None) -> bool:
+    """Whether the time-resolved points of ``scene`` go through the sampled adaptive lanes: method "auto" in float64
+    with no step given, aging law, samples only (t50/t90 and explicitly named methods keep the per-point path).
+    Decided from the scene alone (``plan`` is accepted for the callers that hold one)."""
+    return (scene.method == "auto" and scene.step is None and scene.precision == "float64"
+            and scene.state_law == "aging" and not {"t50", "t90"} & set(scene.observables))
+
+
+def _samples_of_lanes(scene: Scene, plan: Plan, g: np.ndarray, targets: np.ndarray) -> RawResult:
+    """Relaxed slip and samples at the sorted reduced times ``targets`` (one row per point of g, all finite) in the
+    sampled adaptive lanes (dop853 with its fine twin), each point down the tolerance ladder (tolerance_ladder.py)."""
+    n_t = targets.shape[1]
+    atol = scene.atol["xi_inf"]
+    with_psi = plan.tau_samples.size > 0  # the trajectory's psi; slip_at alone needs xi only
+    samples = SampleEstimates.empty(g.size, n_t, scene.rtol, scene.atol["trajectory"], plan.roundoff, with_psi)
+    run = _sampled_runner(plan, LANES_METHOD, targets, atol, scene.rtol, with_psi)
+    rows = np.arange(g.size)
+    ctrl = lane_control_tolerance(scene.rtol)
+    h0 = np.full(g.size, min(0.5, ctrl ** (1.0 / (METHODS[LANES_METHOD].error_order + 1))))
+    res = climb_tolerances(lambda entries, tols, h: run(g[entries], entries, tols, h), rows, h0, ctrl, scene.rtol,
+                           atol, plan.roundoff, perturbation_growth(plan.k[g], plan.a[g], 1.0), samples)
+    return RawResult(res.xi, res.error, res.status, res.steps, samples.xi, samples.u, samples.xi_err, samples.u_err,
+                     np.full((g.size, FRACTIONS.size), np.nan), np.full((g.size, FRACTIONS.size), np.nan), res.work)
+
+
+def _per_point(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray) -> RawResult:
+    """The points g one per thread (sweep/integrate/stop_point.py: a Richardson pair each), ``obs_tau`` their rows of
+    slip_at times."""
     part = RawResult.empty(g.size, plan.tau_samples.size + obs_tau.shape[1])
     fractions = FRACTIONS if {"t50", "t90"} & set(scene.observables) else np.empty(0)
     stop_batch(Method.of(plan.tableau), StopPoints(plan.k[g], plan.a[g], plan.b[g], plan.s_c[g], plan.step[g]),
@@ -205,6 +248,57 @@ def run_points(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray | No
                plan.tau_samples, obs_tau, fractions, StopOutputs(*(getattr(part, f) for f in StopOutputs._fields)))
     part.work[:] = 3 * part.steps.astype(np.int64) // 2
     return part
+
+
+LANE_FAILURES = (MAX_STEPS, NONFINITE, int(Status.STEP_UNDERFLOW))
+"""Statuses of the sampled lanes whose points are solved again on the per-point path."""
+
+
+def _time_resolved(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray) -> RawResult:
+    """Time-resolved points g: the finite ones in the sampled lanes where :func:`samples_in_lanes`, the rest (no
+    finite relaxed slip, failures of the lanes) and every other scene one per thread."""
+    if not samples_in_lanes(scene, plan):
+        return _per_point(scene, plan, g, obs_tau)
+    targets = (np.concatenate((np.broadcast_to(plan.tau_samples, (g.size, plan.tau_samples.size)), obs_tau), axis=1)
+               if plan.tau_samples.size else obs_tau)
+    live = np.flatnonzero(plan.finite[g])
+    out = None if live.size == g.size else RawResult.empty(g.size, targets.shape[1])
+    if live.size:
+        targets = targets[live]
+        ordered = bool(np.all(targets[:, 1:] >= targets[:, :-1]))  # the usual case (the fit's times): no reordering
+        order = None if ordered else np.argsort(targets, axis=1, kind="stable")
+        part = _samples_of_lanes(scene, plan, g[live], np.ascontiguousarray(
+            targets if ordered else np.take_along_axis(targets, order, 1)))
+        if not ordered:
+            for name in SAMPLED:  # back from each row's sorted order
+                np.put_along_axis(getattr(part, name), order, getattr(part, name).copy(), 1)
+        if out is None:  # every point in the lanes
+            out = part
+        else:
+            out.assign(live, part)
+    failed = functools.reduce(np.logical_or, (out.status == code for code in LANE_FAILURES))  # np.isin: 150 us
+    rest = np.flatnonzero(~plan.finite[g] | failed)
+    if rest.size:
+        out.assign(rest, _per_point(scene, plan, g[rest], obs_tau[rest]))
+    return out
+
+
+def run_points(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray | None = None,
+               correction: np.ndarray | None = None) -> RawResult:
+    """Run the plan's points ``g`` (one chunk: one call of a compiled batch) and return their flat outputs, in the
+    order of ``g``. A point's numbers do not depend on the other points of the chunk.
+
+    ``obs_tau`` (shape (g.size, n_t), reduced times tau = V t/D0 [1]): each point's own sample times of slip_at,
+    instead of the scene's t_obs (shared along V); for plans whose points do not lie on a grid (sweep.fit). Only the
+    time-resolved paths sample in time (:func:`_time_resolved`): a relaxed-slip plan (lanes, other state laws) has no
+    sampled times. ``correction`` (over g, NaN-filled): where the relaxed-slip lanes run, the first-order inertial
+    correction of their rk4 points is written there."""
+    if plan.state_law != "aging":
+        return _relax_general(scene, plan, g)
+    if plan.lanes:
+        return _relax_in_lanes(scene, plan, g, correction)
+    obs_tau = _obs_tau(scene, plan.flat_index(g)) if obs_tau is None else np.ascontiguousarray(obs_tau, float)
+    return _time_resolved(scene, plan, g, obs_tau)
 
 
 def chunk_points(n: int, chunk_size: int | None = None) -> list[np.ndarray]:

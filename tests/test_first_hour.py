@@ -453,7 +453,9 @@ class Listener(event.Listener):  # the kernels compiled from Python (nested comp
 event.register("numba:compile", Listener())
 p, km, v = sweep.presets["sample2"], np.logspace(4, 6, 3), np.logspace(-7, -5, 3)
 for kw in ({"model": "quasistatic"}, {"model": "auto"}, {"model": "inertial"},
-           {"model": "quasistatic", "observables": ("xi_inf", "t50")}, {"model": "quasistatic", "state_law": "slip"},
+           {"model": "quasistatic", "observables": ("xi_inf", "t50")},
+           {"model": "quasistatic", "observables": ("xi_inf", "trajectory")},
+           {"model": "quasistatic", "state_law": "slip"},
            {"protocol": "driven", "model": "quasistatic"}, {"protocol": "driven", "model": "inertial"}):
     sweep.run_sweep(sweep.Scene(**{"protocol": "stop", **kw}, params=p, K_over_M=km, V=v), progress=False)
 print(" ".join(sorted(set(compiled))))

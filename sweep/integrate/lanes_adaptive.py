@@ -73,33 +73,48 @@ def _combination(weights, symbol: str, count: int) -> str:
     return " + ".join(f"{float(weights[j])!r} * {symbol}{j + 1}" for j in range(count) if weights[j] != 0.0)
 
 
-def _step_lines(tableau, p: str, start: tuple[str, str, str, str], h: str, correction: bool) -> list[str]:
+def _step_lines(tableau, p: str, start: tuple[str, ...], h: str, correction: bool, tau: bool = False) -> list[str]:
     """Lines of one step of size ``h`` from the state (x, s) with its derivative (dx, ds) (``start``: four
     expressions), every name prefixed by ``p``: stages {p}x2.., the end state {p}xe, {p}se with its derivative
     {p}dxe, {p}dse, E {p}Ee and exponent {p}oe; o_max takes the largest exponent. With ``correction`` the stages
-    also carry y from ({p}y1, {p}dy1), ending in {p}ye, {p}dye."""
+    also carry y from ({p}y1, {p}dy1), ending in {p}ye, {p}dye.
+
+    With ``tau`` (:mod:`sweep.integrate.lanes_sampled`) the state is (x, s, t) with t = tau, ``start`` six
+    expressions (x, s, t, dx, ds, dt), the right-hand side ``rate_t`` and the end's derivative {p}dxe, {p}dse,
+    {p}dte."""
     c, A, b, e = tableau.arrays()
     last = b.size - 1 if tableau.fsal else b.size  # stages evaluated before the step's end
-    x0, s0, dx0, ds0 = start
-    lines = [f"        {p}x1, {p}s1, {p}dx1, {p}ds1 = {x0}, {s0}, {dx0}, {ds0}"]
+    if tau:
+        x0, s0, t0, dx0, ds0, dt0 = start
+        lines = [f"        {p}x1, {p}s1, {p}t1, {p}dx1, {p}ds1, {p}dt1 = {x0}, {s0}, {t0}, {dx0}, {ds0}, {dt0}"]
+        evaluate = "{p}dx{i}, {p}ds{i}, {p}dt{i}, {p}E{i}, {p}o{i} = rate_t({p}x{i}, {p}s{i}, k, a, bb, s_c)"
+    else:
+        x0, s0, dx0, ds0 = start
+        lines = [f"        {p}x1, {p}s1, {p}dx1, {p}ds1 = {x0}, {s0}, {dx0}, {ds0}"]
+        evaluate = "{p}dx{i}, {p}ds{i}, {p}E{i}, {p}o{i} = rate({p}x{i}, {p}s{i}, k, a, bb, s_c)"
     for i in range(2, last + 1):
         lines += [f"        {p}x{i} = {p}x1 + {h} * ({_combination(A[i - 1], p + 'dx', i - 1)})",
                   f"        {p}s{i} = {p}s1 + {h} * ({_combination(A[i - 1], p + 'ds', i - 1)})",
-                  f"        {p}dx{i}, {p}ds{i}, {p}E{i}, {p}o{i} = rate({p}x{i}, {p}s{i}, k, a, bb, s_c)",
+                  "        " + evaluate.format(p=p, i=i),
                   f"        o_max = max(o_max, {p}o{i})"]
         if correction:
             lines += [f"        {p}dy{i} = correction_rate({p}x{i}, {p}s{i}, "
                       f"{p}y1 + {h} * ({_combination(A[i - 1], p + 'dy', i - 1)}), k, a, bb, G, {p}ds{i}, {p}E{i}, "
                       f"{p}o{i})"]
     lines += [f"        {p}xe = {p}x1 + {h} * ({_combination(b, p + 'dx', last)})",
-              f"        {p}se = {p}s1 + {h} * ({_combination(b, p + 'ds', last)})",
-              f"        {p}dxe, {p}dse, {p}Ee, {p}oe = rate({p}xe, {p}se, k, a, bb, s_c)",
-              f"        o_max = max(o_max, {p}oe)"]
+              f"        {p}se = {p}s1 + {h} * ({_combination(b, p + 'ds', last)})"]
+    if tau:
+        lines += [f"        {p}te = {p}t1 + {h} * ({_combination(b, p + 'dt', last)})",
+                  f"        {p}dxe, {p}dse, {p}dte, {p}Ee, {p}oe = rate_t({p}xe, {p}se, k, a, bb, s_c)"]
+    else:
+        lines += [f"        {p}dxe, {p}dse, {p}Ee, {p}oe = rate({p}xe, {p}se, k, a, bb, s_c)"]
+    lines += [f"        o_max = max(o_max, {p}oe)"]
     if correction:
         lines += [f"        {p}ye = {p}y1 + {h} * ({_combination(b, p + 'dy', last)})",
                   f"        {p}dye = correction_rate({p}xe, {p}se, {p}ye, k, a, bb, G, {p}dse, {p}Ee, {p}oe)"]
     if tableau.fsal:
         lines += [f"        {p}dx{b.size}, {p}ds{b.size} = {p}dxe, {p}dse"]
+        lines += [f"        {p}dt{b.size} = {p}dte"] if tau else []
     return lines
 
 
