@@ -30,6 +30,7 @@ from .integrate.tolerance_ladder import SampleEstimates, climb_tolerances
 from .models.stop import MAX_STEPS, NO_FINITE_LIMIT, NONFINITE, OK
 from .physics import perturbation_growth
 from .plan import CHUNK_POINTS, LANES_METHOD, Plan
+from .plan import samples_in_lanes as plan_samples_in_lanes
 from .scene import Scene
 from .solvers import METHODS
 from .status import Status
@@ -214,11 +215,9 @@ def _sampled_runner(plan: Plan, method: str, targets: np.ndarray, atol: float, r
 
 
 def samples_in_lanes(scene: Scene, plan: Plan | None = None) -> bool:
-    """Whether the time-resolved points of ``scene`` go through the sampled adaptive lanes: method "auto" in float64
-    with no step given, aging law, samples only (t50/t90 and explicitly named methods keep the per-point path).
-    Decided from the scene alone (``plan`` is accepted for the callers that hold one)."""
-    return (scene.method == "auto" and scene.step is None and scene.precision == "float64"
-            and scene.state_law == "aging" and not {"t50", "t90"} & set(scene.observables))
+    """Whether the time-resolved points of ``scene`` go through the sampled adaptive lanes (sweep.plan.samples_in_lanes,
+    which the plan records and hashes; ``plan`` is accepted for the callers that hold one)."""
+    return plan.sampled_lanes if plan is not None else plan_samples_in_lanes(scene)
 
 
 def _samples_of_lanes(scene: Scene, plan: Plan, g: np.ndarray, targets: np.ndarray) -> RawResult:

@@ -70,7 +70,7 @@ from .accuracy import (
 from .scene import Scene
 from .solvers import METHODS
 
-__all__ = ["CHUNK_POINTS", "Plan", "PointParams", "make_plan", "choose_method", "line_uses_inertia",
+__all__ = ["CHUNK_POINTS", "Plan", "PointParams", "make_plan", "choose_method", "line_uses_inertia", "samples_in_lanes",
            "stop_plan_for_points"]
 
 LANES_METHOD = "dop853"
@@ -152,6 +152,15 @@ def rk4_step_for(rtol: float, stable_sliding, time_resolved: bool = False):
     return np.minimum(H_MAX / 2, (rtol / (STEP_SAFETY * ERROR_GAIN * error_constant)) ** 0.25)
 
 
+def samples_in_lanes(scene: Scene) -> bool:
+    """Whether the time-resolved points of ``scene`` go through the sampled adaptive lanes
+    (sweep/integrate/lanes_sampled.py: LANES_METHOD with its fine twin, samples from its dense output): method "auto"
+    in float64 with no step given, aging law, samples only (t50/t90 and explicitly named methods keep the per-point
+    path, which also takes the points the lanes fail on and those without a finite relaxed slip)."""
+    return (scene.time_resolved and scene.method == "auto" and scene.step is None and scene.precision == "float64"
+            and scene.state_law == "aging" and not {"t50", "t90"} & set(scene.observables))
+
+
 def choose_method(scene: Scene) -> tuple[str, str]:
     """(method, why): the scene's own choice, or the cheapest measured method for its rtol."""
     if scene.method != "auto":
@@ -211,6 +220,9 @@ class Plan:
     """Per point: the inertial model decided by the policy before any run."""
     chunk_size: int
     state_law: str = "aging"
+    sampled_lanes: bool = False
+    """Time-resolved points in the sampled adaptive lanes (:func:`samples_in_lanes`); ``method`` is then the per-point
+    path's, for the points the lanes leave to it."""
     notes: tuple[tuple[str, str], ...] = ()
     """The description of a protocol other than the stop scene's (:meth:`describe`)."""
     index: np.ndarray | None = None
@@ -262,6 +274,10 @@ class Plan:
                 f"|mu1/A|^3/(4 m2 chi/A^2) >= {STIFF_WORK_MIN:g})" for m in self.point_methods[1:]),
             "stepper": (("adaptive" if self.adaptive else "fixed-step")
                         + (f", {self.dtype.name} lanes" if self.lanes else ", one point per thread")),
+            **({"sampled_lanes": f"{LANES_METHOD} in adaptive lanes with its fine twin, each sample read off the dense "
+                                 "output of the step that holds it (sweep/integrate/lanes_sampled.py), 2 |fine - run| "
+                                 f"+ roundoff a sample; {self.method} one point per thread only where the lanes fail "
+                                 "or no finite relaxed slip exists"} if self.sampled_lanes else {}),
             "step": (f"first trial {step} in sigma, local tolerance {self.ctrl_tol:.3g}" if self.adaptive
                      else f"{step} in sigma ({self.step_source})"),
             "error_estimate": ((f"each run with a fine twin on its mesh halved, in the same lanes "
@@ -303,7 +319,7 @@ class Plan:
         h = hashlib.sha256()
         choices = (self.protocol, self.model, self.model_tol, self.method, self.point_methods, self.dtype.name,
                    self.lanes, self.adaptive, self.step_source, self.ctrl_tol, self.max_steps, self.state_law,
-                   self.needs_tau, self.chunk_size)
+                   self.needs_tau, self.chunk_size, self.sampled_lanes)
         constants = sorted((k, v) for k, v in vars(accuracy).items() if k.isupper())
         h.update(repr((choices, constants)).encode())
         for arr in (self.k, self.a, self.b, self.s_c, self.step, self.finite, self.tau_samples, self.point_method,
@@ -487,5 +503,6 @@ def stop_plan_for_points(scene: Scene, points: PointParams) -> Plan:
         rule="; ".join(_step_rule(m, lanes) for m in point_methods),
         tau_samples=scene.tau_samples,
         needs_tau=scene.time_resolved,
+        sampled_lanes=samples_in_lanes(scene),
         **_common(scene, chi, mu1, k, a, b, G, finite, finite & (scene.model == "inertial")),
     )
