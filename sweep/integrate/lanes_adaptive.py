@@ -118,6 +118,28 @@ def _step_lines(tableau, p: str, start: tuple[str, ...], h: str, correction: boo
     return lines
 
 
+def controller_lines(field, logprev: int, rej: int, h: int) -> list[str]:
+    """Generated lines of a lane loop's accept decision and next step, from the attempt's error norm squared
+    ``err2`` and largest exponent ``o_max``; ``field(f)`` names lane field f, ``logprev``, ``rej`` and ``h`` are the
+    fields of the previous accepted norm's log2, the last rejection and the step (shared by the sampled lanes,
+    sweep/integrate/lanes_sampled.py)."""
+    return [
+        # an exponent beyond EXP_MAX anywhere in the attempt (exp is clamped there) or a NaN: no norm to go by
+        "        finite = o_max <= exp_max and err2 == err2",
+        "        accept = finite and err2 <= one",
+        "        log_err2 = _log2_approx(max(err2, floor2))",
+        # accepted: Gustafsson's PI factor from this and the previous accepted norm (smooth steps where they are
+        # stability-limited, as on the creep manifold); rejected: the I factor, at most 1
+        f"        log_prev = {field(logprev)}",
+        "        factor_pi = safety * exp_f64(pi_now * log_err2 + pi_prev * log_prev)",
+        "        factor_i = safety * exp_f64(i_now * log_err2)",
+        "        factor = min(max_factor, max(min_factor, factor_pi if accept else factor_i))",
+        f"        factor = min(factor, one) if ({field(rej)} > half or not accept) else factor",
+        f"        {field(logprev)} = log_err2 if accept else log_prev",
+        f"        {field(h)} = h * (factor if finite else nonfinite_factor)",
+    ]
+
+
 def _lane_source(tableau, correction: bool, fine=None, split: int = 2) -> str:
     """Source of attempt_all(st, atol) for an explicit tableau, its coefficients written in as literals (a loop over
     stages with run-time offsets defeats the vectoriser). One attempt is a step h of the returned (coarse) run and,
@@ -162,19 +184,7 @@ def _lane_source(tableau, correction: bool, fine=None, split: int = 2) -> str:
         "        sx = atol + tol * max(abs(x1), abs(xe))",
         "        su = tol * min(abs(se), max(one, abs(se - xe))) + u_rounding * abs(se)",
         "        err2 = half * ((ex / sx) ** 2 + ((es - ex) / su) ** 2)",
-        # an exponent beyond EXP_MAX anywhere in the attempt (exp is clamped there) or a NaN: no norm to go by
-        "        finite = o_max <= exp_max and err2 == err2",
-        "        accept = finite and err2 <= one",
-        "        log_err2 = _log2_approx(max(err2, floor2))",
-        # accepted: Gustafsson's PI factor from this and the previous accepted norm (smooth steps where they are
-        # stability-limited, as on the creep manifold); rejected: the I factor, at most 1
-        f"        log_prev = {field(_LOGPREV)}",
-        "        factor_pi = safety * exp_f64(pi_now * log_err2 + pi_prev * log_prev)",
-        "        factor_i = safety * exp_f64(i_now * log_err2)",
-        "        factor = min(max_factor, max(min_factor, factor_pi if accept else factor_i))",
-        f"        factor = min(factor, one) if ({field(_REJ)} > half or not accept) else factor",
-        f"        {field(_LOGPREV)} = log_err2 if accept else log_prev",
-        f"        {field(_H)} = h * (factor if finite else nonfinite_factor)",
+        *controller_lines(field, _LOGPREV, _REJ, _H),
     ]
     kept = [(_X, "xe", "x1"), (_S, "se", "s1"), (_DX, "dxe", "dx1"), (_DS, "dse", "ds1"), (_E, "Ee", field(_E)),
             (_XF, field(_TX), field(_XF)), (_SF, field(_TS), field(_SF)), (_DXF, field(_TDX), field(_DXF)),

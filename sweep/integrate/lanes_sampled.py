@@ -51,7 +51,7 @@ from ..solvers.controllers import ERR_FLOOR, MAX_FACTOR, MIN_FACTOR, NONFINITE_F
 from ..solvers.vmath import exp_f64
 from .batch import lanes_batch
 from .dense_dop853 import EXTRA_A, INTERPOLATOR_POWER, D
-from .lanes_adaptive import _LN2, LANE_TWINS, LANES, _combination, _log2_approx, _step_lines
+from .lanes_adaptive import _LN2, LANE_TWINS, LANES, _combination, _log2_approx, _step_lines, controller_lines
 from .stop_point import U_ROUNDING
 
 # lane fields, each LANES wide at offsets F * LANES of one flat array (lanes_adaptive.py: one base pointer)
@@ -147,17 +147,7 @@ def _sampled_source(tableau, fine, split: int) -> str:
         "        sx = atol + tol * max(abs(x1), abs(xe))",
         "        su = tol * min(abs(se), max(one, abs(se - xe))) + u_rounding * abs(se)",
         "        err2 = norm * ((ex / sx) ** 2 + ((es - ex) / su) ** 2 + tau_weight * (et / (tol * te)) ** 2)",
-        # as in lanes_adaptive._lane_source
-        "        finite = o_max <= exp_max and err2 == err2",
-        "        accept = finite and err2 <= one",
-        "        log_err2 = _log2_approx(max(err2, floor2))",
-        f"        log_prev = {field(_LOGPREV)}",
-        "        factor_pi = safety * exp_f64(pi_now * log_err2 + pi_prev * log_prev)",
-        "        factor_i = safety * exp_f64(i_now * log_err2)",
-        "        factor = min(max_factor, max(min_factor, factor_pi if accept else factor_i))",
-        f"        factor = min(factor, one) if ({field(_REJ)} > half or not accept) else factor",
-        f"        {field(_LOGPREV)} = log_err2 if accept else log_prev",
-        f"        {field(_H)} = h * (factor if finite else nonfinite_factor)",
+        *controller_lines(field, _LOGPREV, _REJ, _H),  # as in lanes_adaptive._lane_source
     ]
     kept = [(_X, "xe", "x1"), (_S, "se", "s1"), (_T, "te", "t1"), (_DX, "dxe", "dx1"), (_DS, "dse", "ds1"),
             (_DT, "dte", "dt1"), (_E, "Ee", field(_E))]
