@@ -320,7 +320,8 @@ def mark_error_above_tol(scene: Scene, out: RawResult) -> None:
             with np.errstate(invalid="ignore"):
                 over = err > scene.rtol * np.abs(val) + scene.atol[name]
             bad |= np.any(over, axis=1)
-    if out.u_at.shape[1]:  # psi = exp(u): the error of u is the relative error of psi
+    n_psi = min(scene.tau_samples.size, out.u_at.shape[1])  # psi is output at the trajectory times only (first)
+    if n_psi:  # psi = exp(u): the error of u is the relative error of psi
         with np.errstate(invalid="ignore"):
-            bad |= np.any(out.u_at_err > scene.rtol, axis=1)
+            bad |= np.any(out.u_at_err[:, :n_psi] > scene.rtol, axis=1)
     out.status[ok & bad] = ERROR_ABOVE_TOL

@@ -98,9 +98,9 @@ def test_a_consumer_that_stops_leaves_no_chunk_running():
 @pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 numba threads (2 cores)")
 @pytest.mark.parametrize("observables", [("xi_inf",), ("xi_inf", "trajectory", "t50")], ids=["relaxed", "transients"])
 def test_side_by_side_gives_the_same_bits_as_one_chunk_at_a_time(observables):
-    """Soft springs of the default sample (model auto: inertial points among the relaxed slips; points without a
-    finite limit among the transients): every variable bitwise equal with 1 numba thread (chunks one after another)
-    and 2 (side by side, where the threading layer allows it)."""
+    """Soft springs of the default sample (model auto: inertial points among the relaxed slips; points flagged
+    error_above_tol among the transients, whose t50 keeps them on the per-point path): every variable bitwise equal
+    with 1 numba thread (chunks one after another) and 2 (side by side, where the threading layer allows it)."""
     scene = dataclasses.replace(sweep.default_scene(), K_over_M=np.logspace(1, 3, 24), V=np.logspace(-6, -3, 20),
                                 observables=observables)
     threads = numba.get_num_threads()

@@ -61,3 +61,24 @@ def test_mixed_grid_has_only_ok_or_flagged_points():
     assert ok.any() and (~ok).any()
     assert np.all(np.isfinite(ds["xi_inf"].values[ok]))
     assert np.all(ds["status"].values[~ok] == sweep.Status.MAX_STEPS)
+
+
+@pytest.mark.parametrize("observables, flagged", [(("xi_inf", "trajectory", "slip_at"), True),
+                                                  (("xi_inf", "slip_at"), False)])
+def test_psi_is_judged_only_where_it_is_an_output(observables, flagged):
+    """error_above_tol from u = ln psi only at the trajectory's times (the file's psi); at the slip_at times only the
+    slip is an output, so a large u estimate there (a point solved one per thread) leaves the point ok."""
+    from sweep.engine import RawResult, mark_error_above_tol
+
+    scene = sweep.Scene(protocol="stop", params=P, K_over_M=[1e5], V=[1e-6], observables=observables,
+                        trajectory_tau=(1e-2, 1e2, 3), t_obs=(1.0, 10.0), rtol=1e-6)
+    n_traj = scene.tau_samples.size
+    out = RawResult.empty(1, n_traj + 2)
+    out.xi_inf[:], out.xi_inf_err[:] = 1.0, 1e-9
+    out.xi_at[:], out.xi_at_err[:], out.u_at[:] = 0.5, 1e-12, 0.1
+    out.u_at_err[:] = 1e-9
+    out.u_at_err[0, -1] = 1e-3  # far above rtol, at a slip_at time
+    if n_traj:
+        out.u_at_err[0, 0] = 1e-3  # and at a trajectory time
+    mark_error_above_tol(scene, out)
+    assert int(out.status[0]) == (int(sweep.Status.ERROR_ABOVE_TOL) if flagged else int(sweep.Status.OK))
