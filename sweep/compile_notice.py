@@ -64,8 +64,8 @@ def _has_index(folder: Path, must_contain: str = "") -> bool:
 
 
 def _samples_in_lanes(scene) -> bool:
-    """:func:`sweep.engine.samples_in_lanes` from the scene alone (imported here: the engine loads numba)."""
-    from .engine import samples_in_lanes
+    """:func:`sweep.plan.samples_in_lanes` (imported here, not at the top: the notice module stays light)."""
+    from .plan import samples_in_lanes
 
     return samples_in_lanes(scene)
 
@@ -74,7 +74,7 @@ def kernel_families(scene=None) -> list[str]:
     """The kernel families (keys of :data:`COLD_COMPILE_S`) a scene compiles on first use; every family without a
     scene. The stop scene: the relaxed-slip engine, or the per-point path for time-resolved observables, the
     slip law's own march, the inertial kernels where the model can be inertial (time-resolved: the sampled lanes
-    where :func:`sweep.engine.samples_in_lanes` takes them; their points without a finite relaxed slip compile the
+    where :func:`sweep.plan.samples_in_lanes` takes them; their points without a finite relaxed slip compile the
     per-point path besides, which the scene alone does not tell); the driven scene: the quasi-static
     and/or inertial variant; the simulated Hopf line adds the driven variant of the scene's model."""
     if scene is None:

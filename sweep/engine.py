@@ -256,7 +256,7 @@ LANE_FAILURES = (MAX_STEPS, NONFINITE, int(Status.STEP_UNDERFLOW))
 def _time_resolved(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray) -> RawResult:
     """Time-resolved points g: the finite ones in the sampled lanes where :func:`samples_in_lanes`, the rest (no
     finite relaxed slip, failures of the lanes) and every other scene one per thread."""
-    if not samples_in_lanes(scene, plan):
+    if not plan.sampled_lanes:
         return _per_point(scene, plan, g, obs_tau)
     targets = (np.concatenate((np.broadcast_to(plan.tau_samples, (g.size, plan.tau_samples.size)), obs_tau), axis=1)
                if plan.tau_samples.size else obs_tau)

@@ -19,6 +19,7 @@ from collections.abc import Callable, Iterable, Iterator
 import numpy as np
 import xarray as xr
 
+from .concurrent_chunks import as_completed_in_threads, side_by_side
 from .engine import SAMPLED, RawResult, chunk_points, mark_error_above_tol, n_samples, run_points
 from .journal import Journal
 from .model_choice import ModelChoice, choose_stop_models
@@ -68,23 +69,14 @@ def in_process(scene: Scene, plan: Plan, todo: Iterable[tuple[int, np.ndarray]],
     safe to enter from two threads at once, the chunks one after another in this thread (numba's threads inside
     each); else the first chunk so, then the others side by side, one chunk per numba thread (where there are enough
     of them: concurrent_chunks.MIN_CHUNKS_PER_THREAD)."""
-    from .concurrent_chunks import side_by_side
-
     todo = list(todo)
     for n, (i, points) in enumerate(todo):
         yield i, task(scene, plan.take(points), points)
         workers = side_by_side(len(todo) - n - 1)
         if workers > 1:
-            yield from concurrently(scene, plan, iter(todo[n + 1:]), task, workers)
+            rest = iter(todo[n + 1:])
+            yield from as_completed_in_threads(lambda pts: task(scene, plan.take(pts), pts), rest, workers)
             return
-
-
-def concurrently(scene: Scene, plan: Plan, todo: Iterator[tuple[int, np.ndarray]], task, workers: int):
-    """:func:`in_process`'s side-by-side part: ``task`` on the chunks of ``todo`` in ``workers`` threads
-    (sweep/concurrent_chunks.py), as they complete."""
-    from .concurrent_chunks import as_completed_in_threads
-
-    yield from as_completed_in_threads(lambda points: task(scene, plan.take(points), points), todo, workers)
 
 
 def run_chunks(scene: Scene, plan: Plan, chunk_size: int | None, journal: Journal | None,
