@@ -46,7 +46,7 @@ from scipy.optimize import least_squares  # noqa: E402
 
 import sweep  # noqa: E402
 from sweep.fit import Curve  # noqa: E402
-from sweep.fit import lockstep as _lockstep  # noqa: E402
+from sweep.fit import stack as _stack  # noqa: E402
 from sweep.fit.space import make_space  # noqa: E402
 
 DEFAULT_OUT = HERE / "results" / "fit.json"
@@ -79,24 +79,24 @@ def make_curves(n: int) -> tuple[list[Curve], list[dict]]:
 
 
 class PointCounter:
-    """Counts the engine's calls and points inside sweep.fit (wraps the forward model the lockstep calls)."""
+    """Counts the engine's calls and points inside sweep.fit (wraps the forward model the problem stack calls)."""
 
     def __init__(self):
         self.calls = self.points = 0
 
     def __enter__(self):
-        self._orig = _lockstep.forward
+        self._orig = _stack.forward
 
         def counted(points, *args, **kwargs):
             self.calls += 1
             self.points += points.n
             return self._orig(points, *args, **kwargs)
 
-        _lockstep.forward = counted
+        _stack.forward = counted
         return self
 
     def __exit__(self, *exc):
-        _lockstep.forward = self._orig
+        _stack.forward = self._orig
 
 
 def engine_fit(curves: list[Curve]) -> dict:

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep.fit import Curve, RelaxedSlips, lockstep
+from sweep.fit import Curve, RelaxedSlips, stack
 
 T = np.array([0.1, 1.0, 10.0, 100.0])
 X = np.array([1e-8, 5e-8, 1e-7, 1.2e-7])
@@ -18,7 +18,7 @@ def no_engine(monkeypatch):
     """Any engine run fails the test: the errors must come before any work."""
     def forbidden(*args, **kwargs):
         raise AssertionError("the engine ran before the input was checked")
-    monkeypatch.setattr(lockstep, "forward", forbidden)
+    monkeypatch.setattr(stack, "forward", forbidden)
 
 
 def _fit(data, **kw):

@@ -1,7 +1,7 @@
 """sweep.fit(...): fit the friction parameters to relaxation curves and relaxed slips, with their uncertainty.
 
-Stages (docs/fit.md), each one lockstep round-set over every problem (a sample's data sets sharing one parameter
-set; sweep.fit.lockstep merges their engine runs):
+Stages (docs/fit.md), each run over every problem at once (a sample's data sets sharing one parameter set;
+sweep.fit.stack merges their engine runs, sweep.fit.levenberg iterates every task in lockstep):
 
 1. checks before any work (sweep.fit.data, .space, .problem, .checks);
 2. global stage: a coarse sweep of the free parameters over their bounds (sweep.fit.globalstage), engine at
@@ -25,14 +25,14 @@ from ..params import FrictionParams
 from ..presets import presets
 from .checks import check_problems
 from .data import Data
-from .globalstage import grid_axes, search
-from .local import refine
-from .lockstep import Lockstep
+from .globalstage import grid_axes, search_all
+from .local import refine_all
 from .outcome import FitOutcome
 from .problem import make_problems
 from .profiles import profile_all
 from .result import build_fit_dataset
 from .space import make_space
+from .stack import ProblemStack
 from .uncertainty import covariance, interval, label, noise_variance, threshold
 
 __all__ = ["fit", "run_fit"]
@@ -77,15 +77,15 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
     n_sets = len(problems) * (int(np.prod([a.size for a in grid_axes(space)])) + 1)
     say(f"global stage: {len(problems)} problem(s), {n_sets} parameter sets on the grid")
     t0 = time.perf_counter()
-    ls = Lockstep(global_rtol, space.V0, space.g)
-    globals_ = ls.map(search, problems)
-    rounds["global"], seconds["global"] = ls.rounds, time.perf_counter() - t0
+    stack = ProblemStack(problems, global_rtol)
+    globals_ = search_all(stack)
+    rounds["global"], seconds["global"] = stack.rounds, time.perf_counter() - t0
 
     say(f"least squares from the best grid points ({time.perf_counter() - t0:.1f} s so far)")
     t1 = time.perf_counter()
-    ls = Lockstep(rtol, space.V0, space.g)
-    fits = ls.map(lambda pr_g, ev: refine(pr_g[0], pr_g[1].theta, ev), list(zip(problems, globals_)))
-    rounds["least_squares"], seconds["least_squares"] = ls.rounds, time.perf_counter() - t1
+    stack = ProblemStack(problems, rtol)
+    fits = refine_all(stack, [g.theta for g in globals_])
+    rounds["least_squares"], seconds["least_squares"] = stack.rounds, time.perf_counter() - t1
 
     s2 = [noise_variance(f.rss, pr.n_residuals, space.p, pr.noise_given) for pr, f in zip(problems, fits)]
     covs = [covariance(f.jac, s) for f, s in zip(fits, s2)]
@@ -95,9 +95,9 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
         say(f"profile likelihoods of {space.p} parameter(s) x {len(problems)} problem(s) "
             f"({time.perf_counter() - t0:.1f} s so far)")
         t2 = time.perf_counter()
-        ls = Lockstep(rtol, space.V0, space.g)
-        profs = profile_all(problems, [f.theta for f in fits], [f.rss for f in fits], covs, s2, crit, ls)
-        rounds["profiles"], seconds["profiles"] = ls.rounds, time.perf_counter() - t2
+        stack.rounds = 0
+        profs = profile_all(problems, [f.theta for f in fits], [f.rss for f in fits], covs, s2, crit, stack)
+        rounds["profiles"], seconds["profiles"] = stack.rounds, time.perf_counter() - t2
         ivs, labels = [], []
         for q, f in enumerate(fits):
             row = [interval(f.theta[j], pf.values, (pf.rss - f.rss) / s2[q], crit[q]) for j, pf in enumerate(profs[q])]

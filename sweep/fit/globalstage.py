@@ -1,11 +1,12 @@
 """Global stage: a coarse sweep of the free parameters over their bounds, so that no local minimum is taken.
 
-Level 1 is a grid over the bound box (GRID_POINTS[p] values per parameter: log-spaced for the positive ones,
-linear otherwise) plus the starting values; level 2 a finer grid (ZOOM_POINTS per parameter) spanning one level-1
-spacing either side of the best level-1 point. Each problem posts both its levels as one batch each (with many
-problems, all their grids go into the same engine calls). Parameter sets under which some stop of the data would
-start from unstable sliding (chi <= mu1, eq. 3: no steady sliding before the stop) are excluded. The level-1
-misfit (sum of squared weighted residuals) is kept as the misfit landscape of the output.
+A grid over the bound box (GRID_POINTS[p] values per parameter: log-spaced for the positive ones, linear otherwise)
+plus the starting values, for every problem in one engine round (sweep.fit.stack: problems that share (K/M, V),
+times and bounds share their grid, solved once). The least squares start from the best of them: a finer grid around
+it (a second level of 5^p sets a problem) cost more forward solves than the Levenberg-Marquardt iterations it saved.
+Parameter sets under which some stop of the data would start from unstable sliding (chi <= mu1, eq. 3: no steady
+sliding before the stop) are excluded. The misfit (sum of squared weighted residuals) over the grid is kept as the
+misfit landscape of the output.
 """
 
 from __future__ import annotations
@@ -14,15 +15,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .local import Evaluate
-from .problem import Problem
 from .space import ParamSpace
+from .stack import ProblemStack
 
-__all__ = ["GRID_POINTS", "GlobalResult", "grid_axes", "search"]
+__all__ = ["GRID_POINTS", "GlobalResult", "grid_axes", "search_all"]
 
 GRID_POINTS = {1: 41, 2: 15, 3: 9, 4: 6, 5: 5}
 """Level-1 grid values per free parameter, by the number of free parameters (41, 225, 729, 1296, 3125 sets)."""
-ZOOM_POINTS = 5
 
 
 @dataclass
@@ -45,40 +44,24 @@ def grid_axes(space: ParamSpace) -> list[np.ndarray]:
     return [_spaced(lo, hi, n, log) for lo, hi, log in zip(space.lower, space.upper, space.log)]
 
 
-def _zoom_axes(space: ParamSpace, axes: list[np.ndarray], best: tuple[int, ...]) -> list[np.ndarray]:
-    out = []
-    for ax, i, log in zip(axes, best, space.log):
-        lo, hi = ax[max(i - 1, 0)], ax[min(i + 1, ax.size - 1)]
-        out.append(_spaced(lo, hi, ZOOM_POINTS, log))
-    return out
-
-
-def _misfit(problem: Problem, sets: np.ndarray, evaluate: Evaluate) -> np.ndarray:
-    res = evaluate(problem.points(sets))
-    r = problem.residuals(res, sets.shape[0])
-    rss = np.sum(r * r, axis=1)
-    return np.where(problem.stable(res, sets.shape[0]), rss, np.nan)
-
-
 def _product(axes: list[np.ndarray]) -> np.ndarray:
     return np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=1)
 
 
-def search(problem: Problem, evaluate: Evaluate) -> GlobalResult:
-    """Both levels for one problem (run it inside :class:`sweep.fit.lockstep.Lockstep` to batch many)."""
-    sp = problem.space
+def search_all(stack: ProblemStack) -> list[GlobalResult]:
+    """The grid and the start for every problem of ``stack`` (engine at its rtol), in one engine round."""
+    sp = stack.space
     axes = grid_axes(sp)
     sets = np.vstack((_product(axes), sp.start))
-    rss = _misfit(problem, sets, evaluate)
-    landscape = rss[:-1].reshape([a.size for a in axes])
-    candidates = [(rss, sets)]
-    if np.isfinite(landscape).any():
-        best = np.unravel_index(np.nanargmin(landscape), landscape.shape)
-        zoom = _product(_zoom_axes(sp, axes, tuple(int(i) for i in best)))
-        candidates.append((_misfit(problem, zoom, evaluate), zoom))
-    all_rss = np.concatenate([c[0] for c in candidates])
-    all_sets = np.vstack([c[1] for c in candidates])
-    if not np.isfinite(all_rss).any():  # cannot happen for validated data (sweep.fit.checks): keep the start
-        return GlobalResult(sp.start.copy(), float("nan"), landscape)
-    i = int(np.nanargmin(all_rss))
-    return GlobalResult(all_sets[i].copy(), float(all_rss[i]), landscape)
+    Q = len(stack.problems)
+    rss, stable = stack.misfits(np.arange(Q), np.broadcast_to(sets, (Q,) + sets.shape))
+    rss = np.where(stable, rss, np.nan)
+    out: list[GlobalResult] = []
+    for q in range(Q):
+        landscape = rss[q, :-1].reshape([a.size for a in axes])
+        if not np.isfinite(rss[q]).any():  # cannot happen for validated data (sweep.fit.checks): keep the start
+            out.append(GlobalResult(sp.start.copy(), float("nan"), landscape))
+            continue
+        i = int(np.nanargmin(rss[q]))
+        out.append(GlobalResult(sets[i].copy(), float(rss[q, i]), landscape))
+    return out

@@ -8,8 +8,8 @@ value gets the bracket's midpoint: the interval interpolates the crossing linear
 for a quadratic misfit, but far off where a profile is flat and then steep (a parameter traded against others
 inside their bounds; the standard error is then useless and the points are (upper - lower)/6 apart). Every profile
 point of every
-parameter of every problem is one least-squares task: a round runs them all in lockstep, their engine runs merged
-(sweep.fit.lockstep). Each profile point starts from the best fit moved along the covariance's regression line
+parameter of every problem is one least-squares task (forward-difference Jacobians, sweep.fit.levenberg.HOLD): a
+round of profile points runs them all in lockstep, one engine round per iteration (sweep.fit.stack). Each profile point starts from the best fit moved along the covariance's regression line
 (theta_k = best_k + C_kj/C_jj (value - best_j)), so a few iterations suffice.
 """
 
@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .local import refine
-from .lockstep import Lockstep
+from .levenberg import HOLD, solve
 from .problem import Problem
+from .stack import ProblemStack
 
 __all__ = ["EXTEND", "OFFSETS", "REFINE_FRACTION", "REFINE_ROUNDS", "Profile", "profile_all"]
 
@@ -74,19 +74,20 @@ def _start(best: np.ndarray, cov: np.ndarray, j: int, value: float) -> np.ndarra
 
 
 def profile_all(problems: list[Problem], best: list[np.ndarray], best_rss: list[float], covs: list[np.ndarray],
-                s2: list[float], crit: float | list[float], lockstep: Lockstep) -> list[list[Profile]]:
+                s2: list[float], crit: float | list[float], stack: ProblemStack) -> list[list[Profile]]:
     """Profiles of every free parameter of every problem (problem x parameter); ``crit`` the threshold per problem
     (uncertainty.threshold), ``s2`` the noise variance per problem."""
     crits = crit if isinstance(crit, list) else [crit] * len(problems)
     points: dict[tuple[int, int], list[tuple[float, float]]] = {}
 
     def run(tasks):
-        def one(task, evaluate):
-            q, j, value = task
-            fit = refine(problems[q], _start(best[q], covs[q], j, value), evaluate, hold={j: value})
-            return fit.rss
-        for (q, j, value), rss in zip(tasks, lockstep.map(one, tasks)):
-            points.setdefault((q, j), []).append((value, rss))
+        hold = np.zeros((len(tasks), problems[0].space.p), bool)
+        hold[np.arange(len(tasks)), [j for _, j, _ in tasks]] = True
+        sol = solve(stack, np.array([q for q, _, _ in tasks]),
+                    np.array([_start(best[q], covs[q], j, value) for q, j, value in tasks]), hold=hold,
+                    central=False, tol=HOLD)
+        for (q, j, value), rss in zip(tasks, sol.rss):
+            points.setdefault((q, j), []).append((value, float(rss)))
 
     sigmas = {}
     tasks = []

@@ -1,0 +1,228 @@
+"""Many small bounded least-squares problems at once: a projected Levenberg-Marquardt method vectorised over tasks.
+
+Every task (a curve's fit, a profile point) minimises its sum of squared weighted residuals over its moving
+parameters (the free parameters not held fixed), within the bound box. One round of :class:`ProblemStack` serves
+one iteration of every unfinished task: each posts its trial parameter set and the finite-difference neighbours of
+that set (the Jacobian is computed speculatively, at the trial point, so that an iteration costs one engine round).
+Then, per task, in scaled variables z = theta/scale (scale: ParamSpace.scale):
+
+* g = J^T r, H = J^T J; a moving parameter at a bound whose gradient points out of the box is frozen for the step;
+* the step solves (H + lambda diag(H)) dz = -g (Marquardt 1963), and the trial point is z + dz clipped to the box;
+* the trial is accepted where it lowers the misfit; lambda then shrinks by max(1/3, 1 - (2 rho - 1)^3) (rho: actual
+  over predicted decrease), else it grows by nu, and nu doubles (Nielsen 1999; Madsen, Nielsen & Tingleff, Methods
+  for non-linear least squares problems, 2004, sec. 3.2);
+* a task stops when its predicted or actual decrease falls below ftol x the misfit, when the step falls below xtol
+  (relative, scaled variables), or after max_rounds rounds (status 0).
+
+Jacobians: central differences d r/d theta_j = (r(theta + h_j) - r(theta - h_j))/(2 h_j), h_j = FD_STEP x scale_j
+(one-sided where a bound is closer), or forward differences (``central=False``, p + 1 sets instead of 2p + 1: a
+profile point keeps only its misfit, which the Jacobian's accuracy does not change; it steers the steps only).
+With the engine at rtol 1e-6 the derivative carries a relative error ~rtol/FD_STEP ~ 1e-3 and a truncation error
+~FD_STEP^2 ~ 1e-6, far below what the noise of a measured curve (>~1e-3) resolves.
+
+Each task's numbers depend only on its own residuals: the sums over residuals run per task, over groups of tasks of
+the same length (sweep.fit.stack pads shorter problems with zeros, which would change the rounding of a pairwise
+sum), and the small linear systems are solved one per task; so a task takes exactly the path it would take alone.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .stack import ProblemStack
+
+__all__ = ["FD_STEP", "FIT", "HOLD", "Solutions", "Tolerances", "solve"]
+
+FD_STEP = 1e-3
+"""Finite-difference step relative to each parameter's scale (ParamSpace.scale)."""
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Stopping rules: relative decrease of the misfit (``ftol``), relative step in scaled variables (``xtol``),
+    rounds at most (``max_rounds``)."""
+
+    ftol: float
+    xtol: float
+    max_rounds: int
+
+
+FIT = Tolerances(ftol=1e-10, xtol=1e-9, max_rounds=100)
+"""A best fit, whose Jacobian gives the covariance."""
+HOLD = Tolerances(ftol=1e-8, xtol=1e-6, max_rounds=100)
+"""A profile point, whose misfit only is kept: its rise over the best fit is read against 3.84 to ~1e-3, i.e. to
+~1e-5 of a misfit of ~n = 200 (ftol 1e-8 is 1e-6 of it), and a parameter 1e-6 (relative, xtol) off its optimum
+changes the misfit by ~(1e-6/0.01)^2 for a 1 % standard error."""
+LAMBDA0 = 1e-3
+"""Initial damping lambda (relative to diag(J^T J), Marquardt's scaling)."""
+STATUS = {0: "max_rounds reached", 1: "nothing to move", 2: "ftol: the misfit no longer decreases",
+          3: "xtol: the step is below xtol"}
+
+
+@dataclass
+class Solutions:
+    """Per task: best parameter set (T, p) (held parameters at their values), its weighted residuals (T, n_max), the
+    Jacobian over every moving parameter (T, n_max, m) (central ones only; None otherwise), misfit (T,), function
+    evaluations (rounds in which the task posted sets), whether sliding was stable before every stop, and the status
+    (a key of STATUS)."""
+
+    theta: np.ndarray
+    residuals: np.ndarray
+    jac: np.ndarray | None
+    rss: np.ndarray
+    nfev: np.ndarray
+    stable: np.ndarray
+    status: np.ndarray
+
+
+def _neighbours(theta: np.ndarray, cols: np.ndarray, stack: ProblemStack, central: bool
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """(sets (T, S, p): theta then its finite-difference neighbours along ``cols`` (T, m), widths (T, m): signed
+    distance from the lower neighbour to the upper one)."""
+    sp = stack.space
+    T, m = cols.shape
+    ti = np.arange(T)[:, None]
+    base = theta[ti, cols]
+    h = FD_STEP * sp.scale[cols]
+    up, down = np.minimum(base + h, sp.upper[cols]), np.maximum(base - h, sp.lower[cols])
+    S = 1 + (2 if central else 1) * m
+    sets = np.repeat(theta[:, None, :], S, axis=1)
+    k = np.arange(m)[None, :]
+    if central:
+        sets[ti, 1 + 2 * k, cols] = up
+        sets[ti, 2 + 2 * k, cols] = down
+        return sets, up - down
+    one = np.where(up > base, up, down)
+    sets[ti, 1 + k, cols] = one
+    return sets, one - base
+
+
+def _jacobian(r: np.ndarray, widths: np.ndarray, central: bool) -> np.ndarray:
+    """(T, n, m) from the residuals (T, S, n) of :func:`_neighbours`' sets."""
+    d = r[:, 1::2] - r[:, 2::2] if central else r[:, 1:] - r[:, :1]
+    return np.swapaxes(d / widths[:, :, None], 1, 2)
+
+
+def _sumsq(r: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Per task, sum of r^2 over its own n residuals (tasks grouped by n: the same pairwise sum as alone)."""
+    out = np.empty(r.shape[0])
+    for length in np.unique(n):
+        pick = np.flatnonzero(n == length)
+        out[pick] = np.sum(r[pick, :length] ** 2, axis=1)
+    return out
+
+
+def _normal_equations(J: np.ndarray, r: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(g = J^T r (T, m), H = J^T J (T, m, m)), summed per task over its own n residuals."""
+    T, _, m = J.shape
+    g, H = np.empty((T, m)), np.empty((T, m, m))
+    for length in np.unique(n):
+        pick = np.flatnonzero(n == length)
+        Jp = J[pick, :length]
+        g[pick] = np.sum(Jp * r[pick, :length, None], axis=1)
+        H[pick] = np.sum(Jp[:, :, :, None] * Jp[:, :, None, :], axis=1)
+    return g, H
+
+
+def _predicted(g: np.ndarray, H: np.ndarray, dz: np.ndarray) -> np.ndarray:
+    """Decrease of the misfit sum r^2 that the linear model predicts for the step dz (twice that of r^2/2)."""
+    return -(2.0 * np.sum(g * dz, axis=1) + np.einsum("ti,tij,tj->t", dz, H, dz))
+
+
+def _within_bounds(z, dz, lo, hi, g, H) -> tuple[np.ndarray, np.ndarray]:
+    """(step, predicted decrease) kept inside the box: the step projected onto the box where that still decreases
+    the linear model, else the step shortened along its direction until it meets the first bound (a Levenberg-
+    Marquardt step decreases the model all along its direction, so the shortened step always does)."""
+    inside = np.all((z + dz >= lo) & (z + dz <= hi), axis=1)
+    proj = np.clip(z + dz, lo, hi) - z
+    with np.errstate(divide="ignore", invalid="ignore"):
+        room = np.where(dz > 0, (hi - z) / dz, np.where(dz < 0, (lo - z) / dz, np.inf))
+    short = dz * np.clip(np.min(room, axis=1), 0.0, 1.0)[:, None]
+    p_proj, p_short = _predicted(g, H, proj), _predicted(g, H, short)
+    use_proj = inside | (p_proj > 0)
+    return np.where(use_proj[:, None], proj, short), np.where(use_proj, p_proj, p_short)
+
+
+def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np.ndarray | None = None,
+          central: bool = True, tol: Tolerances = FIT) -> Solutions:
+    """Minimise every task's misfit; task i belongs to problem ``problem[i]`` and starts at ``theta0[i]`` (clipped
+    to the bounds). ``hold`` (T, p) bool marks parameters held at their start (a profile point); every task must
+    move the same number of parameters."""
+    sp = stack.space
+    problem = np.asarray(problem, dtype=np.intp)
+    T, p = len(problem), sp.p
+    theta = np.clip(np.array(theta0, dtype=float).reshape(T, p), sp.lower, sp.upper)
+    hold = np.zeros((T, p), bool) if hold is None else np.asarray(hold, dtype=bool)
+    moving = ~hold
+    m = int(moving[0].sum()) if T else 0
+    if T and np.any(moving.sum(axis=1) != m):
+        raise ValueError("every task must move the same number of parameters")
+    cols = np.nonzero(moving)[1].reshape(T, m)
+    n = stack.n_res[problem]
+    scale = sp.scale[cols]  # (T, m)
+    lo, hi = sp.lower[cols] / scale, sp.upper[cols] / scale
+
+    def post(idx, th):
+        sets, widths = _neighbours(th, cols[idx], stack, central)
+        r, ok = stack.residuals(problem[idx], sets)
+        return r[:, 0], _jacobian(r, widths, central) * scale[idx][:, None, :], ok[:, 0]
+
+    status = np.ones(T, np.intp) if m == 0 else np.zeros(T, np.intp)
+    nfev = np.ones(T, np.intp)
+    if m == 0:
+        r, ok = stack.residuals(problem, theta[:, None, :])
+        return Solutions(theta, r[:, 0], None, _sumsq(r[:, 0], n), nfev, ok[:, 0], status)
+    r, J, stable = post(np.arange(T), theta)
+    rss = _sumsq(r, n)
+    g, H = _normal_equations(J, r, n)
+    lam = np.full(T, LAMBDA0)
+    nu = np.full(T, 2.0)
+    active = np.ones(T, bool)
+    eye = np.eye(m, dtype=bool)
+    for _ in range(tol.max_rounds):
+        a = np.flatnonzero(active)
+        if not a.size:
+            break
+        z = theta[a[:, None], cols[a]] / scale[a]
+        ga, Ha = g[a], H[a]
+        frozen = ((z <= lo[a]) & (ga > 0)) | ((z >= hi[a]) & (ga < 0))
+        free = ~frozen
+        Hf = np.where(free[:, :, None] & free[:, None, :], Ha, 0.0)
+        diag = np.diagonal(Hf, axis1=1, axis2=2)
+        floor = 1e-12 * np.maximum(np.max(diag, axis=1, keepdims=True), 1e-300)
+        damped = Hf + np.where(eye, (lam[a, None] * np.maximum(diag, floor))[:, :, None] + frozen[:, :, None], 0.0)
+        dz = np.linalg.solve(damped, -np.where(free, ga, 0.0)[:, :, None])[:, :, 0]
+        dz, pred = _within_bounds(z, dz, lo[a], hi[a], ga, Ha)
+        tiny = np.max(np.abs(dz) / (np.abs(z) + tol.xtol), axis=1) <= tol.xtol
+        flat = pred <= tol.ftol * rss[a]
+        stop = tiny | flat
+        status[a[stop]] = np.where(tiny[stop], 3, 2)
+        active[a[stop]] = False
+        go = ~stop
+        a, dz, pred, z = a[go], dz[go], pred[go], z[go]
+        if not a.size:
+            break
+        trial = theta[a].copy()
+        ca, rows = cols[a], np.arange(a.size)[:, None]
+        moved = np.clip((z + dz) * scale[a], sp.lower[ca], sp.upper[ca])
+        trial[rows, ca] = np.where(dz == 0.0, trial[rows, ca], moved)  # z * scale may miss theta by an ulp
+        rt, Jt, st = post(a, trial)
+        nfev[a] += 1
+        rss_t = _sumsq(rt, n[a])
+        better = np.isfinite(rss_t) & (rss_t < rss[a])
+        rho = (rss[a] - rss_t) / np.where(pred > 0, pred, np.inf)
+        acc, rej = a[better], a[~better]
+        decrease = rss[acc] - rss_t[better]
+        theta[acc], r[acc], J[acc], stable[acc] = trial[better], rt[better], Jt[better], st[better]
+        g[acc], H[acc] = _normal_equations(Jt[better], rt[better], n[acc])
+        lam[acc] *= np.maximum(1.0 / 3.0, 1.0 - (2.0 * rho[better] - 1.0) ** 3)
+        nu[acc] = 2.0
+        lam[rej] *= nu[rej]
+        nu[rej] *= 2.0
+        done = decrease <= tol.ftol * rss[acc]
+        rss[acc] = rss_t[better]
+        status[acc[done]] = 2
+        active[acc[done]] = False
+    return Solutions(theta, r, J / scale[:, None, :] if central else None, rss, nfev, stable, status)

@@ -1,0 +1,196 @@
+"""Every problem of a fit side by side: the residuals of many parameter sets of many problems from one engine round.
+
+A round takes tasks (each belongs to one problem) with S parameter sets each, shape (T, S, p), and returns their
+weighted residuals (T, S, n) and whether steady sliding was stable before every stop (T, S). Nothing in it loops
+over tasks or problems in Python: the problems' layouts (which forward row and which sampled time each residual
+reads, sweep.fit.problem) are concatenated once into index tables, and a round is a few numpy gathers around the
+engine calls. That is what makes a fit of 100 curves cost about its forward solves (with a scipy least_squares per
+task in a thread of its own, 95 % of a 100-curve fit was Python).
+
+Each distinct forward point is solved once: a point is keyed by its six parameters and its row of times (rows of
+times are numbered once, when the stack is built), so curves that share (K/M, V) and times share their global grid,
+and profile and perturbed sets that repeat are solved once. Points with sampled times and relaxed-slip-only points go
+to separate engine calls (sweep.fit.forward), so a problem's numbers never depend on the problems beside it: a
+point's numbers do not depend on its batch (sweep/integrate/batch.py), and a problem's residual rows are reduced only
+with those of problems of the same length (sweep.fit.levenberg). Many curves in one call give, bit for bit, the
+estimates of one call per curve.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from .data import Curve
+from .forward import ForwardPoints, forward
+from .problem import MODEL_FAILED, Problem
+
+__all__ = ["ProblemStack", "distinct_rows"]
+
+CHUNK = 2**17
+"""Residuals formed at a time (1 MB temporaries)."""
+
+
+def distinct_rows(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(index of the first of each distinct row of the 2-D float array ``a``, the number of each row's distinct row):
+    rows compared by their bytes, one memcmp-sorted key a row (np.unique(axis=0) compares a row field by field, ~50x
+    slower on rows of 200 times). Rows equal in value but not in bits (0.0 and -0.0) stay apart: they are solved
+    twice, with the same numbers."""
+    rows = np.ascontiguousarray(a).reshape(a.shape[0], -1)
+    if rows.shape[1] == 0:  # no columns: every row is the same
+        return np.zeros(min(1, rows.shape[0]), np.intp), np.zeros(rows.shape[0], np.intp)
+    keys = rows.view(np.dtype((np.void, rows.dtype.itemsize * rows.shape[1]))).reshape(-1)
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    return first, inverse.reshape(-1)
+
+
+class ProblemStack:
+    """The problems of a fit (one shared :class:`sweep.fit.space.ParamSpace`) and their engine settings.
+
+    ``rounds`` counts the engine rounds (a round is one or two engine calls: sampled and relaxed-slip points);
+    ``on_round`` (if given) is called after each with (round number, distinct points solved).
+    """
+
+    def __init__(self, problems: Sequence[Problem], rtol: float,
+                 on_round: Callable[[int, int], None] | None = None):
+        self.problems = list(problems)
+        self.space = self.problems[0].space
+        self.rtol, self.on_round, self.rounds = rtol, on_round, 0
+        sp = self.space
+        self.V0, self.g = sp.V0, sp.g
+        self.rows = np.array([pr.rows for pr in self.problems])
+        self.row_start = np.concatenate(([0], np.cumsum(self.rows)[:-1]))
+        self.n_res = np.array([pr.n_residuals for pr in self.problems])
+        n_max, n_t = int(self.n_res.max()), max(pr.n_t for pr in self.problems)
+        km, v, times, sampled = [], [], [], []
+        res_row = np.zeros((len(self.problems), n_max), np.intp)
+        res_col = np.full((len(self.problems), n_max), -1, np.intp)
+        self.observed = np.zeros((len(self.problems), n_max))
+        self.weights = np.zeros((len(self.problems), n_max))  # 0 on the padding beyond a problem's n_residuals
+        for q, pr in enumerate(self.problems):
+            k, vv = pr.stiffness_velocity()
+            km.append(k)
+            v.append(vv)
+            r = i = 0
+            for d in pr.data:
+                if isinstance(d, Curve):
+                    row_t = np.full(n_t, d.t[-1])  # padded with the last time: no new time, no extra work
+                    row_t[:d.n] = d.t
+                    times.append(row_t)
+                    sampled.append(True)
+                    res_row[q, i:i + d.n], res_col[q, i:i + d.n] = r, np.arange(d.n)
+                    r += 1
+                else:
+                    times += [np.zeros(n_t)] * d.n
+                    sampled += [False] * d.n
+                    res_row[q, i:i + d.n] = r + np.arange(d.n)
+                    r += d.n
+                i += d.n
+            self.observed[q, :i], self.weights[q, :i] = pr.observed, pr.weights
+        self.row_km, self.row_v = np.concatenate(km), np.concatenate(v)
+        self.row_sampled = np.array(sampled)
+        first, self.row_tid = distinct_rows(np.array(times).reshape(len(times), n_t))
+        self.templates = np.array(times).reshape(len(times), n_t)[first]
+        self.res_row, self.res_col = res_row, res_col
+        self.n_max = n_max
+        # problems with the same rows (K/M, V, times) and residual order share a layout, hence their model values
+        layout_keys = [np.concatenate((k, vv, self.row_tid[s0:s0 + nr], self.row_sampled[s0:s0 + nr], res_row[q],
+                                       res_col[q])).astype(float)
+                       for q, (k, vv, s0, nr) in enumerate(zip(km, v, self.row_start, self.rows))]
+        width = max(len(k) for k in layout_keys)
+        padded = np.array([np.concatenate((k, np.full(width - len(k), np.nan), [len(k)])) for k in layout_keys])
+        self.representative, self.layout = distinct_rows(padded)
+
+    @property
+    def p(self) -> int:
+        return self.space.p
+
+    def residuals(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Weighted residuals (T, S, n_max) [noise units] of the parameter sets ``sets`` (T, S, p) of tasks of the
+        problems ``problem`` (T,), MODEL_FAILED where the model gave no number and 0 beyond a problem's residuals;
+        and per set whether sliding was stable before every stop (T, S) (eq. 3)."""
+        problem = np.asarray(problem, dtype=np.intp)
+        model, stable, block_of = self._blocks(problem, sets)
+        T, S = sets.shape[:2]
+        r = np.empty((T, S, self.n_max))
+        for t0, t1 in self._chunks(T, S):
+            r[t0:t1] = self._weighted(problem[t0:t1], model, block_of[t0 * S:t1 * S])
+        return r, stable[block_of].reshape(T, S)
+
+    def misfits(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Sums of squared weighted residuals (T, S) of :meth:`residuals`, without holding them all at once (the
+        global stage: 100 curves x 730 sets x 200 samples would be 117 MB a temporary)."""
+        problem = np.asarray(problem, dtype=np.intp)
+        model, stable, block_of = self._blocks(problem, sets)
+        T, S = sets.shape[:2]
+        rss = np.empty((T, S))
+        for t0, t1 in self._chunks(T, S):
+            r = self._weighted(problem[t0:t1], model, block_of[t0 * S:t1 * S])
+            for k in range(t1 - t0):  # each task over its own residuals: the same sums as sweep.fit.levenberg's
+                rss[t0 + k] = np.sum(r[k, :, :self.n_res[problem[t0 + k]]] ** 2, axis=1)
+        return rss, stable[block_of].reshape(T, S)
+
+    def _chunks(self, T: int, S: int) -> list[tuple[int, int]]:
+        """Task ranges of ~CHUNK residuals (temporaries that stay in cache)."""
+        per = max(1, CHUNK // max(1, S * self.n_max))
+        return [(t0, min(T, t0 + per)) for t0 in range(0, T, per)]
+
+    def _blocks(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(model values of the distinct (layout, set) blocks (U, n_max), their stability (U,), the block of each set
+        (T S,)): a parameter set's model values depend on its problem's layout only, so the global stage's grid is
+        modelled once for every problem of a layout."""
+        T, S, p = sets.shape
+        full = self.space.full(sets.reshape(T * S, p))
+        params = np.column_stack([full[k] for k in ("A", "m1", "m2", "D0", "K_over_M_factor")])
+        first, block_of = distinct_rows(np.column_stack((np.repeat(self.layout[problem], S).astype(float), params)))
+        model, stable = self._model(self.layout[np.repeat(problem, S)[first]], params[first])
+        return model, stable, block_of
+
+    def _weighted(self, problem: np.ndarray, model: np.ndarray, block_of: np.ndarray) -> np.ndarray:
+        """Residual rows (T, S, n_max) of the tasks ``problem`` from the model rows ``model[block_of]``."""
+        T = problem.size
+        w = self.weights[problem][:, None, :]
+        with np.errstate(invalid="ignore", over="ignore"):
+            r = (model[block_of].reshape(T, -1, self.n_max) - self.observed[problem][:, None, :]) * w
+        return np.where(np.isfinite(r), r, MODEL_FAILED) * (w > 0)
+
+    def _model(self, layout: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Model values (U, n_max) [m] in residual order, and stability before every stop (U,), of U blocks: each a
+        layout and a parameter set (A, m1, m2, D0, K/M factor)."""
+        U = layout.size
+        q = self.representative[layout]
+        rows = self.rows[q]
+        block_start = np.concatenate(([0], np.cumsum(rows)[:-1]))
+        block = np.repeat(np.arange(U), rows)
+        row = self.row_start[q][block] + np.arange(block.size) - block_start[block]
+        pb = params[block]
+        keys = np.column_stack((pb[:, :4], self.row_km[row] * pb[:, 4], self.row_v[row], self.row_tid[row]))
+        first, inverse = distinct_rows(keys)
+        x, dx, stable = self._solve(keys[first], self.row_sampled[row[first]])
+        d = inverse[block_start[:, None] + self.res_row[q]]  # (U, n_max) distinct point of each residual
+        col = self.res_col[q]
+        if not x.shape[1]:  # relaxed slips only: no sampled column to read
+            x = np.zeros((x.shape[0], 1))
+        model = np.where(col >= 0, x[d, np.maximum(col, 0)], dx[d])
+        ok = np.logical_and.reduceat(stable[inverse], block_start) if block.size else np.ones(U, bool)
+        return model, ok
+
+    def _solve(self, keys: np.ndarray, sampled: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Slip at the template times, relaxed slip and stability of the distinct points ``keys`` (A, m1, m2, D0,
+        K/M, V, time row): the sampled ones in one engine call, the relaxed-slip-only ones in another."""
+        n = keys.shape[0]
+        x, dx, stable = np.full((n, self.templates.shape[1]), np.nan), np.full(n, np.nan), np.zeros(n, bool)
+        for pick, with_times in ((np.flatnonzero(sampled), True), (np.flatnonzero(~sampled), False)):
+            if not pick.size:
+                continue
+            k = keys[pick]
+            t = self.templates[k[:, 6].astype(np.intp)] if with_times else np.zeros((pick.size, 0))
+            res = forward(ForwardPoints(*k[:, :6].T, t=t), rtol=self.rtol, V0=self.V0, g=self.g)
+            if with_times:
+                x[pick] = res.x
+            dx[pick], stable[pick] = res.dx_inf, res.stable
+        self.rounds += 1
+        if self.on_round is not None:
+            self.on_round(self.rounds, n)
+        return x, dx, stable
