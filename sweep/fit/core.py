@@ -96,7 +96,8 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
             f"({time.perf_counter() - t0:.1f} s so far)")
         t2 = time.perf_counter()
         stack.rounds = 0
-        profs = profile_all(problems, [f.theta for f in fits], [f.rss for f in fits], covs, s2, crit, stack)
+        profs = profile_all(problems, [f.theta for f in fits], [f.rss for f in fits], covs, s2, crit, stack,
+                            [f.jac for f in fits])
         rounds["profiles"], seconds["profiles"] = stack.rounds, time.perf_counter() - t2
         ivs, labels = [], []
         for q, f in enumerate(fits):

@@ -146,10 +146,16 @@ def _within_bounds(z, dz, lo, hi, g, H) -> tuple[np.ndarray, np.ndarray]:
 
 
 def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np.ndarray | None = None,
-          central: bool = True, tol: Tolerances = FIT) -> Solutions:
+          central: bool = True, tol: Tolerances = FIT, jac0: np.ndarray | None = None) -> Solutions:
     """Minimise every task's misfit; task i belongs to problem ``problem[i]`` and starts at ``theta0[i]`` (clipped
     to the bounds). ``hold`` (T, p) bool marks parameters held at their start (a profile point); every task must
-    move the same number of parameters."""
+    move the same number of parameters.
+
+    ``jac0`` (T, n_max, m): a Jacobian over the moving parameters to start from (a profile point: the best fit's).
+    The tasks then post their trial sets only, one forward solve an iteration instead of m + 1 or 2m + 1, and the
+    Jacobian follows Broyden's rank-one secant update J += (dr - J dz) dz^T/(dz^T dz) after every trial (Dennis &
+    Schnabel, Numerical Methods for Unconstrained Optimization, 1983, sec. 8.1).
+    """
     sp = stack.space
     problem = np.asarray(problem, dtype=np.intp)
     T, p = len(problem), sp.p
@@ -164,7 +170,12 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
     scale = sp.scale[cols]  # (T, m)
     lo, hi = sp.lower[cols] / scale, sp.upper[cols] / scale
 
+    broyden = jac0 is not None
+
     def post(idx, th):
+        if broyden:
+            r, ok = stack.residuals(problem[idx], th[:, None, :])
+            return r[:, 0], None, ok[:, 0]
         sets, widths = _neighbours(th, cols[idx], stack, central)
         r, ok = stack.residuals(problem[idx], sets)
         return r[:, 0], _jacobian(r, widths, central) * scale[idx][:, None, :], ok[:, 0]
@@ -175,6 +186,8 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         r, ok = stack.residuals(problem, theta[:, None, :])
         return Solutions(theta, r[:, 0], None, _sumsq(r[:, 0], n), nfev, ok[:, 0], status)
     r, J, stable = post(np.arange(T), theta)
+    if broyden:
+        J = np.array(jac0, dtype=float) * scale[:, None, :]
     rss = _sumsq(r, n)
     g, H = _normal_equations(J, r, n)
     lam = np.full(T, LAMBDA0)
@@ -215,8 +228,16 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         rho = (rss[a] - rss_t) / np.where(pred > 0, pred, np.inf)
         acc, rej = a[better], a[~better]
         decrease = rss[acc] - rss_t[better]
-        theta[acc], r[acc], J[acc], stable[acc] = trial[better], rt[better], Jt[better], st[better]
-        g[acc], H[acc] = _normal_equations(Jt[better], rt[better], n[acc])
+        if broyden:  # the secant through the trial, accepted or not
+            Ja = J[a]
+            Ja += (rt - r[a] - np.einsum("tnm,tm->tn", Ja, dz))[:, :, None] * (dz / np.sum(dz * dz, axis=1,
+                                                                                      keepdims=True))[:, None, :]
+            J[a] = Ja
+            theta[acc], r[acc], stable[acc] = trial[better], rt[better], st[better]
+            g[a], H[a] = _normal_equations(Ja, r[a], n[a])
+        else:
+            theta[acc], r[acc], J[acc], stable[acc] = trial[better], rt[better], Jt[better], st[better]
+            g[acc], H[acc] = _normal_equations(Jt[better], rt[better], n[acc])
         lam[acc] *= np.maximum(1.0 / 3.0, 1.0 - (2.0 * rho[better] - 1.0) ** 3)
         nu[acc] = 2.0
         lam[rej] *= nu[rej]
@@ -225,4 +246,5 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         rss[acc] = rss_t[better]
         status[acc[done]] = 2
         active[acc[done]] = False
-    return Solutions(theta, r, J / scale[:, None, :] if central else None, rss, nfev, stable, status)
+    return Solutions(theta, r, J / scale[:, None, :] if central and not broyden else None, rss, nfev, stable,
+                     status)

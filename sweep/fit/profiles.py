@@ -74,18 +74,25 @@ def _start(best: np.ndarray, cov: np.ndarray, j: int, value: float) -> np.ndarra
 
 
 def profile_all(problems: list[Problem], best: list[np.ndarray], best_rss: list[float], covs: list[np.ndarray],
-                s2: list[float], crit: float | list[float], stack: ProblemStack) -> list[list[Profile]]:
+                s2: list[float], crit: float | list[float], stack: ProblemStack, jacs: list[np.ndarray]
+                ) -> list[list[Profile]]:
     """Profiles of every free parameter of every problem (problem x parameter); ``crit`` the threshold per problem
-    (uncertainty.threshold), ``s2`` the noise variance per problem."""
+    (uncertainty.threshold), ``s2`` the noise variance per problem, ``jacs`` the Jacobian at each best fit (the
+    profile points' first Jacobian, updated by Broyden's secants: sweep.fit.levenberg)."""
     crits = crit if isinstance(crit, list) else [crit] * len(problems)
     points: dict[tuple[int, int], list[tuple[float, float]]] = {}
 
+    p = problems[0].space.p
+
     def run(tasks):
-        hold = np.zeros((len(tasks), problems[0].space.p), bool)
+        hold = np.zeros((len(tasks), p), bool)
         hold[np.arange(len(tasks)), [j for _, j, _ in tasks]] = True
+        jac0 = np.zeros((len(tasks), stack.n_max, p - 1))
+        for i, (q, j, _) in enumerate(tasks):
+            jac0[i, :jacs[q].shape[0]] = np.delete(jacs[q], j, axis=1)
         sol = solve(stack, np.array([q for q, _, _ in tasks]),
                     np.array([_start(best[q], covs[q], j, value) for q, j, value in tasks]), hold=hold,
-                    central=False, tol=HOLD)
+                    central=False, tol=HOLD, jac0=jac0)
         for (q, j, value), rss in zip(tasks, sol.rss):
             points.setdefault((q, j), []).append((value, float(rss)))
 
