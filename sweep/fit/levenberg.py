@@ -33,7 +33,7 @@ import numpy as np
 
 from .stack import ProblemStack
 
-__all__ = ["FD_STEP", "FIT", "HOLD", "Solutions", "Tolerances", "solve"]
+__all__ = ["FD_STEP", "FIT", "HOLD", "Solutions", "Tolerances", "central_jacobian", "solve"]
 
 FD_STEP = 1e-3
 """Finite-difference step relative to each parameter's scale (ParamSpace.scale)."""
@@ -120,9 +120,9 @@ def _normal_equations(J: np.ndarray, r: np.ndarray, n: np.ndarray) -> tuple[np.n
     g, H = np.empty((T, m)), np.empty((T, m, m))
     for length in np.unique(n):
         pick = np.flatnonzero(n == length)
-        Jp = J[pick, :length]
-        g[pick] = np.sum(Jp * r[pick, :length, None], axis=1)
-        H[pick] = np.sum(Jp[:, :, :, None] * Jp[:, :, None, :], axis=1)
+        Jt = np.swapaxes(J[pick, :length], 1, 2)
+        g[pick] = (Jt @ r[pick, :length, None])[:, :, 0]  # stacked products: one small product per task
+        H[pick] = Jt @ J[pick, :length]
     return g, H
 
 
@@ -143,6 +143,13 @@ def _within_bounds(z, dz, lo, hi, g, H) -> tuple[np.ndarray, np.ndarray]:
     p_proj, p_short = _predicted(g, H, proj), _predicted(g, H, short)
     use_proj = inside | (p_proj > 0)
     return np.where(use_proj[:, None], proj, short), np.where(use_proj, p_proj, p_short)
+
+
+def central_jacobian(stack: ProblemStack, problem: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Central-difference Jacobian (T, n_max, p) over every free parameter at ``theta`` (T, p), in one round."""
+    T, p = theta.shape
+    sets, widths = _neighbours(theta, np.tile(np.arange(p), (T, 1)), stack, True)
+    return _jacobian(stack.residuals(problem, sets)[0], widths, True)
 
 
 def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np.ndarray | None = None,

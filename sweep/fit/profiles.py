@@ -25,11 +25,13 @@ from .stack import ProblemStack
 
 __all__ = ["EXTEND", "OFFSETS", "REFINE_FRACTION", "REFINE_ROUNDS", "Profile", "profile_all"]
 
-OFFSETS = (1.5, 2.25, 3.0)
+OFFSETS = (1.5, 2.25)
 """First round, in standard errors either side of the best value. No point at 0.75: on a near-quadratic profile the
 crossing (1.96) lies in [1.5, 2.25], which interpolates it exactly; where it lies below 1.5 instead, the bracket
-[best, 1.5] is bisected by the refinement rounds (REFINE_FRACTION), which is what a point at 0.75 was for."""
-EXTEND = (4.0, 6.0, 9.0, 14.0)
+[best, 1.5] is bisected by the refinement rounds (REFINE_FRACTION), which is what a point at 0.75 was for. No point
+at 3 either: it served only the sides whose crossing lies beyond 2.25, which the second round reaches (a third of
+the profile points of every near-quadratic side saved)."""
+EXTEND = (3.0, 4.0, 6.0, 9.0, 14.0)
 """Second round, on the sides still below the threshold."""
 REFINE_ROUNDS = 4
 """Bisection rounds at most, on the sides whose crossing is poorly bracketed."""
