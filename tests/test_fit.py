@@ -174,6 +174,38 @@ def test_twenty_curves_in_one_call_equal_twenty_separate_calls():
                 assert float(together[name + suffix][i]) == float(alone[name + suffix][0]), (i, name + suffix)
 
 
+def test_a_mixed_campaign_in_one_call_equals_one_call_per_sample():
+    """Samples of different kinds and lengths side by side (a 16-sample curve, a 24-sample curve at another V, and
+    relaxed slips): each sample's best fit, standard errors and least-squares evaluations are those of its own call,
+    bit for bit (the stack pads shorter problems, and its relaxed-slip points go to their own engine call)."""
+    t16, t24 = np.logspace(-1, 3, 16), np.logspace(-1, 3.3, 24)
+    km, v = np.array([2e5, 4e5, 7e5]), np.array([3e-6, 1e-5, 3e-5])
+    dx = np.array([relaxed_slip(SAMPLE1, a, b) for a, b in zip(km, v)])
+    data = [_noisy(SAMPLE2, KM2, 1e-6, t16, 0.005, 31, sample="a", name="a"),
+            _noisy(SAMPLE2, KM2, 3e-6, t24, 0.005, 32, sample="b", name="b"),
+            RelaxedSlips(km, v, dx * (1 + 0.01 * np.random.default_rng(33).standard_normal(3)), noise=0.01 * dx,
+                         sample="c")]
+    together = sweep.fit(data, free=("A", "m1"), params=_params(SAMPLE2), profiles=False)
+    for i, d in enumerate(data):
+        alone = sweep.fit(d, free=("A", "m1"), params=_params(SAMPLE2), profiles=False)
+        for name in ("A", "A_stderr", "m1", "m1_stderr", "function_evaluations", "misfit"):
+            assert float(together[name][i]) == float(alone[name][0]), (i, name)
+
+
+def test_a_least_squares_cut_short_says_it_did_not_converge(monkeypatch):
+    """A fit stopped after 2 rounds reports least_squares_status 0 (max_rounds_reached), one left to converge
+    reports that it did (2 or 3)."""
+    from sweep.fit import levenberg, local
+
+    curve = _noisy(SAMPLE2, KM2, 1e-6, T, 0.005, 41)
+    done = sweep.fit(curve, free=FREE, params=_params(SAMPLE2), profiles=False)
+    assert int(done["least_squares_status"][0]) in (2, 3)
+    monkeypatch.setattr(local, "FIT", levenberg.Tolerances(ftol=1e-10, xtol=1e-9, max_rounds=2))
+    short = sweep.fit(curve, free=FREE, params=_params(SAMPLE2), profiles=False)
+    assert int(short["least_squares_status"][0]) == 0
+    assert short["least_squares_status"].attrs["flag_meanings"].split()[0] == "max_rounds_reached"
+
+
 # --- noise estimated, K/M factor and D0 free, labels, profile rounds ------------------------------------------
 
 T60 = np.logspace(-1, 3.5, 60)

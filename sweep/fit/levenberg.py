@@ -33,7 +33,7 @@ import numpy as np
 
 from .stack import ProblemStack
 
-__all__ = ["FD_STEP", "FIT", "HOLD", "Solutions", "Tolerances", "central_jacobian", "solve"]
+__all__ = ["FD_STEP", "FIT", "HOLD", "STATUS", "STATUS_FLAGS", "Solutions", "Tolerances", "solve"]
 
 FD_STEP = 1e-3
 """Finite-difference step relative to each parameter's scale (ParamSpace.scale)."""
@@ -59,6 +59,8 @@ LAMBDA0 = 1e-3
 """Initial damping lambda (relative to diag(J^T J), Marquardt's scaling)."""
 STATUS = {0: "max_rounds reached", 1: "nothing to move", 2: "ftol: the misfit no longer decreases",
           3: "xtol: the step is below xtol"}
+STATUS_FLAGS = {0: "max_rounds_reached", 1: "nothing_to_move", 2: "misfit_converged", 3: "step_converged"}
+"""CF flag_meanings of STATUS."""
 
 
 @dataclass
@@ -143,13 +145,6 @@ def _within_bounds(z, dz, lo, hi, g, H) -> tuple[np.ndarray, np.ndarray]:
     p_proj, p_short = _predicted(g, H, proj), _predicted(g, H, short)
     use_proj = inside | (p_proj > 0)
     return np.where(use_proj[:, None], proj, short), np.where(use_proj, p_proj, p_short)
-
-
-def central_jacobian(stack: ProblemStack, problem: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """Central-difference Jacobian (T, n_max, p) over every free parameter at ``theta`` (T, p), in one round."""
-    T, p = theta.shape
-    sets, widths = _neighbours(theta, np.tile(np.arange(p), (T, 1)), stack, True)
-    return _jacobian(stack.residuals(problem, sets)[0], widths, True)
 
 
 def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np.ndarray | None = None,

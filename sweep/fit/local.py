@@ -1,11 +1,12 @@
 """Local refinement: every problem's least squares from its best grid point, in lockstep (sweep.fit.levenberg).
 
-Two phases, each one Levenberg-Marquardt over every task at once (one engine round an iteration): first from a
-central-difference Jacobian at the start, updated by Broyden's secants (one forward solve an iteration); then from
-where that stopped with central-difference Jacobians at every iteration (2p + 1 parameter sets), which usually stops
-at once: its Jacobian at the best fit gives the covariance (sweep.fit.uncertainty). With central differences
-throughout, the 100 curves of benchmarks/fit.py took 67 forward solves a curve, against ~30 so. The engine runs at
-the fit's ``rtol``.
+Two phases, each one Levenberg-Marquardt over every task at once (one engine round an iteration,
+sweep.fit.levenberg): forward-difference Jacobians (p + 1 parameter sets an iteration), then from where they
+stopped central-difference ones (2p + 1 sets), which stop after one or two iterations: the Jacobian at the best fit,
+central, gives the covariance (sweep.fit.uncertainty). The 100 curves of benchmarks/fit.py took 67 forward solves a
+curve with central differences throughout, ~50 so; Broyden's secants from one central Jacobian (one solve an
+iteration, as the profile points do from the best fit) took up to 100 iterations from the coarse global grid. The
+engine runs at the fit's ``rtol``.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .levenberg import FIT, STATUS, central_jacobian, solve
+from .levenberg import FIT, STATUS, solve
 from .stack import ProblemStack
 
 __all__ = ["LocalFit", "refine_all"]

@@ -18,6 +18,7 @@ import xarray as xr
 from ..dataset import REFERENCES, versions
 from .data import Curve
 from .globalstage import grid_axes
+from .levenberg import STATUS, STATUS_FLAGS
 from .outcome import FitOutcome
 from .space import UNITS
 from .uncertainty import LABELS
@@ -91,6 +92,10 @@ def _per_sample(out: FitOutcome) -> dict[str, xr.Variable]:
                                for pr, s in zip(out.problems, out.s2)],
                     "m", "noise estimated from the residuals, sqrt(RSS/(n - p)) (NaN: noise given)"),
         "function_evaluations": _v("sample", [f.nfev for f in out.fits], "1", "least-squares function evaluations"),
+        "least_squares_status": _v("sample", np.array([f.status for f in out.fits], np.int8), None,
+                                   "how the least squares stopped (sweep.fit.levenberg.STATUS; 0: not converged)",
+                                   flag_values=np.array(sorted(STATUS), np.int8),
+                                   flag_meanings=" ".join(STATUS_FLAGS[k] for k in sorted(STATUS))),
         "stable_before_stop": _v("sample", np.array([f.stable for f in out.fits], np.int8), None,
                                  "steady sliding stable before every stop at the best fit (chi > mu1, eq. 3)",
                                  flag_values=np.array([0, 1], np.int8), flag_meanings="no yes"),
