@@ -179,7 +179,7 @@ def test_a_mixed_campaign_in_one_call_equals_one_call_per_sample():
     relaxed slips): each sample's best fit, standard errors and least-squares evaluations are those of its own call,
     bit for bit (the stack pads shorter problems, and its relaxed-slip points go to their own engine call)."""
     t16, t24 = np.logspace(-1, 3, 16), np.logspace(-1, 3.3, 24)
-    km, v = np.array([2e5, 4e5, 7e5]), np.array([3e-6, 1e-5, 3e-5])
+    km, v = np.array([2e5, 4e5, 7e5]), np.array([1e-6, 3e-6, 1e-5])
     dx = np.array([relaxed_slip(SAMPLE1, a, b) for a, b in zip(km, v)])
     data = [_noisy(SAMPLE2, KM2, 1e-6, t16, 0.005, 31, sample="a", name="a"),
             _noisy(SAMPLE2, KM2, 3e-6, t24, 0.005, 32, sample="b", name="b"),
