@@ -18,6 +18,7 @@ import matplotlib
 
 matplotlib.use("Agg")  # files only; no display needed
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker as mticker  # noqa: E402
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
@@ -64,10 +65,19 @@ def figure_legend(fig, axes) -> None:
                    frameon=False)
 
 
+LOG_MINOR_SUBS = (2.0, 5.0)
+"""Minor ticks of every log axis, per decade: at 2 and 5 (not matplotlib's 2..9). Each tick is a few artists that the
+constrained layout measures and the drawing measures again: the default landscape's four log axes and colorbars had
+~250 of them, ~0.3 s of its ~0.9 s picture."""
+
+
 def save(fig, path: str | os.PathLike) -> Path:
     """Write ``fig`` to ``path`` (PNG, parents created) at its own pixel size and close it."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    for axis in (a for ax in fig.axes for a in (ax.xaxis, ax.yaxis)):
+        if axis.get_scale() == "log":
+            axis.set_minor_locator(mticker.LogLocator(subs=LOG_MINOR_SUBS))
     fig.savefig(path, dpi=DPI)
     plt.close(fig)
     return path
