@@ -54,7 +54,7 @@ def search_all(stack: ProblemStack) -> list[GlobalResult]:
     axes = grid_axes(sp)
     sets = np.vstack((_product(axes), sp.start))
     Q = len(stack.problems)
-    rss, stable = stack.misfits(np.arange(Q), np.broadcast_to(sets, (Q,) + sets.shape))
+    rss, stable = stack.misfits(np.arange(Q), sets)
     rss = np.where(stable, rss, np.nan)
     out: list[GlobalResult] = []
     for q in range(Q):

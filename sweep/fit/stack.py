@@ -136,12 +136,18 @@ class ProblemStack:
         return r, stable[block_of].reshape(T, S)
 
     def misfits(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Sums of squared weighted residuals (T, S) of :meth:`residuals` (summed in order, not pairwise: the global
-        stage's misfits, which only rank its grid), without holding the residuals (the global stage: 100 curves x
-        730 sets x 200 samples would be 117 MB a temporary)."""
+        """Sums of squared weighted residuals (T, S) of :meth:`residuals` for ``sets`` (T, S, p), or (S, p) the same
+        for every task (the global grid: its blocks are then the layouts times the sets, without sorting T S keys),
+        summed in order, not pairwise (the global stage's misfits only rank its grid), without holding the residuals
+        (100 curves x 730 sets x 200 samples would be a 117 MB temporary)."""
         problem = np.asarray(problem, dtype=np.intp)
-        model, stable, block_of = self._blocks(problem, sets)
-        T, S = sets.shape[:2]
+        T, S = problem.size, sets.shape[-2]
+        if sets.ndim == 2:  # one row of sets for every task (the global grid): blocks per layout, no key sort
+            layouts, which = np.unique(self.layout[problem], return_inverse=True)
+            model, stable = self._model(np.repeat(layouts, S), self._params(np.tile(sets, (layouts.size, 1))))
+            block_of = (which.reshape(-1)[:, None] * S + np.arange(S)).reshape(-1)
+        else:
+            model, stable, block_of = self._blocks(problem, sets)
         rss = np.empty((T, S))
         _misfit_sums(model, block_of.reshape(T, S), self.observed[problem], self.weights[problem],
                      self.n_res[problem], MODEL_FAILED, rss)
@@ -157,11 +163,15 @@ class ProblemStack:
         (T S,)): a parameter set's model values depend on its problem's layout only, so the global stage's grid is
         modelled once for every problem of a layout."""
         T, S, p = sets.shape
-        full = self.space.full(sets.reshape(T * S, p))
-        params = np.column_stack([full[k] for k in ("A", "m1", "m2", "D0", "K_over_M_factor")])
+        params = self._params(sets.reshape(T * S, p))
         first, block_of = distinct_rows(np.column_stack((np.repeat(self.layout[problem], S).astype(float), params)))
         model, stable = self._model(self.layout[np.repeat(problem, S)[first]], params[first])
         return model, stable, block_of
+
+    def _params(self, sets: np.ndarray) -> np.ndarray:
+        """(A, m1, m2, D0, K/M factor) of each parameter set (rows of ``sets``)."""
+        full = self.space.full(sets)
+        return np.column_stack([full[k] for k in ("A", "m1", "m2", "D0", "K_over_M_factor")])
 
     def _weighted(self, problem: np.ndarray, model: np.ndarray, block_of: np.ndarray) -> np.ndarray:
         """Residual rows (T, S, n_max) of the tasks ``problem`` from the model rows ``model[block_of]``."""
