@@ -70,11 +70,18 @@ def _sigma(cov: np.ndarray, j: int, lo: float, hi: float) -> float:
     return min(s, (hi - lo) / 6.0)
 
 
-def _start(best: np.ndarray, cov: np.ndarray, j: int, value: float) -> np.ndarray:
-    theta = best.copy()
-    if np.all(np.isfinite(cov[:, j])) and cov[j, j] > 0:
-        theta += cov[:, j] / cov[j, j] * (value - best[j])
-    theta[j] = value
+def _starts(best: np.ndarray, covs: np.ndarray, q: np.ndarray, j: np.ndarray, value: np.ndarray) -> np.ndarray:
+    """Start of each profile point (task i: problem q[i], parameter j[i] at value[i]): the best fit moved along the
+    covariance's regression line, theta_k = best_k + C_kj/C_jj (value - best_j) (the best fit itself where that
+    column of the covariance is not finite)."""
+    i = np.arange(q.size)
+    col = covs[q, :, j]  # (T, p): column j of each task's covariance
+    cjj = col[i, j]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        shift = col / cjj[:, None] * (value - best[q, j])[:, None]
+    usable = np.all(np.isfinite(col), axis=1) & (cjj > 0)
+    theta = best[q] + np.where(usable[:, None], shift, 0.0)
+    theta[i, j] = value
     return theta
 
 
@@ -88,16 +95,20 @@ def profile_all(problems: list[Problem], best: list[np.ndarray], best_rss: list[
     points: dict[tuple[int, int], list[tuple[float, float]]] = {}
 
     p = problems[0].space.p
+    best_all, covs_all = np.array(best), np.array(covs)
+    jacs_all = np.zeros((len(problems), stack.n_max, p))  # each padded with zero rows to n_max
+    for q, jac in enumerate(jacs):
+        jacs_all[q, :jac.shape[0]] = jac
+    others = np.array([[k for k in range(p) if k != j] for j in range(p)], dtype=np.intp).reshape(p, p - 1)
 
     def run(tasks):
+        q, j = (np.array([t[k] for t in tasks], dtype=np.intp) for k in (0, 1))
+        value = np.array([t[2] for t in tasks], dtype=float)
         hold = np.zeros((len(tasks), p), bool)
-        hold[np.arange(len(tasks)), [j for _, j, _ in tasks]] = True
-        jac0 = np.zeros((len(tasks), stack.n_max, p - 1))
-        for i, (q, j, _) in enumerate(tasks):
-            jac0[i, :jacs[q].shape[0]] = np.delete(jacs[q], j, axis=1)
-        sol = solve(stack, np.array([q for q, _, _ in tasks]),
-                    np.array([_start(best[q], covs[q], j, value) for q, j, value in tasks]), hold=hold,
-                    central=False, tol=HOLD, jac0=jac0)
+        hold[np.arange(len(tasks)), j] = True
+        jac0 = jacs_all[q[:, None, None], np.arange(stack.n_max)[None, :, None], others[j][:, None, :]]
+        sol = solve(stack, q, _starts(best_all, covs_all, q, j, value), hold=hold, central=False, tol=HOLD,
+                    jac0=jac0)
         for (q, j, value), rss in zip(tasks, sol.rss):
             points.setdefault((q, j), []).append((value, float(rss)))
 
