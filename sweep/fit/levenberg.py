@@ -124,15 +124,19 @@ def _normal_equations(J: np.ndarray, r: np.ndarray, n: np.ndarray) -> tuple[np.n
     g, H = np.empty((T, m)), np.empty((T, m, m))
     for length in np.unique(n):
         pick = np.flatnonzero(n == length)
-        Jt = np.swapaxes(J[pick, :length], 1, 2)
-        g[pick] = (Jt @ r[pick, :length, None])[:, :, 0]  # stacked products: one small product per task
-        H[pick] = Jt @ J[pick, :length]
+        # contiguous copies: matmul takes other loops (other rounding) for strided operands, and a problem padded
+        # beside longer ones is strided where alone it is not
+        Jp, rp = np.ascontiguousarray(J[pick, :length]), np.ascontiguousarray(r[pick, :length, None])
+        Jt = np.ascontiguousarray(np.swapaxes(Jp, 1, 2))
+        g[pick] = (Jt @ rp)[:, :, 0]  # stacked products: one small product per task
+        H[pick] = Jt @ Jp
     return g, H
 
 
 def _predicted(g: np.ndarray, H: np.ndarray, dz: np.ndarray) -> np.ndarray:
     """Decrease of the misfit sum r^2 that the linear model predicts for the step dz (twice that of r^2/2)."""
-    return -(2.0 * np.sum(g * dz, axis=1) + np.einsum("ti,tij,tj->t", dz, H, dz))
+    # sums over the last axis only (einsum's loop order changed with the number of tasks: a task's last bits did)
+    return -(2.0 * np.sum(g * dz, axis=1) + np.sum(np.sum(H * dz[:, None, :], axis=2) * dz, axis=1))
 
 
 def _within_bounds(z, dz, lo, hi, g, H) -> tuple[np.ndarray, np.ndarray]:
@@ -234,8 +238,8 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         decrease = rss[acc] - rss_t[better]
         if broyden:  # the secant through the trial, accepted or not
             Ja = J[a]
-            Ja += (rt - r[a] - np.einsum("tnm,tm->tn", Ja, dz))[:, :, None] * (dz / np.sum(dz * dz, axis=1,
-                                                                                      keepdims=True))[:, None, :]
+            Ja += (rt - r[a] - np.sum(Ja * dz[:, None, :], axis=2))[:, :, None] * (
+                dz / np.sum(dz * dz, axis=1, keepdims=True))[:, None, :]
             J[a] = Ja
             theta[acc], r[acc], stable[acc] = trial[better], rt[better], st[better]
             g[a], H[a] = _normal_equations(Ja, r[a], n[a])
