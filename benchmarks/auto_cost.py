@@ -6,7 +6,8 @@ Issue 17's targets: ``model="auto"`` at most 1.2x ``model="quasistatic"`` on the
 2 threads at least 1.8x 1 thread on both. Each grid is the default scene's (sample2, K/M 1e3..1e6 x V 1e-7..1e-4,
 rtol 1e-6; 1e6 points: 1000 x 1000 over the same ranges), run through ``sweep.run_sweep`` with no output file, after
 one untimed warm-up call per model; best of ``--repeats`` calls per (model, threads), models and thread counts
-alternated within each repeat, in one process (numba.set_num_threads). Between them, the machine's own gain from a
+alternated within each repeat, in one process (numba.set_num_threads); the default scene at least SMALL_REPEATS
+times (a call takes 35-60 ms, where the host's hiccups weigh). Between them, the machine's own gain from a
 second thread (``machine_two_threads_over_one``: a compute loop that shares nothing, alone and twice at once): the
 ceiling of any 2-thread gain on this machine in this run. ``--quick``: 2e4 and 4e4 points, one repeat (a smoke
 run). Writes JSON with machine info and the load average under benchmarks/results/.
@@ -50,6 +51,10 @@ def _independent_work(x, sweeps):
         for i in range(x.size):
             total += np.exp(-x[i] * 1e-3 * r)
     return total
+
+
+SMALL_REPEATS = 20
+"""Repeats at least, of the default scene's calls (see main)."""
 
 
 def machine_ceiling(sweeps: int = 600) -> dict:
@@ -115,7 +120,10 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     t_start = time.perf_counter()
     sides, repeats = ((None, 200), 1) if args.quick else ((None, 1000), args.repeats)
-    rows = [row for side in sides for row in measure(side, repeats)]
+    # the default scene's run takes 35-60 ms: a host's hiccup of a few ms moves one call's 2-thread gain by 0.1-0.2,
+    # so it gets at least SMALL_REPEATS calls (a few seconds); the 1e6-point runs get --repeats
+    rows = [row for side in sides
+            for row in measure(side, repeats if side or args.quick else max(repeats, SMALL_REPEATS))]
     gains = {str(a["points"]): a["wall_s"]["quasistatic"] / b["wall_s"]["quasistatic"]
              for a, b in zip(rows[::2], rows[1::2])}
     ceilings = {str(a["points"]): a["machine_two_threads_over_one"] for a in rows[::2]}
