@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import threading
+import time
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, contextmanager
@@ -98,6 +99,8 @@ class PreparedRun:
     journal: Journal | None
     imap: Callable[..., Iterator[tuple[int, dict[str, np.ndarray]]]]
     """The backend's map over chunks (sweep/backends.py: open_backend)."""
+    compute_s: float = 0.0
+    """Wall seconds of :meth:`finish`'s chunk loop (the computing, without the Dataset, the file and the picture)."""
 
     def finish(self, progress: bool | None = None, history: str = "",
                picture: Callable[[xr.Dataset], None] | None = None) -> xr.Dataset:
@@ -110,7 +113,9 @@ class PreparedRun:
         sampled in time stayed in the journal, after the write, with the Dataset read from the file. The write is
         always waited for: the file is whole or absent when this returns or raises."""
         scene, plan, size, journal = self.scene, self.plan, self.chunk_size, self.journal
+        t0 = time.perf_counter()
         flat, seconds = run_chunks(scene, plan, size, journal, progress, self.imap)
+        self.compute_s = time.perf_counter() - t0
         # with a journal the arrays sampled in time stayed there: written into the file chunk by chunk, never held
         blocks = None
         if journal is not None and plan.protocol == "stop" and n_samples(scene, plan) > 0:
