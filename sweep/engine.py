@@ -300,14 +300,20 @@ def run_points(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray | No
     return _time_resolved(scene, plan, g, obs_tau)
 
 
-def chunk_points(n: int, chunk_size: int | None = None) -> list[np.ndarray]:
+@functools.lru_cache(maxsize=8)
+def chunk_points(n: int, chunk_size: int | None = None) -> tuple[np.ndarray, ...]:
     """The points 0..n-1 split into consecutive chunks of at most ``chunk_size`` (default: a stop chunk), each in a
     fixed pseudo-random order: the costly points cluster on the grid, and every thread's share of a chunk then
     mixes cheap and costly ones. A chunk covers a contiguous range of the flat (K/M, V) index, so that its
-    trajectories can be written into the file as one block (sweep/io.py) and never held whole."""
+    trajectories can be written into the file as one block (sweep/io.py) and never held whole. Cached (read-only
+    arrays): a run asks twice, for its journal's ranges and for its chunks, and the permutations cost ~0.3 ms of
+    the default scene's ~35 ms run."""
     rng = np.random.default_rng(ORDER_SEED)
     bounds = np.array_split(np.arange(n), max(1, math.ceil(n / (chunk_size or CHUNK_POINTS["stop"]))))
-    return [rng.permutation(block) for block in bounds]
+    chunks = tuple(rng.permutation(block) for block in bounds)
+    for chunk in chunks:
+        chunk.flags.writeable = False
+    return chunks
 
 
 def mark_error_above_tol(scene: Scene, out: RawResult) -> None:

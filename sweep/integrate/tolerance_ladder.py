@@ -66,8 +66,11 @@ def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, to
                        np.full(n, float(tol0)), np.zeros(n, np.int8), np.zeros(n, np.int64))
     growth = np.broadcast_to(np.asarray(growth, dtype=float), (n,))
     todo = np.ones(n, bool)
+    every = np.arange(n)
     while todo.any():
-        i = np.flatnonzero(todo)
+        # the first pass takes every point: slices (views) instead of gathers and scatters through an index array,
+        # ~0.1 ms of the ~1 ms of numpy around a default-scene chunk's kernel
+        i = slice(None) if todo.all() else np.flatnonzero(todo)
         x, fine, tail, status, attempts, *sampled = run(points[i], out.step[i], h0[i])
         rounding = rounding_error(roundoff, 2 * attempts, x, growth[i])  # the fine run's steps round too
         estimate = COARSE_GAIN * np.abs(fine - x) + 2.0 * tail + rounding
@@ -79,12 +82,13 @@ def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, to
         out.work[i] += 3 * attempts.astype(np.int64)
         within = estimate <= tol_x
         if samples is not None:
-            within &= samples.keep(i, sampled[0], attempts, growth[i], tail)
+            within &= samples.keep(every[i], sampled[0], attempts, growth[i], tail)
         more = ((status != MAX_STEPS) & ~within & (rounding <= tol_x) & (out.runs[i] < MAX_RUNS)
                 & (out.step[i] / TOL_RATIO >= LANE_TOL_FLOOR))
+        again = every[i][more]
         todo[:] = False
-        todo[i[more]] = True
-        out.step[i[more]] /= TOL_RATIO
+        todo[again] = True
+        out.step[again] /= TOL_RATIO
     out.error[out.status != OK] = np.nan
     return out
 
