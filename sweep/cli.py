@@ -50,7 +50,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         out = args.output
         # the rate of the computing alone: with the file and the picture in it, the default scene's 20,000 points
         # read ~20,000 points/s, of a computing at ~500,000
-        print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s: computed in {compute_s:.2f} s, "
+        print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s: computed in {_seconds(compute_s)} s, "
               f"{scene.n_points / max(compute_s, 1e-9):,.0f} points/s, then the file and the picture; kernel "
               f"{'compiled' if compile_s > SLOW_S else 'loaded'} in {compile_s:.1f} s beforehand)")
         print(_flag_summary(ds, "status"))
@@ -194,6 +194,12 @@ def _most_failed(ds, out: Path) -> int:
         return 0
     return _fail(f"{bad} of {ds['status'].size} points failed ({text}); the values are in {out} but most are NaN "
                  "or inaccurate: check the units (K_over_M [s-2], V [m/s]) and ranges", 1)
+
+
+def _seconds(x: float) -> str:
+    """Seconds with two decimals, or two significant digits below 0.1 s (a small grid computes in milliseconds:
+    "0.00 s" beside its rate would say nothing)."""
+    return f"{x:.2f}" if x >= 0.1 else f"{x:.2g}"
 
 
 def _run_to_file(scene, args: argparse.Namespace, warm: bool, picture=None):

@@ -1,5 +1,6 @@
 """The command line: run (config, dry run, default output names), plot, info, and errors."""
 
+import re
 import subprocess
 import sys
 
@@ -41,7 +42,14 @@ def test_run_plot_info(config, tmp_path):
     proc = sweep_cli("run", str(config), "-o", str(out), cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert out.exists() and out.with_suffix(".png").stat().st_size > 10_000
-    assert "wrote" in proc.stdout and " s" in proc.stdout
+    # "wrote <file> (48 points in T s: computed in C s, R points/s, then the file and the picture; ...)": the rate is
+    # the computing's own, not the file's and the picture's
+    line = next(t for t in proc.stdout.splitlines() if t.startswith("wrote") and ".nc" in t)
+    found = re.search(r"\((\d+) points in ([\d.]+) s: computed in ([\d.e-]+) s, ([\d,]+) points/s", line)
+    assert found, line
+    n, total, computed, rate = (float(g.replace(",", "")) for g in found.groups())
+    assert n == 48 and 0 < computed <= total, line
+    assert rate == pytest.approx(n / computed, rel=0.06), line  # the printed seconds are rounded to 2 digits
     ds = sweep.open(out)
     assert ds.sizes == {"K_over_M": 12, "V": 4}
     assert ds.attrs["scene"].count("m2 = 0.003") == 1 and "t50" in ds
