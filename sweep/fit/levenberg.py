@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .space import ParamSpace
 from .stack import ProblemStack
 
 __all__ = ["FD_STEP", "FIT", "HOLD", "STATUS", "STATUS_FLAGS", "Solutions", "Tolerances", "solve"]
@@ -81,11 +82,10 @@ class Solutions:
     status: np.ndarray
 
 
-def _neighbours(theta: np.ndarray, cols: np.ndarray, stack: ProblemStack, central: bool
+def _neighbours(theta: np.ndarray, cols: np.ndarray, sp: ParamSpace, central: bool
                 ) -> tuple[np.ndarray, np.ndarray]:
     """(sets (T, S, p): theta then its finite-difference neighbours along ``cols`` (T, m), widths (T, m): signed
     distance from the lower neighbour to the upper one)."""
-    sp = stack.space
     T, m = cols.shape
     ti = np.arange(T)[:, None]
     base = theta[ti, cols]
@@ -109,11 +109,17 @@ def _jacobian(r: np.ndarray, widths: np.ndarray, central: bool) -> np.ndarray:
     return np.swapaxes(d / widths[:, :, None], 1, 2)
 
 
-def _sumsq(r: np.ndarray, n: np.ndarray) -> np.ndarray:
-    """Per task, sum of r^2 over its own n residuals (tasks grouped by n: the same pairwise sum as alone)."""
-    out = np.empty(r.shape[0])
+def _by_length(n: np.ndarray):
+    """(length, indices of the tasks with n == length), for each distinct length: each task's sums then run over its
+    own residuals only, in the order they would run alone (sweep.fit.stack pads shorter problems with zeros)."""
     for length in np.unique(n):
-        pick = np.flatnonzero(n == length)
+        yield int(length), np.flatnonzero(n == length)
+
+
+def _sumsq(r: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Per task, sum of r^2 over its own n residuals."""
+    out = np.empty(r.shape[0])
+    for length, pick in _by_length(n):
         out[pick] = np.sum(r[pick, :length] ** 2, axis=1)
     return out
 
@@ -122,8 +128,7 @@ def _normal_equations(J: np.ndarray, r: np.ndarray, n: np.ndarray) -> tuple[np.n
     """(g = J^T r (T, m), H = J^T J (T, m, m)), summed per task over its own n residuals."""
     T, _, m = J.shape
     g, H = np.empty((T, m)), np.empty((T, m, m))
-    for length in np.unique(n):
-        pick = np.flatnonzero(n == length)
+    for length, pick in _by_length(n):
         # contiguous copies: matmul takes other loops (other rounding) for strided operands, and a problem padded
         # beside longer ones is strided where alone it is not
         Jp, rp = np.ascontiguousarray(J[pick, :length]), np.ascontiguousarray(r[pick, :length, None])
@@ -184,15 +189,15 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         if broyden:
             r, ok = stack.residuals(problem[idx], th[:, None, :])
             return r[:, 0], None, ok[:, 0]
-        sets, widths = _neighbours(th, cols[idx], stack, central)
+        sets, widths = _neighbours(th, cols[idx], sp, central)
         r, ok = stack.residuals(problem[idx], sets)
         return r[:, 0], _jacobian(r, widths, central) * scale[idx][:, None, :], ok[:, 0]
 
-    status = np.ones(T, np.intp) if m == 0 else np.zeros(T, np.intp)
     nfev = np.ones(T, np.intp)
-    if m == 0:
+    if m == 0:  # nothing to move: the residuals at the start
         r, ok = stack.residuals(problem, theta[:, None, :])
-        return Solutions(theta, r[:, 0], None, _sumsq(r[:, 0], n), nfev, ok[:, 0], status)
+        return Solutions(theta, r[:, 0], None, _sumsq(r[:, 0], n), nfev, ok[:, 0], np.ones(T, np.intp))
+    status = np.zeros(T, np.intp)
     r, J, stable = post(np.arange(T), theta)
     if broyden:
         J = np.array(jac0, dtype=float) * scale[:, None, :]

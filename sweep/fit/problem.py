@@ -15,7 +15,6 @@ import numpy as np
 
 from ..errors import InputError
 from .data import Curve, Data, RelaxedSlips
-from .forward import ForwardPoints, ForwardResult
 from .space import ParamSpace
 
 __all__ = ["Problem", "make_problems"]
@@ -43,7 +42,7 @@ class Problem:
 
     @property
     def n_t(self) -> int:
-        """Sampled times per forward point (the longest curve)."""
+        """Sampled times of its longest curve."""
         return max([d.n for d in self.data if isinstance(d, Curve)], default=0)
 
     @property
@@ -78,48 +77,24 @@ class Problem:
         v = [np.atleast_1d(d.V) for d in self.data]
         return np.concatenate(km), np.concatenate(v)
 
-    def points(self, theta: np.ndarray, n_t: int | None = None) -> ForwardPoints:
-        """Forward points of the parameter sets ``theta`` (m x p): m blocks of :attr:`rows` rows; each curve's times
-        padded to ``n_t`` columns (default :attr:`n_t`) with its last time (no new time, so no extra work)."""
-        theta = np.atleast_2d(theta)
-        m, rows = theta.shape[0], self.rows
-        n_t = self.n_t if n_t is None else n_t
-        km, v = self.stiffness_velocity()
-        t = np.zeros((rows, n_t))
-        r = 0
+    def layout(self, n_t: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Where the model values come from, for sweep.fit.stack: per forward row (one per curve, one per relaxed-slip
+        value) its times padded to ``n_t`` columns with its last one (rows, n_t) and how many are its own (0: relaxed
+        slip only); per residual, its forward row and its column among the sampled times (-1: the relaxed slip)."""
+        times, lengths = np.zeros((self.rows, n_t)), np.zeros(self.rows, np.intp)
+        res_row, res_col = np.empty(self.n_residuals, np.intp), np.full(self.n_residuals, -1, np.intp)
+        r = i = 0
         for d in self.data:
             if isinstance(d, Curve):
-                t[r, :d.n], t[r, d.n:] = d.t, d.t[-1]
+                times[r], lengths[r] = d.t[-1], d.n  # padded beyond its length (never solved there)
+                times[r, :d.n] = d.t
+                res_row[i:i + d.n], res_col[i:i + d.n] = r, np.arange(d.n)
                 r += 1
             else:
+                res_row[i:i + d.n] = r + np.arange(d.n)
                 r += d.n
-        full = {k: np.repeat(val, rows) for k, val in self.space.full(theta).items()}
-        return ForwardPoints(A=full["A"], m1=full["m1"], m2=full["m2"], D0=full["D0"],
-                             K_over_M=np.tile(km, m) * full["K_over_M_factor"], V=np.tile(v, m),
-                             t=np.tile(t, (m, 1)))
-
-    def model(self, res: ForwardResult, m: int) -> np.ndarray:
-        """Model values (m x n_residuals) [m] from the forward results of :meth:`points` of m parameter sets."""
-        rows = self.rows
-        x, dx = res.x.reshape(m, rows, -1), res.dx_inf.reshape(m, rows)
-        parts, r = [], 0
-        for d in self.data:
-            if isinstance(d, Curve):
-                parts.append(x[:, r, :d.n])
-                r += 1
-            else:
-                parts.append(dx[:, r:r + d.n])
-                r += d.n
-        return np.concatenate(parts, axis=1)
-
-    def residuals(self, res: ForwardResult, m: int) -> np.ndarray:
-        """Weighted residuals (m x n_residuals) [noise units]; MODEL_FAILED where the model gave no number."""
-        r = (self.model(res, m) - self.observed) * self.weights
-        return np.where(np.isfinite(r), r, MODEL_FAILED)
-
-    def stable(self, res: ForwardResult, m: int) -> np.ndarray:
-        """Per parameter set: steady sliding was stable before every stop of the data (eq. 3)."""
-        return res.stable.reshape(m, self.rows).all(axis=1)
+            i += d.n
+        return times, lengths, res_row, res_col
 
 
 def make_problems(data: Sequence[Data], space: ParamSpace, per_data_set: bool) -> list[Problem]:

@@ -23,7 +23,6 @@ from collections.abc import Callable, Sequence
 import numba
 import numpy as np
 
-from .data import Curve
 from .forward import ForwardPoints, forward
 from .problem import MODEL_FAILED, Problem
 
@@ -81,35 +80,25 @@ class ProblemStack:
         self.row_start = np.concatenate(([0], np.cumsum(self.rows)[:-1]))
         self.n_res = np.array([pr.n_residuals for pr in self.problems])
         n_max, n_t = int(self.n_res.max()), max(pr.n_t for pr in self.problems)
+        Q = len(self.problems)
         km, v, times, lengths = [], [], [], []
-        res_row = np.zeros((len(self.problems), n_max), np.intp)
-        res_col = np.full((len(self.problems), n_max), -1, np.intp)
-        self.observed = np.zeros((len(self.problems), n_max))
-        self.weights = np.zeros((len(self.problems), n_max))  # 0 on the padding beyond a problem's n_residuals
+        res_row, res_col = np.zeros((Q, n_max), np.intp), np.full((Q, n_max), -1, np.intp)
+        self.observed = np.zeros((Q, n_max))
+        self.weights = np.zeros((Q, n_max))  # 0 on the padding beyond a problem's n_residuals
         for q, pr in enumerate(self.problems):
             k, vv = pr.stiffness_velocity()
             km.append(k)
             v.append(vv)
-            r = i = 0
-            for d in pr.data:
-                if isinstance(d, Curve):
-                    row_t = np.full(n_t, d.t[-1])  # padded (never solved beyond its length)
-                    row_t[:d.n] = d.t
-                    times.append(row_t)
-                    lengths.append(d.n)
-                    res_row[q, i:i + d.n], res_col[q, i:i + d.n] = r, np.arange(d.n)
-                    r += 1
-                else:
-                    times += [np.zeros(n_t)] * d.n
-                    lengths += [0] * d.n
-                    res_row[q, i:i + d.n] = r + np.arange(d.n)
-                    r += d.n
-                i += d.n
-            self.observed[q, :i], self.weights[q, :i] = pr.observed, pr.weights
+            t, length, rows_q, cols_q = pr.layout(n_t)
+            times.append(t)
+            lengths.append(length)
+            res_row[q, :pr.n_residuals], res_col[q, :pr.n_residuals] = rows_q, cols_q
+            self.observed[q, :pr.n_residuals], self.weights[q, :pr.n_residuals] = pr.observed, pr.weights
         self.row_km, self.row_v = np.concatenate(km), np.concatenate(v)
-        rows_t = np.column_stack((np.array(times).reshape(len(times), n_t), lengths))
+        lengths = np.concatenate(lengths)
+        rows_t = np.column_stack((np.concatenate(times), lengths))
         first, self.row_tid = distinct_rows(rows_t)
-        self.templates, self.template_length = rows_t[first, :-1], np.array(lengths)[first]
+        self.templates, self.template_length = rows_t[first, :-1], lengths[first]
         self.res_row, self.res_col = res_row, res_col
         self.n_max = n_max
         # problems with the same rows (K/M, V, times) and residual order share a layout, hence their model values
@@ -118,10 +107,6 @@ class ProblemStack:
         width = max(len(k) for k in layout_keys)
         padded = np.array([np.concatenate((k, np.full(width - len(k), np.nan), [len(k)])) for k in layout_keys])
         self.representative, self.layout = distinct_rows(padded)
-
-    @property
-    def p(self) -> int:
-        return self.space.p
 
     def residuals(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Weighted residuals (T, S, n_max) [noise units] of the parameter sets ``sets`` (T, S, p) of tasks of the
