@@ -1,12 +1,17 @@
 """Profile likelihoods: the least misfit at fixed values of one parameter, the others free (sweep.fit.local).
 
 Each free parameter of each problem is profiled at best +- OFFSETS standard errors (from the covariance), cut at
-its bounds (the bound itself then being the last point). A side whose profile has not crossed the 95 % threshold
-and has not reached its bound is extended to EXTEND standard errors in a second round. Then, up to REFINE_ROUNDS
+its bounds (the bound itself then being the last point). Where the misfit is quadratic the square root of its rise is
+linear in the parameter, with the slope 1/standard error that the covariance predicts: a side whose first point
+rises within QUADRATIC_TOL of that prediction has its threshold crossing interpolated between the best value and
+that point, exactly so for a quadratic misfit. A side that rose otherwise gets the point INNER standard errors out
+(the bracket of a near-quadratic but skewed profile); a side whose profile has not crossed the 95 % threshold and
+has not reached its bound is extended to EXTEND standard errors, both in a second round. Then, up to REFINE_ROUNDS
 times, a side whose threshold crossing lies in a bracket wider than REFINE_FRACTION x its distance from the best
-value gets the bracket's midpoint: the interval interpolates the crossing linearly in sqrt(misfit increase), exact
-for a quadratic misfit, but far off where a profile is flat and then steep (a parameter traded against others
-inside their bounds; the standard error is then useless and the points are (upper - lower)/6 apart).
+value gets the bracket's midpoint (the bracket [best, first point] of a side that passed the quadratic test
+excepted): the interval interpolates the crossing linearly in sqrt(misfit increase), far off where a profile is
+flat and then steep (a parameter traded against others inside their bounds; the standard error is then useless and
+the points are (upper - lower)/6 apart).
 
 Every profile point of every parameter of every problem is one least-squares task over the other parameters: a
 round of profile points runs them all in lockstep, one engine round per iteration (sweep.fit.levenberg,
@@ -26,14 +31,22 @@ from .levenberg import HOLD, solve
 from .problem import Problem
 from .stack import ProblemStack
 
-__all__ = ["EXTEND", "OFFSETS", "REFINE_FRACTION", "REFINE_ROUNDS", "Profile", "profile_all"]
+__all__ = ["EXTEND", "INNER", "OFFSETS", "QUADRATIC_TOL", "REFINE_FRACTION", "REFINE_ROUNDS", "Profile",
+           "profile_all"]
 
-OFFSETS = (1.5, 2.25)
-"""First round, in standard errors either side of the best value. No point at 0.75: on a near-quadratic profile the
-crossing (1.96) lies in [1.5, 2.25], which interpolates it exactly; where it lies below 1.5 instead, the bracket
-[best, 1.5] is bisected by the refinement rounds (REFINE_FRACTION), which is what a point at 0.75 was for. No point
-at 3 either: it served only the sides whose crossing lies beyond 2.25, which the second round reaches (a third of
-the profile points of every near-quadratic side saved)."""
+OFFSETS = (2.25,)
+"""First round, in standard errors either side of the best value: one point a side. On a quadratic profile the
+crossing lies at 1.96, inside [best, 2.25] with room for a rise QUADRATIC_TOL off the prediction (2.25 x 0.9 > 1.96).
+Two points a side (1.5 and 2.25) cost twice the forward solves; on the 100 curves of benchmarks/fit.py every one of
+the 600 sides rose within 5.4 % of the prediction at 2.25, and the crossings interpolated from [best, 2.25] agreed
+with those from [1.5, 2.25] to 0.4 % of the interval's half-width."""
+QUADRATIC_TOL = 0.1
+"""A side is near-quadratic where sqrt(rise) at its first point lies within this fraction of |value - best|/stderr
+(the covariance's prediction): the crossing interpolated from the best value is then off by ~QUADRATIC_TOL^2 of the
+half-width at most (a rise that bends smoothly from the predicted slope)."""
+INNER = 1.5
+"""Second round, on the sides whose first point crossed the threshold but did not rise as predicted: the point that
+brackets a near-quadratic crossing (1.96) with the first (REFINE_FRACTION then needs no more)."""
 EXTEND = (3.0, 4.0, 6.0, 9.0, 14.0)
 """Second round, on the sides still below the threshold."""
 REFINE_ROUNDS = 4
@@ -122,30 +135,46 @@ def profile_all(problems: list[Problem], best: list[np.ndarray], best_rss: list[
             for sign, bound in ((-1, sp.lower[j]), (1, sp.upper[j])):
                 tasks += [(q, j, v) for v in _side_values(best[q][j], sigmas[q, j], sign, bound, OFFSETS)]
     run(tasks)
+
+    def side(q, j, sign):
+        """The points of one side, nearest first, as (value, misfit rise in noise-variance units)."""
+        b = float(best[q][j])
+        return sorted(((v, (r - best_rss[q]) / s2[q]) for v, r in points[q, j] if (v - b) * sign > 0),
+                      key=lambda vr: abs(vr[0] - b))
+
+    def quadratic(q, j, v, delta):
+        """Whether sqrt(delta) at v rose as the covariance predicts, |v - best|/stderr, within QUADRATIC_TOL."""
+        cjj = covs[q][j, j]
+        if not (np.isfinite(cjj) and cjj > 0 and np.isfinite(delta)):
+            return False
+        return abs(np.sqrt(max(delta, 0.0)) * np.sqrt(cjj) / abs(v - float(best[q][j])) - 1.0) <= QUADRATIC_TOL
+
     tasks = []
-    for (q, j), pts in points.items():
+    for q, j in points:
         sp = problems[q].space
         b = float(best[q][j])
         for sign, bound in ((-1, sp.lower[j]), (1, sp.upper[j])):
-            side = [(v, r) for v, r in pts if (v - b) * sign > 0]
-            reached = any(v == bound for v, _ in side)
-            crossed = any((r - best_rss[q]) / s2[q] >= crits[q] for _, r in side)
+            pts = side(q, j, sign)
+            reached = any(v == bound for v, _ in pts)
+            crossed = any(d >= crits[q] for _, d in pts)
             if not (reached or crossed):
-                far = [v for v in _side_values(b, sigmas[q, j], sign, bound, EXTEND)]
-                tasks += [(q, j, v) for v in far]
+                tasks += [(q, j, v) for v in _side_values(b, sigmas[q, j], sign, bound, EXTEND)]
+            elif pts and pts[0][1] >= crits[q] and not quadratic(q, j, *pts[0]):
+                inner = b + sign * INNER * sigmas[q, j]
+                if abs(inner - b) < abs(pts[0][0] - b):
+                    tasks.append((q, j, inner))
     if tasks:
         run(tasks)
     for _ in range(REFINE_ROUNDS):
         tasks = []
-        for (q, j), pts in points.items():
+        for q, j in points:
             b = float(best[q][j])
             for sign in (-1, 1):
-                side = sorted(((v, (r - best_rss[q]) / s2[q]) for v, r in pts if (v - b) * sign > 0),
-                              key=lambda vr: abs(vr[0] - b))
                 v_in = b
-                for v, delta in side:
+                for v, delta in side(q, j, sign):
                     if delta >= crits[q]:
-                        if abs(v - v_in) > REFINE_FRACTION * abs(v_in - b):
+                        exempt = v_in == b and quadratic(q, j, v, delta)
+                        if not exempt and abs(v - v_in) > REFINE_FRACTION * abs(v_in - b):
                             tasks.append((q, j, 0.5 * (v + v_in)))
                         break
                     v_in = v
