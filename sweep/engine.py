@@ -196,10 +196,12 @@ def lane_groups(n: int) -> int:
     return max(1, min(4 * threads, max(threads, n // (4 * LANES))))
 
 
-def _sampled_runner(plan: Plan, method: str, targets: np.ndarray, atol: float, rtol: float, with_psi: bool):
+def _sampled_runner(plan: Plan, method: str, targets: np.ndarray, atol: float, rtol: float, with_psi: bool,
+                    twin: bool = True):
     """run(points, rows, tolerances, first steps) -> (xi_inf, fine xi_inf, tail bounds, status, attempts, samples)
     in the sampled adaptive lanes of ``method`` (sweep/integrate/lanes_sampled.py): run r solves the plan point
-    ``points[r]`` with the sorted sample times ``targets[rows[r]]``; the samples are a SampledOutputs."""
+    ``points[r]`` with the sorted sample times ``targets[rows[r]]``; the samples are a SampledOutputs (the twin's
+    NaN where ``twin`` is false)."""
 
     def run(points, rows, tols, h0):
         sample_batch = sampled_lane_kernels(method)[1]
@@ -207,7 +209,7 @@ def _sampled_runner(plan: Plan, method: str, targets: np.ndarray, atol: float, r
         sample_batch(LanePoints(plan.k, plan.a, plan.b, plan.s_c, plan.G),
                      SampledRuns(points, rows, np.ascontiguousarray(tols, dtype=float),
                                  np.ascontiguousarray(h0, dtype=float), targets, atol, rtol, plan.max_steps,
-                                 with_psi),
+                                 with_psi, twin),
                      lane_groups(points.size), out)
         return out.xi_inf, out.fine, out.tail_err, out.status, out.steps, out
 
@@ -220,19 +222,21 @@ def samples_in_lanes(scene: Scene, plan: Plan | None = None) -> bool:
     return plan.sampled_lanes if plan is not None else plan_samples_in_lanes(scene)
 
 
-def _samples_of_lanes(scene: Scene, plan: Plan, g: np.ndarray, targets: np.ndarray) -> RawResult:
+def _samples_of_lanes(scene: Scene, plan: Plan, g: np.ndarray, targets: np.ndarray, estimates: bool = True
+                      ) -> RawResult:
     """Relaxed slip and samples at the sorted reduced times ``targets`` (one row per point of g, all finite) in the
-    sampled adaptive lanes (dop853 with its fine twin), each point down the tolerance ladder (tolerance_ladder.py)."""
+    sampled adaptive lanes (dop853 with its fine twin), each point down the tolerance ladder (tolerance_ladder.py);
+    without ``estimates`` one run each, no twin, errors NaN."""
     n_t = targets.shape[1]
     atol = scene.atol["xi_inf"]
     with_psi = plan.tau_samples.size > 0  # the trajectory's psi; slip_at alone needs xi only
     samples = SampleEstimates.empty(g.size, n_t, scene.rtol, scene.atol["trajectory"], plan.roundoff, with_psi)
-    run = _sampled_runner(plan, LANES_METHOD, targets, atol, scene.rtol, with_psi)
+    run = _sampled_runner(plan, LANES_METHOD, targets, atol, scene.rtol, with_psi, estimates)
     rows = np.arange(g.size)
     ctrl = lane_control_tolerance(scene.rtol)
     h0 = np.full(g.size, min(0.5, ctrl ** (1.0 / (METHODS[LANES_METHOD].error_order + 1))))
     res = climb_tolerances(lambda entries, tols, h: run(g[entries], entries, tols, h), rows, h0, ctrl, scene.rtol,
-                           atol, plan.roundoff, perturbation_growth(plan.k[g], plan.a[g], 1.0), samples)
+                           atol, plan.roundoff, perturbation_growth(plan.k[g], plan.a[g], 1.0), samples, estimates)
     return RawResult(res.xi, res.error, res.status, res.steps, samples.xi, samples.u, samples.xi_err, samples.u_err,
                      np.full((g.size, FRACTIONS.size), np.nan), np.full((g.size, FRACTIONS.size), np.nan), res.work)
 
@@ -253,9 +257,11 @@ LANE_FAILURES = (MAX_STEPS, NONFINITE, int(Status.STEP_UNDERFLOW))
 """Statuses of the sampled lanes whose points are solved again on the per-point path."""
 
 
-def _time_resolved(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray) -> RawResult:
-    """Time-resolved points g: the finite ones in the sampled lanes where :func:`samples_in_lanes`, the rest (no
-    finite relaxed slip, failures of the lanes) and every other scene one per thread."""
+def _time_resolved(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray, estimates: bool = True
+                   ) -> RawResult:
+    """Time-resolved points g: the finite ones in the sampled lanes where :func:`samples_in_lanes` (``estimates``:
+    :func:`_samples_of_lanes`), the rest (no finite relaxed slip, failures of the lanes) and every other scene one
+    per thread (with their estimates, always)."""
     if not plan.sampled_lanes:
         return _per_point(scene, plan, g, obs_tau)
     targets = (np.concatenate((np.broadcast_to(plan.tau_samples, (g.size, plan.tau_samples.size)), obs_tau), axis=1)
@@ -267,7 +273,7 @@ def _time_resolved(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray)
         ordered = bool(np.all(targets[:, 1:] >= targets[:, :-1]))  # the usual case (the fit's times): no reordering
         order = None if ordered else np.argsort(targets, axis=1, kind="stable")
         part = _samples_of_lanes(scene, plan, g[live], np.ascontiguousarray(
-            targets if ordered else np.take_along_axis(targets, order, 1)))
+            targets if ordered else np.take_along_axis(targets, order, 1)), estimates)
         if not ordered:
             for name in SAMPLED:  # back from each row's sorted order
                 np.put_along_axis(getattr(part, name), order, getattr(part, name).copy(), 1)
@@ -283,7 +289,7 @@ def _time_resolved(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray)
 
 
 def run_points(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray | None = None,
-               correction: np.ndarray | None = None) -> RawResult:
+               correction: np.ndarray | None = None, estimates: bool = True) -> RawResult:
     """Run the plan's points ``g`` (one chunk: one call of a compiled batch) and return their flat outputs, in the
     order of ``g``. A point's numbers do not depend on the other points of the chunk.
 
@@ -291,13 +297,15 @@ def run_points(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray | No
     instead of the scene's t_obs (shared along V); for plans whose points do not lie on a grid (sweep.fit). Only the
     time-resolved paths sample in time (:func:`_time_resolved`): a relaxed-slip plan (lanes, other state laws) has no
     sampled times. ``correction`` (over g, NaN-filled): where the relaxed-slip lanes run, the first-order inertial
-    correction of their rk4 points is written there."""
+    correction of their rk4 points is written there. ``estimates=False``: the points that the sampled lanes solve
+    are run once each, at the ladder's first control tolerance, without their fine twin (~0.6x the cost), and carry
+    no error estimate (NaN): for callers that check the accuracy otherwise (sweep.fit's iterations)."""
     if plan.state_law != "aging":
         return _relax_general(scene, plan, g)
     if plan.lanes:
         return _relax_in_lanes(scene, plan, g, correction)
     obs_tau = _obs_tau(scene, plan.flat_index(g)) if obs_tau is None else np.ascontiguousarray(obs_tau, float)
-    return _time_resolved(scene, plan, g, obs_tau)
+    return _time_resolved(scene, plan, g, obs_tau, estimates)
 
 
 @functools.lru_cache(maxsize=8)

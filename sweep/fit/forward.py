@@ -93,11 +93,14 @@ def _settings(rtol: float, sampled: bool) -> Scene:
                  model="quasistatic")
 
 
-def forward(points: ForwardPoints, rtol: float = 1e-8, V0: float = 1e-6, g: float = 9.81) -> ForwardResult:
+def forward(points: ForwardPoints, rtol: float = 1e-8, V0: float = 1e-6, g: float = 9.81, estimates: bool = True
+            ) -> ForwardResult:
     """Solve every point of ``points`` in one engine call; see the module docstring for the equations.
 
     ``rtol`` is the engine's relative accuracy (1e-10..1e-2; pick it far below the data's relative noise).
-    V0 [m s-1] and g [m s-2] as in :class:`sweep.FrictionParams`.
+    V0 [m s-1] and g [m s-2] as in :class:`sweep.FrictionParams`. ``estimates=False``: the points of the sampled
+    lanes run once, without the fine twin that estimates their error (~half the cost; ``x_err`` and ``dx_inf_err``
+    NaN there): the fit's iterations, whose best fits are checked with estimates (sweep.fit.core).
     """
     n = points.n
     t = np.asarray(points.t, dtype=float).reshape(n, -1)
@@ -109,8 +112,10 @@ def forward(points: ForwardPoints, rtol: float = 1e-8, V0: float = 1e-6, g: floa
     m2 = np.broadcast_to(np.asarray(points.m2, dtype=float), (n,))
     scene = _settings(float(rtol), t.shape[1] > 0)
     plan = stop_plan_for_points(scene, PointParams(chi, mu1, A.copy(), m2.copy(), G))
-    raw = run_points(scene, plan, np.arange(n), obs_tau=V[:, None] * t / D0[:, None] if t.shape[1] else None)
-    mark_error_above_tol(scene, raw)
+    raw = run_points(scene, plan, np.arange(n), obs_tau=V[:, None] * t / D0[:, None] if t.shape[1] else None,
+                     estimates=estimates)
+    if estimates:  # without, the lanes' points have no estimate to compare (the per-point fallback's are kept)
+        mark_error_above_tol(scene, raw)
     return ForwardResult(x=D0[:, None] * raw.xi_at, x_err=D0[:, None] * raw.xi_at_err, dx_inf=D0 * raw.xi_inf,
                          dx_inf_err=D0 * raw.xi_inf_err, status=raw.status,
                          stable=np.asarray(physics.stable_sliding(chi, mu1, A), dtype=bool))

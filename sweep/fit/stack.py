@@ -29,12 +29,12 @@ from .problem import MODEL_FAILED, Problem
 __all__ = ["ProblemStack", "distinct_rows"]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, parallel=True)
 def _misfit_sums(model, block_of, observed, weights, n_res, failed, out):  # pragma: no cover (compiled)
     """out[t, s] = sum over i < n_res[t] of ((model[block_of[t, s], i] - observed[t, i]) weights[t, i])^2, a
     non-finite residual counted as ``failed``: one pass, no temporaries (numpy needed 6 passes over 100 curves x 730
-    grid sets x 200 samples, 85 % of the global stage)."""
-    for t in range(block_of.shape[0]):
+    grid sets x 200 samples, 85 % of the global stage), tasks split over the threads (each sum runs in order)."""
+    for t in numba.prange(block_of.shape[0]):
         for s in range(block_of.shape[1]):
             row = model[block_of[t, s]]
             acc = 0.0
@@ -45,8 +45,31 @@ def _misfit_sums(model, block_of, observed, weights, n_res, failed, out):  # pra
                 acc += r * r
             out[t, s] = acc
 
-CHUNK = 2**17
-"""Residuals formed at a time (1 MB temporaries)."""
+
+
+@numba.njit(cache=True, nogil=True)
+def _residual_rows(model, block_of, observed, weights, failed, out):  # pragma: no cover (compiled)
+    """out[t, s, i] = (model[block_of[t, s], i] - observed[t, i]) weights[t, i], ``failed`` where not finite, 0 where
+    the weight is 0 (beyond a problem's residuals): one pass, no temporaries (as numpy: 4 passes and a gather)."""
+    for t in range(block_of.shape[0]):
+        for s in range(block_of.shape[1]):
+            row = model[block_of[t, s]]
+            for i in range(row.size):
+                w = weights[t, i]
+                r = (row[i] - observed[t, i]) * w
+                if not np.isfinite(r):
+                    r = failed
+                out[t, s, i] = r if w > 0 else 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def _in_residual_order(sampled, relaxed, point, col, out):  # pragma: no cover (compiled)
+    """out[u, i] = sampled[point[u, i], col[u, i]] where col >= 0 (a sample of a curve), else relaxed[point[u, i]]
+    (a relaxed slip): the model value of each residual of each block, one pass."""
+    for u in range(point.shape[0]):
+        for i in range(point.shape[1]):
+            c = col[u, i]
+            out[u, i] = sampled[point[u, i], c] if c >= 0 else relaxed[point[u, i]]
 
 
 def distinct_rows(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -66,14 +89,17 @@ class ProblemStack:
     """The problems of a fit (one shared :class:`sweep.fit.space.ParamSpace`) and their engine settings.
 
     ``rounds`` counts the engine rounds (a round is one engine call per length of the rows of times);
-    ``on_round`` (if given) is called after each with (round number, distinct points solved).
+    ``on_round`` (if given) is called after each with (round number, distinct points solved). ``estimates``: the
+    engine estimates each model value's error (:meth:`model_errors`); without, the forward solves cost ~0.6x
+    (sweep.fit.forward), each one run at the ladder's first control tolerance (the optimisations' rounds: the best
+    fits are checked by a stack with estimates, sweep.fit.core).
     """
 
     def __init__(self, problems: Sequence[Problem], rtol: float,
-                 on_round: Callable[[int, int], None] | None = None):
+                 on_round: Callable[[int, int], None] | None = None, estimates: bool = True):
         self.problems = list(problems)
         self.space = self.problems[0].space
-        self.rtol, self.on_round, self.rounds = rtol, on_round, 0
+        self.rtol, self.on_round, self.rounds, self.estimates = rtol, on_round, 0, estimates
         sp = self.space
         self.V0, self.g = sp.V0, sp.g
         self.rows = np.array([pr.rows for pr in self.problems])
@@ -116,8 +142,7 @@ class ProblemStack:
         model, stable, block_of = self._blocks(problem, sets)
         T, S = sets.shape[:2]
         r = np.empty((T, S, self.n_max))
-        for t0, t1 in self._chunks(T, S):
-            r[t0:t1] = self._weighted(problem[t0:t1], model, block_of[t0 * S:t1 * S])
+        _residual_rows(model, block_of.reshape(T, S), self.observed[problem], self.weights[problem], MODEL_FAILED, r)
         return r, stable[block_of].reshape(T, S)
 
     def misfits(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -138,10 +163,17 @@ class ProblemStack:
                      self.n_res[problem], MODEL_FAILED, rss)
         return rss, stable[block_of].reshape(T, S)
 
-    def _chunks(self, T: int, S: int) -> list[tuple[int, int]]:
-        """Task ranges of ~CHUNK residuals (temporaries that stay in cache)."""
-        per = max(1, CHUNK // max(1, S * self.n_max))
-        return [(t0, min(T, t0 + per)) for t0 in range(0, T, per)]
+    def model_errors(self, problem: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Per task (``problem`` (T,), parameter set ``theta`` (T, p)): the largest error estimate of the engine's
+        model values over the task's residuals, in units of each residual's noise (NaN where the engine gave no
+        estimate: a failed point); the stack must have ``estimates``."""
+        problem = np.asarray(problem, dtype=np.intp)
+        params = self._params(np.asarray(theta, dtype=float).reshape(problem.size, -1))
+        _, _, err = self._model(self.layout[problem], params, errors=True)
+        with np.errstate(invalid="ignore"):
+            scaled = np.abs(err) * self.weights[problem]
+        scaled[self.weights[problem] == 0] = 0.0  # padding beyond a problem's residuals
+        return np.max(scaled, axis=1, initial=0.0) if scaled.shape[1] else np.zeros(problem.size)
 
     def _blocks(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(model values of the distinct (layout, set) blocks (U, n_max), their stability (U,), the block of each set
@@ -158,17 +190,12 @@ class ProblemStack:
         full = self.space.full(sets)
         return np.column_stack([full[k] for k in ("A", "m1", "m2", "D0", "K_over_M_factor")])
 
-    def _weighted(self, problem: np.ndarray, model: np.ndarray, block_of: np.ndarray) -> np.ndarray:
-        """Residual rows (T, S, n_max) of the tasks ``problem`` from the model rows ``model[block_of]``."""
-        T = problem.size
-        w = self.weights[problem][:, None, :]
-        with np.errstate(invalid="ignore", over="ignore"):
-            r = (model[block_of].reshape(T, -1, self.n_max) - self.observed[problem][:, None, :]) * w
-        return np.where(np.isfinite(r), r, MODEL_FAILED) * (w > 0)
-
-    def _model(self, layout: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _model(self, layout: np.ndarray, params: np.ndarray, errors: bool = False):
         """Model values (U, n_max) [m] in residual order, and stability before every stop (U,), of U blocks: each a
-        layout and a parameter set (A, m1, m2, D0, K/M factor)."""
+        layout and a parameter set (A, m1, m2, D0, K/M factor); with ``errors`` also their error estimates (U, n_max)
+        [m] (a stack with ``estimates`` only)."""
+        if errors and not self.estimates:
+            raise ValueError("error estimates need a ProblemStack with estimates=True")
         U = layout.size
         q = self.representative[layout]
         rows = self.rows[q]
@@ -178,30 +205,39 @@ class ProblemStack:
         pb = params[block]
         keys = np.column_stack((pb[:, :4], self.row_km[row] * pb[:, 4], self.row_v[row], self.row_tid[row]))
         first, inverse = distinct_rows(keys)
-        x, dx, stable = self._solve(keys[first])
+        x, dx, stable, x_err, dx_err = self._solve(keys[first])
         d = inverse[block_start[:, None] + self.res_row[q]]  # (U, n_max) distinct point of each residual
         col = self.res_col[q]
-        if not x.shape[1]:  # relaxed slips only: no sampled column to read
-            x = np.zeros((x.shape[0], 1))
-        model = np.where(col >= 0, x[d, np.maximum(col, 0)], dx[d])
-        ok = np.logical_and.reduceat(stable[inverse], block_start) if block.size else np.ones(U, bool)
-        return model, ok
 
-    def _solve(self, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Slip at the template times, relaxed slip and stability of the distinct points ``keys`` (A, m1, m2, D0,
-        K/M, V, time row), one engine call per length of the rows of times (0: relaxed slip only): a point's numbers
+        def in_residual_order(sampled, relaxed):
+            out = np.empty(d.shape)
+            _in_residual_order(sampled, relaxed, d, col, out)
+            return out
+
+        ok = np.logical_and.reduceat(stable[inverse], block_start) if block.size else np.ones(U, bool)
+        if errors:
+            return in_residual_order(x, dx), ok, in_residual_order(x_err, dx_err)
+        return in_residual_order(x, dx), ok
+
+    def _solve(self, keys: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Slip at the template times, relaxed slip, stability and the two error estimates (None without
+        ``estimates``) of the distinct points ``keys`` (A, m1, m2, D0, K/M, V, time row), one engine call per length
+        of the rows of times (0: relaxed slip only): a point's numbers
         depend on its own times only (the sampled lanes' switch to the closed-form continuation counts the samples
         left: a row padded with its last time gave other numbers)."""
         n = keys.shape[0]
         x, dx, stable = np.full((n, self.templates.shape[1]), np.nan), np.full(n, np.nan), np.zeros(n, bool)
+        x_err, dx_err = (np.full_like(x, np.nan), np.full_like(dx, np.nan)) if self.estimates else (None, None)
         tid = keys[:, 6].astype(np.intp)
         length = self.template_length[tid]
         for L in np.unique(length):
             pick = np.flatnonzero(length == L)
             res = forward(ForwardPoints(*keys[pick, :6].T, t=self.templates[tid[pick], :L]), rtol=self.rtol,
-                          V0=self.V0, g=self.g)
+                          V0=self.V0, g=self.g, estimates=self.estimates)
             x[pick, :L], dx[pick], stable[pick] = res.x, res.dx_inf, res.stable
+            if self.estimates:
+                x_err[pick, :L], dx_err[pick] = res.x_err, res.dx_inf_err
         self.rounds += 1
         if self.on_round is not None:
             self.on_round(self.rounds, n)
-        return x, dx, stable
+        return x, dx, stable, x_err, dx_err

@@ -110,21 +110,22 @@ def _dense_lines(p: str, h: str, piece: str, n_stages: int) -> list[str]:
 
 
 def _sampled_source(tableau, fine, split: int) -> str:
-    """Source of attempt_all(st, atol, tau_weight, norm) for the sampled lanes (module docstring): the fine twin's
-    ``split`` steps in one lane loop written once (as in lanes_adaptive._lane_source), each storing its
-    interpolant, then the run's step and interpolant, its error norm over (xi, u, and tau with the weight
-    ``tau_weight``; ``norm`` = 1 / (2 + tau_weight)), the accept mask and the PI controller, as selects."""
+    """Source of attempt_all(st, atol, tau_weight, norm, twin) for the sampled lanes (module docstring): the fine
+    twin's ``split`` steps (none where ``twin`` is false) in one lane loop written once (as in
+    lanes_adaptive._lane_source), each storing its interpolant, then the run's step and interpolant, its error norm
+    over (xi, u, and tau with the weight ``tau_weight``; ``norm`` = 1 / (2 + tau_weight)), the accept mask and the PI
+    controller, as selects."""
     _, _, b, e = tableau.arrays()
     n = b.size
     W = LANES
     field = lambda f: f"st[{f * W} + l]"  # noqa: E731
     tentative = tuple(field(f) for f in (_TX, _TS, _TT, _TDX, _TDS, _TDT))
     lines = [
-        "def attempt_all(st, atol, tau_weight, norm):",
+        "def attempt_all(st, atol, tau_weight, norm, twin):",
         "    for l in range(W):",
         f"        {', '.join(tentative)}, {field(_TO)} = {field(_XF)}, {field(_SF)}, {field(_TF)}, {field(_DXF)}, "
         f"{field(_DSF)}, {field(_DTF)}, {field(_EXPO)}",
-        f"    for half in range({split}):",
+        f"    for half in range({split} if twin else 0):",
         "        for l in range(W):",
         f"            k, a, bb, s_c = st[l], {field(_A)}, {field(_B)}, {field(_SC)}",
         f"            hf, o_max = {1.0 / split!r} * {field(_H)}, {field(_TO)}",
@@ -159,7 +160,7 @@ def _sampled_source(tableau, fine, split: int) -> str:
 
 
 def _attempt(tableau, fine, split: int):
-    """attempt_all(st, atol, tau_weight, norm) of the sampled lanes, float64, compiled into sample_runs (generated
+    """attempt_all(st, atol, tau_weight, norm, twin) of the sampled lanes, float64, compiled into sample_runs (generated
     source has no file to cache it by)."""
     f = np.float64
     namespace = {"rate_t": make_rate_t(f), "exp_f64": exp_f64, "_log2_approx": _log2_approx, "W": LANES,
@@ -240,7 +241,12 @@ class SampledRuns(NamedTuple):
     ``with_psi``: psi (u = ln psi) is wanted at the samples, and tau enters the error norm. Without it (slip_at
     alone) the steps are those of xi and u, which the slip at a given time needs: tau's relative error, in the
     norm, set the steps of the tail, 1.3x the cost of a fit's forward solve for the same slip estimates; with psi
-    wanted it must stay, or psi's estimates fell below its error (1.18e-5 against 1.01e-5, rtol 1e-4)."""
+    wanted it must stay, or psi's estimates fell below its error (1.18e-5 against 1.01e-5, rtol 1e-4).
+    ``twin``: whether the fine twin runs beside the run. Without it (a caller that needs the values only: the fit's
+    iterations, sweep.fit.stack) the run costs ~0.6x and everything of the twin (its relaxed slip and samples) is
+    NaN: no estimate can be formed. The run's numbers are those it has beside its twin, except where the twin's
+    exponent rejected an attempt (the attempt's largest exponent spans both) or the twin's E delayed the switch to
+    the closed-form continuation (tests/test_lanes_sampled.py)."""
 
     point: np.ndarray
     row: np.ndarray
@@ -251,6 +257,7 @@ class SampledRuns(NamedTuple):
     rtol: float
     max_steps: int
     with_psi: bool
+    twin: bool = True
 
 
 class SampledOutputs(NamedTuple):
@@ -326,11 +333,14 @@ def make_sampled_lane_kernels(tableau, fine, split: int):
 
     @njit(cache=True, fastmath=FAST, error_model="numpy")
     def continue_samples(st, lane, r, j, k, a, bb, job, out):
-        """Samples j.. of run r from the closed-form continuation of the run and of its twin, each from its own
-        state and relaxed slip, with the continuation's bound on u."""
+        """Samples j.. of run r from the closed-form continuation of the run and of its twin (NaN without one), each
+        from its own state and relaxed slip, with the continuation's bound on u."""
         row = job.targets[job.row[r]]
         for base, x_inf, x_at, u_at in ((_X, out.xi_inf[r], out.xi_at[r], out.u_at[r]),
                                         (_XF, out.fine[r], out.xi_fine[r], out.u_fine[r])):
+            if base == _XF and not job.twin:
+                x_at[j:], u_at[j:] = nan, nan
+                continue
             x, s, tau = st[base * W + lane], st[(base + _S - _X) * W + lane], st[(base + _T - _X) * W + lane]
             E = st[(base + _E - _X) * W + lane]
             continue_in_closed_form(k, a, bb, x_inf, s - x, tau, row[j:], x_at[j:], u_at[j:])
@@ -353,11 +363,12 @@ def make_sampled_lane_kernels(tableau, fine, split: int):
         theta_step = newton_step_for(job.rtol)
         tau_weight = 1.0 if job.with_psi else 0.0
         norm = 1.0 / (2.0 + tau_weight)
+        twin = job.twin
         for lane in range(W):
             queued = take_next(st, lane, lane_run, next_j, runs, queued, pts, job, out)
             busy += lane_run[lane] >= 0
         while busy > 0:
-            attempt_all(st, atol, tau_weight, norm)
+            attempt_all(st, atol, tau_weight, norm, twin)
             for lane in range(W):
                 r = lane_run[lane]
                 if r < 0:
@@ -389,10 +400,13 @@ def make_sampled_lane_kernels(tableau, fine, split: int):
                         out.xi_at[r, j], out.u_at[r, j], theta, slope = sample_in_piece(st, _RUN, lane, row[j], guess,
                                                                                          theta_step)
                         t_prev = row[j]
-                        second = row[j] > t_mid  # in the twin's second half step
-                        out.xi_fine[r, j], out.u_fine[r, j], _, _ = sample_in_piece(
-                            st, _HALF + _PIECE if second else _HALF, lane, row[j],
-                            2.0 * theta - (1.0 if second else 0.0), theta_step)
+                        if twin:
+                            second = row[j] > t_mid  # in the twin's second half step
+                            out.xi_fine[r, j], out.u_fine[r, j], _, _ = sample_in_piece(
+                                st, _HALF + _PIECE if second else _HALF, lane, row[j],
+                                2.0 * theta - (1.0 if second else 0.0), theta_step)
+                        else:
+                            out.xi_fine[r, j], out.u_fine[r, j] = nan, nan
                         out.cont_err[r, j] = zero
                         j += 1
                     next_j[lane] = j
@@ -400,10 +414,12 @@ def make_sampled_lane_kernels(tableau, fine, split: int):
                         bound = tail_error(k, a, bb, u, E)
                         if bound <= TAIL_SAFETY * (TAIL_RTOL * xi + atol):  # negligible: see TAIL_RTOL
                             out.xi_inf[r] = xi + tail_slip(k, a, bb, u, E)
-                            out.fine[r] = xf + tail_slip(k, a, bb, uf, Ef)
-                            out.tail_err[r] = bound + tail_error(k, a, bb, uf, Ef)
+                            if twin:
+                                out.fine[r] = xf + tail_slip(k, a, bb, uf, Ef)
+                                bound += tail_error(k, a, bb, uf, Ef)
+                            out.tail_err[r] = bound
                             tail_done[lane] = True
-                    if (tail_done[lane] and j < n_t and E < e_continue and Ef < e_continue
+                    if (tail_done[lane] and j < n_t and E < e_continue and (Ef < e_continue or not twin)
                             and (row[j] > TAU_INTEGRATED
                                  or n_t - j < SAMPLES_PER_EFOLD * math.log(row[n_t - 1] / t_end))):
                         continue_samples(st, lane, r, j, k, a, bb, job, out)

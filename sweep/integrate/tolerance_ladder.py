@@ -53,20 +53,32 @@ entry."""
 
 
 def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, tol0: float, rtol: float, atol: float,
-                     roundoff: float, growth: np.ndarray | float = 0.0, samples: SampleEstimates | None = None
-                     ) -> LadderResult:
+                     roundoff: float, growth: np.ndarray | float = 0.0, samples: SampleEstimates | None = None,
+                     estimates: bool = True) -> LadderResult:
     """Run ``points`` at the control tolerance ``tol0`` (first trial steps ``h0``), and again TOL_RATIO times tighter
     where the estimate (1) exceeds the tolerance. ``LadderResult.step`` holds the returned run's control tolerance,
     ``work`` counts 3 steps per attempt (a step and two half steps); ``growth``: see
     :func:`sweep.integrate.ladder.rounding_error`. With ``samples`` the runner returns a sixth item, the runs'
     samples (:class:`sweep.integrate.lanes_sampled.SampledOutputs`), kept there with their estimates (2); a point
-    is then run again also where a sample's estimate exceeds its tolerance."""
+    is then run again also where a sample's estimate exceeds its tolerance.
+
+    ``estimates=False``: the runner runs without the fine twin (its outputs NaN); every point is run once, at
+    ``tol0``, and returned with no estimate (``error`` NaN, the samples' too): for callers that need the values
+    only and check their accuracy otherwise (sweep.fit: the iterations of its optimisations)."""
     n = points.size
     out = LadderResult(np.full(n, np.nan), np.full(n, np.inf), np.zeros(n, np.int8), np.zeros(n, np.int32),
                        np.full(n, float(tol0)), np.zeros(n, np.int8), np.zeros(n, np.int64))
     growth = np.broadcast_to(np.asarray(growth, dtype=float), (n,))
     todo = np.ones(n, bool)
     every = np.arange(n)
+    if not estimates:
+        x, _, _, status, attempts, *sampled = run(points, out.step, h0)
+        out.xi[:], out.steps[:], out.runs[:], out.work[:] = x, attempts, 1, attempts
+        out.status[:] = np.where((status == OK) & ~np.isfinite(x), NONFINITE, status)
+        out.error[:] = np.nan
+        if samples is not None:
+            samples.store(sampled[0])
+        return out
     while todo.any():
         # the first pass takes every point: slices (views) instead of gathers and scatters through an index array,
         # ~0.1 ms of the ~1 ms of numpy around a default-scene chunk's kernel
@@ -116,6 +128,12 @@ class SampleEstimates:
         """For n points of n_t samples, uninitialised: the first run of every point fills its row."""
         blank = lambda: np.empty((n, n_t))  # noqa: E731
         return cls(blank(), blank(), blank(), blank(), rtol, atol, roundoff, with_psi)
+
+    def store(self, runs) -> None:
+        """The samples of ``runs`` (SampledOutputs of every point, in order) without estimates (NaN): the arrays
+        themselves, no copy."""
+        self.xi, self.u = runs.xi_at, runs.u_at
+        self.xi_err, self.u_err = np.full_like(runs.xi_at, np.nan), np.full_like(runs.u_at, np.nan)
 
     def keep(self, entries: np.ndarray, runs, attempts: np.ndarray, growth: np.ndarray, tail: np.ndarray
              ) -> np.ndarray:
