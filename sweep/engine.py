@@ -76,7 +76,11 @@ class RawResult:
     def assign(self, sel: np.ndarray, part: RawResult) -> None:
         for name, value in vars(part).items():
             if isinstance(value, np.ndarray):
-                getattr(self, name)[sel] = value
+                mine = getattr(self, name)
+                if not mine.flags.writeable:  # a read-only NaN view (estimates not formed): a copy of its own
+                    mine = np.array(mine)
+                    setattr(self, name, mine)
+                mine[sel] = value
 
 
 def _obs_tau(scene: Scene, points: np.ndarray) -> np.ndarray:
@@ -275,8 +279,9 @@ def _time_resolved(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray,
         part = _samples_of_lanes(scene, plan, g[live], np.ascontiguousarray(
             targets if ordered else np.take_along_axis(targets, order, 1)), estimates)
         if not ordered:
-            for name in SAMPLED:  # back from each row's sorted order
-                np.put_along_axis(getattr(part, name), order, getattr(part, name).copy(), 1)
+            for name in SAMPLED:  # back from each row's sorted order (a read-only NaN view has none)
+                if getattr(part, name).flags.writeable:
+                    np.put_along_axis(getattr(part, name), order, getattr(part, name).copy(), 1)
         if out is None:  # every point in the lanes
             out = part
         else:

@@ -100,7 +100,8 @@ def forward(points: ForwardPoints, rtol: float = 1e-8, V0: float = 1e-6, g: floa
     ``rtol`` is the engine's relative accuracy (1e-10..1e-2; pick it far below the data's relative noise).
     V0 [m s-1] and g [m s-2] as in :class:`sweep.FrictionParams`. ``estimates=False``: the points of the sampled
     lanes run once, without the fine twin that estimates their error (~half the cost; ``x_err`` and ``dx_inf_err``
-    NaN there): the fit's iterations, whose best fits are checked with estimates (sweep.fit.core).
+    NaN there; ``x_err`` a read-only NaN view): the fit's iterations, whose best fits are checked with estimates
+    (sweep.fit.core).
     """
     n = points.n
     t = np.asarray(points.t, dtype=float).reshape(n, -1)
@@ -116,7 +117,8 @@ def forward(points: ForwardPoints, rtol: float = 1e-8, V0: float = 1e-6, g: floa
                      estimates=estimates)
     if estimates:  # without, the lanes' points have no estimate to compare (the per-point fallback's are kept)
         mark_error_above_tol(scene, raw)
-    return ForwardResult(x=D0[:, None] * raw.xi_at, x_err=D0[:, None] * raw.xi_at_err, dx_inf=D0 * raw.xi_inf,
+    x_err = D0[:, None] * raw.xi_at_err if estimates else np.broadcast_to(np.nan, raw.xi_at.shape)
+    return ForwardResult(x=D0[:, None] * raw.xi_at, x_err=x_err, dx_inf=D0 * raw.xi_inf,
                          dx_inf_err=D0 * raw.xi_inf_err, status=raw.status,
                          stable=np.asarray(physics.stable_sliding(chi, mu1, A), dtype=bool))
 

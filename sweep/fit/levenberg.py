@@ -20,15 +20,17 @@ profile point keeps only its misfit, which the Jacobian's accuracy does not chan
 With the engine at rtol 1e-6 the derivative carries a relative error ~rtol/FD_STEP ~ 1e-3 and a truncation error
 ~FD_STEP^2 ~ 1e-6, far below what the noise of a measured curve (>~1e-3) resolves.
 
-Each task's numbers depend only on its own residuals: the sums over residuals run per task, over groups of tasks of
-the same length (sweep.fit.stack pads shorter problems with zeros, which would change the rounding of a pairwise
-sum), and the small linear systems are solved one per task; so a task takes exactly the path it would take alone.
+Each task's numbers depend only on its own residuals: the sums over residuals (misfit, J^T r, J^T J, Broyden's
+update) run per task over its own residuals, in order, in compiled loops (sweep.fit.stack pads shorter problems with
+zeros, which would change the rounding of numpy's pairwise sums), and the small linear systems are solved one per
+task; so a task takes exactly the path it would take alone.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from .space import ParamSpace
@@ -109,32 +111,66 @@ def _jacobian(r: np.ndarray, widths: np.ndarray, central: bool) -> np.ndarray:
     return np.swapaxes(d / widths[:, :, None], 1, 2)
 
 
-def _by_length(n: np.ndarray):
-    """(length, indices of the tasks with n == length), for each distinct length: each task's sums then run over its
-    own residuals only, in the order they would run alone (sweep.fit.stack pads shorter problems with zeros)."""
-    for length in np.unique(n):
-        yield int(length), np.flatnonzero(n == length)
+@numba.njit(cache=True, nogil=True)
+def _sumsq_rows(r, n, out):  # pragma: no cover (compiled)
+    """out[t] = sum over i < n[t] of r[t, i]^2, in order."""
+    for t in range(r.shape[0]):
+        acc = 0.0
+        for i in range(n[t]):
+            acc += r[t, i] * r[t, i]
+        out[t] = acc
+
+
+@numba.njit(cache=True, nogil=True)
+def _normal_rows(J, r, n, g, H):  # pragma: no cover (compiled)
+    """g[t] = J[t]^T r[t], H[t] = J[t]^T J[t], each sum over i < n[t], in order."""
+    for t in range(J.shape[0]):
+        m = J.shape[2]
+        for a in range(m):
+            acc = 0.0
+            for i in range(n[t]):
+                acc += J[t, i, a] * r[t, i]
+            g[t, a] = acc
+            for b in range(a, m):
+                acc = 0.0
+                for i in range(n[t]):
+                    acc += J[t, i, a] * J[t, i, b]
+                H[t, a, b] = acc
+                H[t, b, a] = acc
+
+
+@numba.njit(cache=True, nogil=True)
+def _broyden_rows(J, dr, dz, n):  # pragma: no cover (compiled)
+    """Broyden's rank-one secant update in place, J[t] += (dr[t] - J[t] dz[t]) dz[t]^T / (dz[t]^T dz[t]), over the
+    rows i < n[t] (the padding beyond stays zero)."""
+    for t in range(J.shape[0]):
+        m = J.shape[2]
+        dd = 0.0
+        for k in range(m):
+            dd += dz[t, k] * dz[t, k]
+        for i in range(n[t]):
+            s = 0.0
+            for k in range(m):
+                s += J[t, i, k] * dz[t, k]
+            c = dr[t, i] - s
+            for k in range(m):
+                J[t, i, k] += c * (dz[t, k] / dd)
 
 
 def _sumsq(r: np.ndarray, n: np.ndarray) -> np.ndarray:
-    """Per task, sum of r^2 over its own n residuals."""
+    """Per task, sum of r^2 over its own n residuals (in order: a task's sum never depends on the tasks beside it,
+    as numpy's pairwise sums over padded rows would)."""
     out = np.empty(r.shape[0])
-    for length, pick in _by_length(n):
-        out[pick] = np.sum(r[pick, :length] ** 2, axis=1)
+    _sumsq_rows(np.ascontiguousarray(r), np.ascontiguousarray(n), out)
     return out
 
 
 def _normal_equations(J: np.ndarray, r: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(g = J^T r (T, m), H = J^T J (T, m, m)), summed per task over its own n residuals."""
+    """(g = J^T r (T, m), H = J^T J (T, m, m)), summed per task over its own n residuals, in order (one compiled
+    pass; as stacked numpy products, contiguous copies per group of equal length were needed for the same bits)."""
     T, _, m = J.shape
     g, H = np.empty((T, m)), np.empty((T, m, m))
-    for length, pick in _by_length(n):
-        # contiguous copies: matmul takes other loops (other rounding) for strided operands, and a problem padded
-        # beside longer ones is strided where alone it is not
-        Jp, rp = np.ascontiguousarray(J[pick, :length]), np.ascontiguousarray(r[pick, :length, None])
-        Jt = np.ascontiguousarray(np.swapaxes(Jp, 1, 2))
-        g[pick] = (Jt @ rp)[:, :, 0]  # stacked products: one small product per task
-        H[pick] = Jt @ Jp
+    _normal_rows(np.ascontiguousarray(J), np.ascontiguousarray(r), np.ascontiguousarray(n), g, H)
     return g, H
 
 
@@ -243,8 +279,7 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         decrease = rss[acc] - rss_t[better]
         if broyden:  # the secant through the trial, accepted or not
             Ja = J[a]
-            Ja += (rt - r[a] - np.sum(Ja * dz[:, None, :], axis=2))[:, :, None] * (
-                dz / np.sum(dz * dz, axis=1, keepdims=True))[:, None, :]
+            _broyden_rows(Ja, rt - r[a], np.ascontiguousarray(dz), n[a])
             J[a] = Ja
             theta[acc], r[acc], stable[acc] = trial[better], rt[better], st[better]
             g[a], H[a] = _normal_equations(Ja, r[a], n[a])

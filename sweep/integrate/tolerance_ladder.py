@@ -130,10 +130,10 @@ class SampleEstimates:
         return cls(blank(), blank(), blank(), blank(), rtol, atol, roundoff, with_psi)
 
     def store(self, runs) -> None:
-        """The samples of ``runs`` (SampledOutputs of every point, in order) without estimates (NaN): the arrays
-        themselves, no copy."""
+        """The samples of ``runs`` (SampledOutputs of every point, in order) without estimates: the arrays themselves,
+        no copy, and read-only NaN views for the estimates (no memory: RawResult.assign copies them before writing)."""
         self.xi, self.u = runs.xi_at, runs.u_at
-        self.xi_err, self.u_err = np.full_like(runs.xi_at, np.nan), np.full_like(runs.u_at, np.nan)
+        self.xi_err = self.u_err = np.broadcast_to(np.nan, runs.xi_at.shape)
 
     def keep(self, entries: np.ndarray, runs, attempts: np.ndarray, growth: np.ndarray, tail: np.ndarray
              ) -> np.ndarray:
