@@ -90,10 +90,10 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
 
     say(f"least squares from the best grid points ({time.perf_counter() - t0:.1f} s so far)")
     t1 = time.perf_counter()
-    stack = ProblemStack(problems, rtol, estimates=False)
+    stack = stack.with_settings(rtol, estimates=False)
     fits = refine_all(stack, [g.theta for g in globals_])
     rounds["least_squares"], seconds["least_squares"] = stack.rounds, time.perf_counter() - t1
-    model_error = _check_model_error(problems, fits, rtol, progress)
+    model_error = _check_model_error(stack.with_settings(rtol, estimates=True), fits, progress)
 
     s2 = [noise_variance(f.rss, pr.n_residuals, space.p, pr.noise_given) for pr, f in zip(problems, fits)]
     covs = [covariance(f.jac, s) for f, s in zip(fits, s2)]
@@ -119,17 +119,16 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
                       model_error)
 
 
-def _check_model_error(problems, fits, rtol: float, progress: Callable[[str], None] | None) -> np.ndarray:
+def _check_model_error(check: ProblemStack, fits, progress: Callable[[str], None] | None) -> np.ndarray:
     """The engine's largest error estimate at each best fit, in units of the noise (one more forward solve each,
     with estimates); a warning (the "sweep" logger, and ``progress``) where it exceeds MODEL_ERROR_LIMIT."""
-    check = ProblemStack(problems, rtol, estimates=True)
-    err = check.model_errors(np.arange(len(problems)), np.array([f.theta for f in fits]))
-    over = [pr.name for pr, e in zip(problems, err) if not e <= MODEL_ERROR_LIMIT]
+    err = check.model_errors(np.arange(len(check.problems)), np.array([f.theta for f in fits]))
+    over = [pr.name for pr, e in zip(check.problems, err) if not e <= MODEL_ERROR_LIMIT]
     if over:
         msg = (f"the engine's error at the best fit exceeds {MODEL_ERROR_LIMIT:g} of the noise (or has no estimate) "
                f"for {len(over)} sample(s) ({', '.join(over[:5])}{', ...' if len(over) > 5 else ''}): largest "
                f"{np.nanmax(err) if np.isfinite(err).any() else float('nan'):.3g}; fit again with a smaller rtol "
-               f"(now {rtol:g})")
+               f"(now {check.rtol:g})")
         log.warning(msg)
         if progress is not None:
             progress(msg)

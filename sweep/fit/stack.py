@@ -18,6 +18,7 @@ estimates of one call per curve.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable, Sequence
 
 import numba
@@ -133,6 +134,13 @@ class ProblemStack:
         width = max(len(k) for k in layout_keys)
         padded = np.array([np.concatenate((k, np.full(width - len(k), np.nan), [len(k)])) for k in layout_keys])
         self.representative, self.layout = distinct_rows(padded)
+
+    def with_settings(self, rtol: float, estimates: bool) -> ProblemStack:
+        """The same problems and index tables (shared, read only) at another engine ``rtol`` and ``estimates``,
+        rounds counted from 0: the fit's stages differ only in these."""
+        other = copy.copy(self)
+        other.rtol, other.estimates, other.rounds = rtol, estimates, 0
+        return other
 
     def residuals(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Weighted residuals (T, S, n_max) [noise units] of the parameter sets ``sets`` (T, S, p) of tasks of the
