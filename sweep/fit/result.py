@@ -118,8 +118,8 @@ def _landscape(out: FitOutcome) -> tuple[dict[str, xr.Variable], dict[str, xr.Va
 
 
 def _data(out: FitOutcome) -> dict[str, xr.Variable]:
-    cols: dict[str, list] = {k: [] for k in ("sample", "set", "t", "K_over_M", "V", "observed", "fitted", "residual",
-                                              "noise")}
+    cols: dict[str, list] = {k: [] for k in ("t", "K_over_M", "V", "observed", "fitted", "residual", "noise")}
+    names, counts, owner = [], [], []  # per data set: its name, its number of data, its sample
     for q, (pr, f) in enumerate(zip(out.problems, out.fits)):
         noise = pr.noise * np.sqrt(out.s2[q])  # s2 = 1 where the noise is given
         fitted = pr.observed + f.residuals / pr.weights
@@ -130,8 +130,9 @@ def _data(out: FitOutcome) -> dict[str, xr.Variable]:
         factor = out.space.full(f.theta)["K_over_M_factor"][0]
         for d in pr.data:
             n = d.n
-            cols["sample"].append(np.full(n, q))
-            cols["set"].append(np.full(n, d.name, dtype=object))
+            names.append(d.name)
+            counts.append(n)
+            owner.append(q)
             if isinstance(d, Curve):
                 cols["t"].append(d.t)
                 cols["K_over_M"].append(np.full(n, d.K_over_M * factor))
@@ -141,9 +142,10 @@ def _data(out: FitOutcome) -> dict[str, xr.Variable]:
                 cols["K_over_M"].append(d.K_over_M * factor)
                 cols["V"].append(d.V)
     c = {k: np.concatenate(v) for k, v in cols.items()}
+    c["sample"], c["set"] = np.repeat(owner, counts), np.repeat(np.array(names, dtype=str), counts)
     return {
         "datum_sample": _v("datum", c["sample"].astype(np.int32), None, "index of the sample (problem) of the datum"),
-        "datum_set": _v("datum", c["set"].astype(str), None, "name of the data set of the datum"),
+        "datum_set": _v("datum", c["set"], None, "name of the data set of the datum"),
         "datum_t": _v("datum", c["t"], "s", "time after the stop (NaN: a relaxed slip)"),
         "datum_K_over_M": _v("datum", c["K_over_M"], "s-2", "K/M of the datum (times the fitted factor if free)"),
         "datum_V": _v("datum", c["V"], "m s-1", "driving velocity before the stop"),
