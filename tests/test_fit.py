@@ -339,27 +339,27 @@ def test_profiles_are_extended_until_they_cross_the_threshold(monkeypatch):
             assert w_short == pytest.approx(w_default, rel=0.05), name
 
 
-def test_model_error_at_the_best_fit_bounds_the_true_one_and_warns_when_not_negligible(caplog):
+def test_engine_error_at_the_best_fit_bounds_the_true_one_and_warns_when_not_negligible(caplog):
     """The optimisations' forward solves carry no estimate; the best fit's are solved again with them. The reported
-    model_error (largest over the samples, in units of the noise) bounds the true error of the fitted curve against
+    engine_error (largest over the samples, in units of the noise) bounds the true error of the fitted curve against
     the reference at the best-fit parameters, and stays below the limit at the default rtol; with a noise of 1e-8 of
     the relaxed slip and rtol 1e-4 it cannot, and the fit says so (a warning naming the sample and rtol)."""
     import logging
 
-    from sweep.fit.core import MODEL_ERROR_LIMIT
+    from sweep.fit.core import ENGINE_ERROR_LIMIT
 
     curve = _noisy(SAMPLE2, KM2, 1e-6, T, 0.005, 31, name="c")
     ds = sweep.fit(curve, free=FREE, params=_params(SAMPLE2), profiles=False)
     best = {**SAMPLE2, **{n: float(ds[n][0]) for n in FREE}}
     true = np.abs(ds["fitted"].values - slip_curve(best, KM2, 1e-6, T)) / ds["datum_noise"].values
-    err = float(ds["model_error"][0])
-    print(f"model_error {err:.3g}, true {true.max():.3g}")
-    assert np.isfinite(err) and err <= MODEL_ERROR_LIMIT
+    err = float(ds["engine_error"][0])
+    print(f"engine_error {err:.3g}, true {true.max():.3g}")
+    assert np.isfinite(err) and err <= ENGINE_ERROR_LIMIT
     assert true.max() <= max(err, 1e-9)
 
     sigma = 1e-8 * relaxed_slip(SAMPLE2, KM2, 1e-6)
     exact = Curve(T, slip_curve(SAMPLE2, KM2, 1e-6, T), KM2, 1e-6, noise=sigma, sample="tight")
     with caplog.at_level(logging.WARNING, logger="sweep"):
         ds = sweep.fit(exact, free=FREE, params=_params(SAMPLE2), profiles=False, rtol=1e-4)
-    assert float(ds["model_error"][0]) > MODEL_ERROR_LIMIT
+    assert float(ds["engine_error"][0]) > ENGINE_ERROR_LIMIT
     assert any("tight" in r.getMessage() and "rtol" in r.getMessage() for r in caplog.records)

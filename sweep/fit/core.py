@@ -12,7 +12,7 @@ sweep.fit.stack merges their engine runs, sweep.fit.levenberg iterates every tas
 
 The optimisations' forward solves carry no error estimate (the engine's fine twins cost ~0.6x more, and an
 optimisation only needs values far more accurate than the noise): the best fits are solved once more with their
-estimates, and ``model_error`` reports the largest, in units of the noise, with a warning above MODEL_ERROR_LIMIT.
+estimates, and ``engine_error`` reports the largest, in units of the noise, with a warning above ENGINE_ERROR_LIMIT.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ __all__ = ["fit", "run_fit"]
 log = logging.getLogger("sweep")
 
 RTOL_RANGE = (1e-10, 1e-4)
-MODEL_ERROR_LIMIT = 0.01
+ENGINE_ERROR_LIMIT = 0.01
 """Largest engine error at a best fit, in units of the data's noise, below which it is negligible (it shifts the
 misfit by ~2e-2 of one unit of chi^2 on 200 samples at most); above it the fit warns (a smaller ``rtol`` helps)."""
 
@@ -93,7 +93,7 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
     stack = stack.with_settings(rtol, estimates=False)
     fits = refine_all(stack, [g.theta for g in globals_])
     rounds["least_squares"], seconds["least_squares"] = stack.rounds, time.perf_counter() - t1
-    model_error = _check_model_error(stack.with_settings(rtol, estimates=True), fits, progress)
+    engine_error = _check_engine_error(stack.with_settings(rtol, estimates=True), fits, progress)
 
     s2 = [noise_variance(f.rss, pr.n_residuals, space.p, pr.noise_given) for pr, f in zip(problems, fits)]
     covs = [covariance(f.jac, s) for f, s in zip(fits, s2)]
@@ -116,16 +116,16 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
     settings = {"free": list(space.names), "rtol": rtol, "global_rtol": global_rtol, "poor": poor,
                 "per_data_set": bool(per_data_set), "params": _params(params).as_dict()}
     return FitOutcome(problems, space, globals_, fits, s2, covs, crit, profs, ivs, labels, rounds, seconds, settings,
-                      model_error)
+                      engine_error)
 
 
-def _check_model_error(check: ProblemStack, fits, progress: Callable[[str], None] | None) -> np.ndarray:
+def _check_engine_error(check: ProblemStack, fits, progress: Callable[[str], None] | None) -> np.ndarray:
     """The engine's largest error estimate at each best fit, in units of the noise (one more forward solve each,
-    with estimates); a warning (the "sweep" logger, and ``progress``) where it exceeds MODEL_ERROR_LIMIT."""
-    err = check.model_errors(np.arange(len(check.problems)), np.array([f.theta for f in fits]))
-    over = [pr.name for pr, e in zip(check.problems, err) if not e <= MODEL_ERROR_LIMIT]
+    with estimates); a warning (the "sweep" logger, and ``progress``) where it exceeds ENGINE_ERROR_LIMIT."""
+    err = check.engine_errors(np.arange(len(check.problems)), np.array([f.theta for f in fits]))
+    over = [pr.name for pr, e in zip(check.problems, err) if not e <= ENGINE_ERROR_LIMIT]
     if over:
-        msg = (f"the engine's error at the best fit exceeds {MODEL_ERROR_LIMIT:g} of the noise (or has no estimate) "
+        msg = (f"the engine's error at the best fit exceeds {ENGINE_ERROR_LIMIT:g} of the noise (or has no estimate) "
                f"for {len(over)} sample(s) ({', '.join(over[:5])}{', ...' if len(over) > 5 else ''}): largest "
                f"{np.nanmax(err) if np.isfinite(err).any() else float('nan'):.3g}; fit again with a smaller rtol "
                f"(now {check.rtol:g})")

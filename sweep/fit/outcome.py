@@ -34,5 +34,5 @@ class FitOutcome:
     rounds: dict[str, int]
     seconds: dict[str, float]
     settings: dict[str, object]
-    model_error: np.ndarray
+    engine_error: np.ndarray
     """Per problem, the engine's largest error estimate at the best fit in units of the noise (sweep.fit.core)."""

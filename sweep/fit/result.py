@@ -91,10 +91,10 @@ def _per_sample(out: FitOutcome) -> dict[str, xr.Variable]:
         "noise": _v("sample", [np.sqrt(s) * pr.noise[0] if not pr.noise_given else np.nan
                                for pr, s in zip(out.problems, out.s2)],
                     "m", "noise estimated from the residuals, sqrt(RSS/(n - p)) (NaN: noise given)"),
-        "model_error": _v("sample", out.model_error, "1",
+        "engine_error": _v("sample", out.engine_error, "1",
                           "largest error estimate of the engine's model at the best fit, in units of the noise",
                           comment="the optimisations' forward solves carry no estimate; the best fit is solved once "
-                                  "more with them (sweep.fit.core: negligible below MODEL_ERROR_LIMIT = 0.01, a "
+                                  "more with them (sweep.fit.core: negligible below ENGINE_ERROR_LIMIT = 0.01, a "
                                   "warning above)"),
         "function_evaluations": _v("sample", [f.nfev for f in out.fits], "1", "least-squares function evaluations"),
         "least_squares_status": _v("sample", np.array([f.status for f in out.fits], np.int8), None,

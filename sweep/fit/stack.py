@@ -91,7 +91,7 @@ class ProblemStack:
 
     ``rounds`` counts the engine rounds (a round is one engine call per length of the rows of times);
     ``on_round`` (if given) is called after each with (round number, distinct points solved). ``estimates``: the
-    engine estimates each model value's error (:meth:`model_errors`); without, the forward solves cost ~0.6x
+    engine estimates each model value's error (:meth:`engine_errors`); without, the forward solves cost ~0.6x
     (sweep.fit.forward), each one run at the ladder's first control tolerance (the optimisations' rounds: the best
     fits are checked by a stack with estimates, sweep.fit.core).
     """
@@ -171,7 +171,7 @@ class ProblemStack:
                      self.n_res[problem], MODEL_FAILED, rss)
         return rss, stable[block_of].reshape(T, S)
 
-    def model_errors(self, problem: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    def engine_errors(self, problem: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Per task (``problem`` (T,), parameter set ``theta`` (T, p)): the largest error estimate of the engine's
         model values over the task's residuals, in units of each residual's noise (NaN where the engine gave no
         estimate: a failed point); the stack must have ``estimates``."""
