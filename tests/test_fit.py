@@ -363,3 +363,18 @@ def test_engine_error_at_the_best_fit_bounds_the_true_one_and_warns_when_not_neg
         ds = sweep.fit(exact, free=FREE, params=_params(SAMPLE2), profiles=False, rtol=1e-4)
     assert float(ds["engine_error"][0]) > ENGINE_ERROR_LIMIT
     assert any("tight" in r.getMessage() and "rtol" in r.getMessage() for r in caplog.records)
+
+
+def test_a_first_fit_on_a_cold_cache_says_it_compiles(monkeypatch, caplog):
+    """sweep.fit from Python on a machine without numba's cache: the compile notice (logger "sweep") names the
+    forward model's kernel families before the first round, instead of ~1 min of silence."""
+    import logging
+
+    import sweep.compile_notice as notice
+
+    monkeypatch.setattr(notice, "_checked", False)
+    monkeypatch.setattr(notice, "cache_is_cold", lambda: True)
+    with caplog.at_level(logging.INFO, logger="sweep"):
+        sweep.fit(_noisy(SAMPLE2, KM2, 1e-6, T, 0.005, 5), free=FREE, params=_params(SAMPLE2), profiles=False)
+    (message,) = [r.getMessage() for r in caplog.records if "compiling numba kernels" in r.getMessage()]
+    assert "time-resolved lanes" in message, message

@@ -24,6 +24,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 import xarray as xr
 
+from ..compile_notice import announce_if_cold
 from ..errors import InputError
 from ..params import FrictionParams
 from ..presets import presets
@@ -80,6 +81,9 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
         raise InputError(f"poor must be > 0 (relative half-width of a 95 % interval above which a parameter is "
                          f"poorly constrained), got {poor!r}")
     check_problems(problems)
+    # the forward model's kernels (the sampled lanes; the per-point path for parameter sets without a finite relaxed
+    # slip): on a machine without numba's cache, ~1 min of compiling before the first round, said at once
+    announce_if_cold(families=["time-resolved lanes", "time-resolved stop"])
     rounds, seconds = {}, {}
     n_sets = len(problems) * (int(np.prod([a.size for a in grid_axes(space)])) + 1)
     say(f"global stage: {len(problems)} problem(s), {n_sets} parameter sets on the grid")
