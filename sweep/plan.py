@@ -329,7 +329,7 @@ class Plan:
         h.update(repr((choices, constants)).encode())
         for arr in (self.k, self.a, self.b, self.s_c, self.step, self.finite, self.tau_samples, self.point_method,
                     self.G, self.inertial):
-            h.update(np.ascontiguousarray(arr).tobytes())
+            h.update(np.ascontiguousarray(arr))  # the buffer itself: the same bytes as tobytes(), without a copy
         self.__dict__["_hash"] = h.hexdigest()[:16]  # a frozen dataclass: its __setattr__ refuses
         return self.__dict__["_hash"]
 

@@ -124,9 +124,13 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
 
 
 def _check_engine_error(check: ProblemStack, fits, progress: Callable[[str], None] | None) -> np.ndarray:
-    """The engine's largest error estimate at each best fit, in units of the noise (one more forward solve each,
-    with estimates); a warning (the "sweep" logger, and ``progress``) where it exceeds ENGINE_ERROR_LIMIT."""
-    err = check.engine_errors(np.arange(len(check.problems)), np.array([f.theta for f in fits]))
+    """A bound on the engine's error in the model values each best fit used, in units of the noise: one more
+    forward solve each, with estimates, and the difference from the values used (ProblemStack.engine_errors); a
+    warning (the "sweep" logger, and ``progress``) where it exceeds ENGINE_ERROR_LIMIT."""
+    used = np.zeros((len(fits), check.n_max))  # the residuals the fit used (no estimates), padded
+    for q, f in enumerate(fits):
+        used[q, :f.residuals.size] = f.residuals
+    err = check.engine_errors(np.arange(len(check.problems)), np.array([f.theta for f in fits]), used)
     over = [pr.name for pr, e in zip(check.problems, err) if not e <= ENGINE_ERROR_LIMIT]
     if over:
         msg = (f"the engine's error at the best fit exceeds {ENGINE_ERROR_LIMIT:g} of the noise (or has no estimate) "

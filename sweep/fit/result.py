@@ -92,10 +92,11 @@ def _per_sample(out: FitOutcome) -> dict[str, xr.Variable]:
                                for pr, s in zip(out.problems, out.s2)],
                     "m", "noise estimated from the residuals, sqrt(RSS/(n - p)) (NaN: noise given)"),
         "engine_error": _v("sample", out.engine_error, "1",
-                          "largest error estimate of the engine's model at the best fit, in units of the noise",
+                          "bound on the engine's error in the model values of the best fit, in units of the noise "
+                          "(largest over the sample's data)",
                           comment="the optimisations' forward solves carry no estimate; the best fit is solved once "
-                                  "more with them (sweep.fit.core: negligible below ENGINE_ERROR_LIMIT = 0.01, a "
-                                  "warning above)"),
+                                  "more with them: its estimate plus the difference from the values used "
+                                  "(sweep.fit.core: negligible below ENGINE_ERROR_LIMIT = 0.01, a warning above)"),
         "function_evaluations": _v("sample", [f.nfev for f in out.fits], "1", "least-squares function evaluations"),
         "least_squares_status": _v("sample", np.array([f.status for f in out.fits], np.int8), None,
                                    "how the least squares stopped (sweep.fit.levenberg.STATUS; 0: not converged)",

@@ -171,16 +171,22 @@ class ProblemStack:
                      self.n_res[problem], MODEL_FAILED, rss)
         return rss, stable[block_of].reshape(T, S)
 
-    def engine_errors(self, problem: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    def engine_errors(self, problem: np.ndarray, theta: np.ndarray, used: np.ndarray | None = None) -> np.ndarray:
         """Per task (``problem`` (T,), parameter set ``theta`` (T, p)): the largest error estimate of the engine's
         model values over the task's residuals, in units of each residual's noise (NaN where the engine gave no
-        estimate: a failed point); the stack must have ``estimates``."""
+        estimate: a failed point); the stack must have ``estimates``. ``used`` (T, n_max): the weighted residuals
+        the caller computed at ``theta`` without estimates (the ladder's first run, which may differ from the
+        estimated values where the ladder ran a point again): then the bound is |used - these| + their estimate,
+        which bounds the error of the values used."""
         problem = np.asarray(problem, dtype=np.intp)
         params = self._params(np.asarray(theta, dtype=float).reshape(problem.size, -1))
-        _, _, err = self._model(self.layout[problem], params, errors=True)
+        model, _, err = self._model(self.layout[problem], params, errors=True)
+        w = self.weights[problem]
         with np.errstate(invalid="ignore"):
-            scaled = np.abs(err) * self.weights[problem]
-        scaled[self.weights[problem] == 0] = 0.0  # padding beyond a problem's residuals
+            scaled = np.abs(err) * w
+            if used is not None:
+                scaled += np.abs(used - (model - self.observed[problem]) * w)
+        scaled[w == 0] = 0.0  # padding beyond a problem's residuals
         return np.max(scaled, axis=1, initial=0.0) if scaled.shape[1] else np.zeros(problem.size)
 
     def _blocks(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
