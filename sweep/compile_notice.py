@@ -20,6 +20,8 @@ their own (load 0.8): relaxed slip 11.9 s, a cold default `sweep run` 17.9 s of 
 compiled beside it, takes longest), 21.1 s in all. The sampled adaptive lanes (time-resolved, method "auto": the
 "time-resolved lanes" family; 2026-11-26, load 2.6 from other work): 45-49 s for one point's first run (the
 generated attempt alone 26 s, the relaxed lanes' 18 s in the same conditions), the relaxed lanes 13 s beside it.
+A cold first sweep.fit (one curve, 2026-11-27, load ~1): 61 s with the sampled lanes and the per-point path compiled
+one after the other, 38-44 s with the per-point path compiled aside (:func:`compiled_aside`, sweep.fit.core).
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ from pathlib import Path
 
 from .log import LOGGER
 
-__all__ = ["COLD_COMPILE_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "driven_families",
+__all__ = ["COLD_COMPILE_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "compiled_aside", "driven_families",
            "inertial_stop_compiled_aside", "kernel_families", "timed"]
 
 
@@ -121,20 +123,17 @@ def announce_if_cold(scene=None, families: list[str] | None = None) -> bool:
 
 
 @contextmanager
-def inertial_stop_compiled_aside(scene) -> Iterator[None]:
-    """On a cold cache, compile the inertial stop kernels in a second process while this one compiles the rest
-    (the default scene: lanes ~6 s beside inertial ~13 s, on 2 cores); on leaving, wait for it, so that this
-    process then loads them from numba's cache. Nothing happens where the cache is warm, the scene needs no inertial
-    stop kernels or no other family, or the helper cannot start; a helper that fails only means this process
-    compiles them itself, as without it."""
-    families = kernel_families(scene)
-    if "inertial stop" not in families or len(families) < 2 or not cache_is_cold():
+def compiled_aside(code: str, wanted: bool = True) -> Iterator[None]:
+    """On a cold cache (and where ``wanted``), run ``code`` (a warm-up that compiles one kernel family) in a second
+    Python process while this one runs the block (and compiles the rest); on leaving, wait for it, so that this
+    process then loads that family from numba's cache. Nothing happens where the cache is warm or the helper cannot
+    start; a helper that fails only means this process compiles the family itself, as without it."""
+    if not wanted or not cache_is_cold():
         yield
         return
     import subprocess
     import sys
 
-    code = "from sweep.model_choice import warm_up_models; warm_up_models()"
     try:
         # run from the folder that holds this very package: "python -c" puts its working directory first on the
         # path, and started inside a source checkout beside an installed copy (the README's quick start) the helper
@@ -150,6 +149,16 @@ def inertial_stop_compiled_aside(scene) -> Iterator[None]:
     finally:
         if helper.poll() is None:  # interrupted or failed here: the helper's work is not needed any more
             helper.kill()
+
+
+@contextmanager
+def inertial_stop_compiled_aside(scene) -> Iterator[None]:
+    """:func:`compiled_aside` of the inertial stop kernels, where the scene needs them beside another family (the
+    default scene: lanes ~6 s beside inertial ~13 s, on 2 cores)."""
+    families = kernel_families(scene)
+    with compiled_aside("from sweep.model_choice import warm_up_models; warm_up_models()",
+                        "inertial stop" in families and len(families) >= 2):
+        yield
 
 
 @contextmanager

@@ -30,7 +30,7 @@ from ..plan import PointParams, stop_plan_for_points
 from ..scene import Scene
 from ..status import Status
 
-__all__ = ["ForwardPoints", "ForwardResult", "forward", "stable_sliding"]
+__all__ = ["ForwardPoints", "ForwardResult", "forward", "stable_sliding", "warm_up_per_point"]
 
 OK = int(Status.OK)
 
@@ -122,3 +122,14 @@ def forward(points: ForwardPoints, rtol: float = 1e-8, V0: float = 1e-6, g: floa
                          dx_inf_err=D0 * raw.xi_inf_err, status=raw.status,
                          stable=np.asarray(physics.stable_sliding(chi, mu1, A), dtype=bool))
 
+
+
+def warm_up_per_point(*rtols: float) -> None:
+    """Compile (or load from numba's cache) the per-point path of :func:`forward` at each of ``rtols``: one point
+    without a finite relaxed slip (m2 = 0, mu1 < 0: the slip grows without bound, docs/physics.md 6) and one sampled
+    time. A fit's global grid holds such points (sweep.fit.core compiles this in a second process on a cold cache,
+    beside the sampled lanes)."""
+    one = np.ones(1)
+    for rtol in rtols:
+        forward(ForwardPoints(A=0.01 * one, m1=-0.001 * one, m2=0.0 * one, D0=1e-6 * one, K_over_M=1e5 * one,
+                              V=1e-6 * one, t=np.ones((1, 1))), rtol=rtol)
