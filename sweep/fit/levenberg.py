@@ -2,8 +2,9 @@
 
 Every task (a curve's fit, a profile point) minimises its sum of squared weighted residuals over its moving
 parameters (the free parameters not held fixed), within the bound box. One round of :class:`ProblemStack` serves
-one iteration of every unfinished task: each posts its trial parameter set and the finite-difference neighbours of
-that set (the Jacobian is computed speculatively, at the trial point, so that an iteration costs one engine round).
+one iteration of every unfinished task: each posts its trial parameter set and the forward-difference neighbours of
+that set (the Jacobian is computed speculatively, at the trial point, so that an iteration costs one engine round),
+or its trial set alone where the Jacobian follows Broyden's secants (``jac0``).
 Then, per task, in scaled variables z = theta/scale (scale: ParamSpace.scale):
 
 * g = J^T r, H = J^T J; a moving parameter at a bound whose gradient points out of the box is frozen for the step;
@@ -14,11 +15,12 @@ Then, per task, in scaled variables z = theta/scale (scale: ParamSpace.scale):
 * a task stops when its predicted or actual decrease falls below ftol x the misfit, when the step falls below xtol
   (relative, scaled variables), or after max_rounds rounds (status 0).
 
-Jacobians: central differences d r/d theta_j = (r(theta + h_j) - r(theta - h_j))/(2 h_j), h_j = FD_STEP x scale_j
-(one-sided where a bound is closer), or forward differences (``central=False``, p + 1 sets instead of 2p + 1: a
-profile point keeps only its misfit, which the Jacobian's accuracy does not change; it steers the steps only).
-With the engine at rtol 1e-6 the derivative carries a relative error ~rtol/FD_STEP ~ 1e-3 and a truncation error
-~FD_STEP^2 ~ 1e-6, far below what the noise of a measured curve (>~1e-3) resolves.
+Jacobians: forward differences d r/d theta_j = (r(theta + h_j) - r(theta))/h_j, h_j = FD_STEP x scale_j (backward
+where the upper bound is closer), m + 1 sets an iteration: the Jacobian steers the steps, and its error (~FD_STEP)
+barely moves the optimum they stop at (sweep.fit.local). :func:`central_jacobian` gives the central differences
+(r(theta + h_j) - r(theta - h_j))/(2 h_j) at a best fit, for its covariance: with the engine at rtol 1e-6 they carry
+a relative error ~rtol/FD_STEP ~ 1e-3 and a truncation error ~FD_STEP^2 ~ 1e-6, far below what the noise of a
+measured curve (>~1e-3) resolves.
 
 Each task's numbers depend only on its own residuals: the sums over residuals (misfit, J^T r, J^T J, Broyden's
 update) run per task over its own residuals, in order, in compiled loops (sweep.fit.stack pads shorter problems with
@@ -36,7 +38,8 @@ import numpy as np
 from .space import ParamSpace
 from .stack import ProblemStack
 
-__all__ = ["FD_STEP", "FIT", "HOLD", "STATUS", "STATUS_FLAGS", "Solutions", "Tolerances", "solve"]
+__all__ = ["FD_STEP", "FIT", "HOLD", "STATUS", "STATUS_FLAGS", "Solutions", "Tolerances", "central_jacobian",
+           "solve"]
 
 FD_STEP = 1e-3
 """Finite-difference step relative to each parameter's scale (ParamSpace.scale)."""
@@ -70,14 +73,12 @@ STATUS_FLAGS = {0: "max_rounds_reached", 1: "nothing_to_move", 2: "misfit_conver
 
 @dataclass
 class Solutions:
-    """Per task: best parameter set (T, p) (held parameters at their values), its weighted residuals (T, n_max), the
-    Jacobian over every moving parameter (T, n_max, m) (central ones only; None otherwise), misfit (T,), function
-    evaluations (rounds in which the task posted sets), whether sliding was stable before every stop, and the status
-    (a key of STATUS)."""
+    """Per task: best parameter set (T, p) (held parameters at their values), its weighted residuals (T, n_max),
+    misfit (T,), function evaluations (rounds in which the task posted sets), whether sliding was stable before every
+    stop, and the status (a key of STATUS)."""
 
     theta: np.ndarray
     residuals: np.ndarray
-    jac: np.ndarray | None
     rss: np.ndarray
     nfev: np.ndarray
     stable: np.ndarray
@@ -194,8 +195,22 @@ def _within_bounds(z, dz, lo, hi, g, H) -> tuple[np.ndarray, np.ndarray]:
     return np.where(use_proj[:, None], proj, short), np.where(use_proj, p_proj, p_short)
 
 
+def central_jacobian(stack: ProblemStack, problem: np.ndarray, theta: np.ndarray, residuals: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """(central-difference Jacobian (T, n_max, p) of every task at ``theta`` (T, p) over every free parameter, whether
+    sliding was stable at every neighbour (T,)): one engine round of the 2p neighbours, ``residuals`` (T, n_max) those
+    at ``theta`` itself (known)."""
+    problem = np.asarray(problem, dtype=np.intp)
+    T, p = theta.shape
+    cols = np.broadcast_to(np.arange(p), (T, p))
+    sets, widths = _neighbours(theta, cols, stack.space, True)
+    r, ok = stack.residuals(problem, sets[:, 1:])
+    r = np.concatenate((residuals[:, None, :], r), axis=1)
+    return _jacobian(r, widths, True), np.all(ok, axis=1)
+
+
 def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np.ndarray | None = None,
-          central: bool = True, tol: Tolerances = FIT, jac0: np.ndarray | None = None) -> Solutions:
+          tol: Tolerances = FIT, jac0: np.ndarray | None = None) -> Solutions:
     """Minimise every task's misfit; task i belongs to problem ``problem[i]`` and starts at ``theta0[i]`` (clipped
     to the bounds). ``hold`` (T, p) bool marks parameters held at their start (a profile point); every task must
     move the same number of parameters.
@@ -225,14 +240,14 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         if broyden:
             r, ok = stack.residuals(problem[idx], th[:, None, :])
             return r[:, 0], None, ok[:, 0]
-        sets, widths = _neighbours(th, cols[idx], sp, central)
+        sets, widths = _neighbours(th, cols[idx], sp, False)
         r, ok = stack.residuals(problem[idx], sets)
-        return r[:, 0], _jacobian(r, widths, central) * scale[idx][:, None, :], ok[:, 0]
+        return r[:, 0], _jacobian(r, widths, False) * scale[idx][:, None, :], ok[:, 0]
 
     nfev = np.ones(T, np.intp)
     if m == 0:  # nothing to move: the residuals at the start
         r, ok = stack.residuals(problem, theta[:, None, :])
-        return Solutions(theta, r[:, 0], None, _sumsq(r[:, 0], n), nfev, ok[:, 0], np.ones(T, np.intp))
+        return Solutions(theta, r[:, 0], _sumsq(r[:, 0], n), nfev, ok[:, 0], np.ones(T, np.intp))
     status = np.zeros(T, np.intp)
     r, J, stable = post(np.arange(T), theta)
     if broyden:
@@ -294,5 +309,4 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         rss[acc] = rss_t[better]
         status[acc[done]] = 2
         active[acc[done]] = False
-    return Solutions(theta, r, J / scale[:, None, :] if central and not broyden else None, rss, nfev, stable,
-                     status)
+    return Solutions(theta, r, rss, nfev, stable, status)

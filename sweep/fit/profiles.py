@@ -120,7 +120,7 @@ def profile_all(problems: list[Problem], best: list[np.ndarray], best_rss: list[
         hold = np.zeros((len(tasks), p), bool)
         hold[np.arange(len(tasks)), j] = True
         jac0 = jacs_all[q[:, None, None], np.arange(stack.n_max)[None, :, None], others[j][:, None, :]]
-        sol = solve(stack, q, _starts(best_all, covs_all, q, j, value), hold=hold, central=False, tol=HOLD,
+        sol = solve(stack, q, _starts(best_all, covs_all, q, j, value), hold=hold, tol=HOLD,
                     jac0=jac0)
         for (q, j, value), rss in zip(tasks, sol.rss):
             points.setdefault((q, j), []).append((value, float(rss)))
