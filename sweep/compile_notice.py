@@ -35,8 +35,8 @@ from pathlib import Path
 
 from .log import LOGGER
 
-__all__ = ["COLD_COMPILE_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "compiled_aside", "driven_families",
-           "inertial_stop_compiled_aside", "kernel_families", "timed"]
+__all__ = ["COLD_COMPILE_S", "HELPER_WAIT_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "compiled_aside",
+           "driven_families", "inertial_stop_compiled_aside", "kernel_families", "timed"]
 
 
 COLD_COMPILE_S = {"relaxed-slip engine": 12, "time-resolved stop": 18, "time-resolved lanes": 45, "inertial stop": 18,
@@ -44,6 +44,9 @@ COLD_COMPILE_S = {"relaxed-slip engine": 12, "time-resolved stop": 18, "time-res
 """Seconds to compile each kernel family from an empty cache on the 2-core development machine (module docstring)."""
 SLOW_S = 3.0
 """A warm-up still running after this many seconds is compiling, not loading: say so."""
+HELPER_WAIT_S = 300.0
+"""At most this long a block of :func:`compiled_aside` waits for its helper once it is done itself (a family compiles
+in ~20-45 s on 2 cores): a helper stuck for any reason is killed, and this process compiles what it still needs."""
 PACKAGE = Path(__file__).resolve().parent
 _checked = False
 _compiling_announced = False
@@ -145,9 +148,11 @@ def compiled_aside(code: str, wanted: bool = True) -> Iterator[None]:
         return
     try:
         yield
-        helper.wait()
+        helper.wait(timeout=HELPER_WAIT_S)
+    except subprocess.TimeoutExpired:
+        pass  # killed below; what the helper did not cache, this process compiles when it needs it
     finally:
-        if helper.poll() is None:  # interrupted or failed here: the helper's work is not needed any more
+        if helper.poll() is None:  # interrupted, failed or stuck: the helper's work is not needed any more
             helper.kill()
 
 

@@ -491,7 +491,7 @@ def test_the_inertial_helper_compiles_the_package_this_process_runs(monkeypatch,
         def __init__(self, args, **kw):
             started.append(kw.get("cwd"))
 
-        def wait(self):
+        def wait(self, timeout=None):
             return 0
 
         def poll(self):
@@ -503,3 +503,33 @@ def test_the_inertial_helper_compiles_the_package_this_process_runs(monkeypatch,
     with notice.inertial_stop_compiled_aside(sweep.default_scene()):
         pass
     assert started and Path(started[0]) == Path(sweep.__file__).resolve().parent.parent
+
+
+def test_a_stuck_compile_helper_is_killed_after_its_wait(monkeypatch):
+    """compiled_aside waits for its helper at most HELPER_WAIT_S once its own block is done: a helper that never
+    ends (stuck for any reason) is killed, and the block's caller goes on (it compiles what it still needs)."""
+    import subprocess
+
+    import sweep.compile_notice as notice
+
+    killed, waited = [], []
+
+    class Stuck:
+        def __init__(self, args, **kw):
+            pass
+
+        def wait(self, timeout=None):
+            waited.append(timeout)
+            raise subprocess.TimeoutExpired("python", timeout)
+
+        def poll(self):
+            return None
+
+        def kill(self):
+            killed.append(True)
+
+    monkeypatch.setattr(notice, "cache_is_cold", lambda: True)
+    monkeypatch.setattr(subprocess, "Popen", Stuck)
+    with notice.compiled_aside("pass"):
+        pass
+    assert waited == [notice.HELPER_WAIT_S] and killed == [True]

@@ -381,7 +381,7 @@ def test_a_first_fit_on_a_cold_cache_says_it_compiles_and_compiles_aside(monkeyp
         def __init__(self, args, **kw):
             started.append(args)
 
-        def wait(self):
+        def wait(self, timeout=None):
             return 0
 
         def poll(self):
