@@ -123,7 +123,6 @@ def forward(points: ForwardPoints, rtol: float = 1e-8, V0: float = 1e-6, g: floa
                          stable=np.asarray(physics.stable_sliding(chi, mu1, A), dtype=bool))
 
 
-
 def warm_up_per_point(*rtols: float) -> None:
     """Compile (or load from numba's cache) the per-point path of :func:`forward` at each of ``rtols``: one point
     without a finite relaxed slip (m2 = 0, mu1 < 0: the slip grows without bound, docs/physics.md 6) and one sampled

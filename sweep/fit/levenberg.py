@@ -196,17 +196,15 @@ def _within_bounds(z, dz, lo, hi, g, H) -> tuple[np.ndarray, np.ndarray]:
 
 
 def central_jacobian(stack: ProblemStack, problem: np.ndarray, theta: np.ndarray, residuals: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray]:
-    """(central-difference Jacobian (T, n_max, p) of every task at ``theta`` (T, p) over every free parameter, whether
-    sliding was stable at every neighbour (T,)): one engine round of the 2p neighbours, ``residuals`` (T, n_max) those
-    at ``theta`` itself (known)."""
+                     ) -> np.ndarray:
+    """Central-difference Jacobian (T, n_max, p) of every task at ``theta`` (T, p) over every free parameter: one
+    engine round of the 2p neighbours, ``residuals`` (T, n_max) those at ``theta`` itself (known)."""
     problem = np.asarray(problem, dtype=np.intp)
     T, p = theta.shape
     cols = np.broadcast_to(np.arange(p), (T, p))
     sets, widths = _neighbours(theta, cols, stack.space, True)
-    r, ok = stack.residuals(problem, sets[:, 1:])
-    r = np.concatenate((residuals[:, None, :], r), axis=1)
-    return _jacobian(r, widths, True), np.all(ok, axis=1)
+    r, _ = stack.residuals(problem, sets[:, 1:])
+    return _jacobian(np.concatenate((residuals[:, None, :], r), axis=1), widths, True)
 
 
 def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np.ndarray | None = None,

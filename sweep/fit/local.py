@@ -44,7 +44,7 @@ def refine_all(stack: ProblemStack, theta0: list[np.ndarray]) -> list[LocalFit]:
     tasks = np.arange(len(stack.problems))
     theta0 = np.clip(np.array(theta0, dtype=float), stack.space.lower, stack.space.upper)
     sol = solve(stack, tasks, theta0, tol=FIT)
-    jac, _ = central_jacobian(stack, tasks, sol.theta, sol.residuals)
+    jac = central_jacobian(stack, tasks, sol.theta, sol.residuals)
     out = []
     for q, n in enumerate(stack.n_res):
         out.append(LocalFit(sol.theta[q].copy(), sol.residuals[q, :n].copy(), jac[q, :n].copy(),

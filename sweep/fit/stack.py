@@ -30,37 +30,38 @@ from .problem import MODEL_FAILED, Problem
 __all__ = ["ProblemStack", "distinct_rows"]
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _weighted_residual(model, observed, weight, failed):  # pragma: no cover (compiled)
+    """(model - observed) weight, ``failed`` where that is not finite (the model gave no number)."""
+    r = (model - observed) * weight
+    return r if np.isfinite(r) else failed
+
+
 @numba.njit(cache=True, nogil=True, parallel=True)
 def _misfit_sums(model, block_of, observed, weights, n_res, failed, out):  # pragma: no cover (compiled)
-    """out[t, s] = sum over i < n_res[t] of ((model[block_of[t, s], i] - observed[t, i]) weights[t, i])^2, a
-    non-finite residual counted as ``failed``: one pass, no temporaries (numpy needed 6 passes over 100 curves x 730
-    grid sets x 200 samples, 85 % of the global stage), tasks split over the threads (each sum runs in order)."""
+    """out[t, s] = sum over i < n_res[t] of the squared :func:`_weighted_residual` of model[block_of[t, s], i]: one
+    pass, no temporaries (numpy needed 6 passes over 100 curves x 730 grid sets x 200 samples, 85 % of the global
+    stage), tasks split over the threads (each sum runs in order)."""
     for t in numba.prange(block_of.shape[0]):
         for s in range(block_of.shape[1]):
             row = model[block_of[t, s]]
             acc = 0.0
             for i in range(n_res[t]):
-                r = (row[i] - observed[t, i]) * weights[t, i]
-                if not np.isfinite(r):
-                    r = failed
+                r = _weighted_residual(row[i], observed[t, i], weights[t, i], failed)
                 acc += r * r
             out[t, s] = acc
 
 
-
 @numba.njit(cache=True, nogil=True)
 def _residual_rows(model, block_of, observed, weights, failed, out):  # pragma: no cover (compiled)
-    """out[t, s, i] = (model[block_of[t, s], i] - observed[t, i]) weights[t, i], ``failed`` where not finite, 0 where
-    the weight is 0 (beyond a problem's residuals): one pass, no temporaries (as numpy: 4 passes and a gather)."""
+    """out[t, s, i] = :func:`_weighted_residual` of model[block_of[t, s], i], 0 where the weight is 0 (beyond a
+    problem's residuals): one pass, no temporaries (as numpy: 4 passes and a gather)."""
     for t in range(block_of.shape[0]):
         for s in range(block_of.shape[1]):
             row = model[block_of[t, s]]
             for i in range(row.size):
                 w = weights[t, i]
-                r = (row[i] - observed[t, i]) * w
-                if not np.isfinite(r):
-                    r = failed
-                out[t, s, i] = r if w > 0 else 0.0
+                out[t, s, i] = _weighted_residual(row[i], observed[t, i], w, failed) if w > 0 else 0.0
 
 
 @numba.njit(cache=True, nogil=True)

@@ -69,8 +69,6 @@ def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, to
     out = LadderResult(np.full(n, np.nan), np.full(n, np.inf), np.zeros(n, np.int8), np.zeros(n, np.int32),
                        np.full(n, float(tol0)), np.zeros(n, np.int8), np.zeros(n, np.int64))
     growth = np.broadcast_to(np.asarray(growth, dtype=float), (n,))
-    todo = np.ones(n, bool)
-    every = np.arange(n)
     if not estimates:
         x, _, _, status, attempts, *sampled = run(points, out.step, h0)
         out.xi[:], out.steps[:], out.runs[:], out.work[:] = x, attempts, 1, attempts
@@ -79,6 +77,8 @@ def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, to
         if samples is not None:
             samples.store(sampled[0])
         return out
+    todo = np.ones(n, bool)
+    every = np.arange(n)
     while todo.any():
         # the first pass takes every point: slices (views) instead of gathers and scatters through an index array,
         # ~0.1 ms of the ~1 ms of numpy around a default-scene chunk's kernel
