@@ -7,17 +7,28 @@ process and recompiled (~8 s per process, and the cache index grew by one entry 
 dispatcher (or intrinsic) a UUID derived from its module, qualified name and variant instead, so the pickle, and
 the cache key, are the same in every process (the fastmath options are dicts, not sets, for the same reason:
 models/stop.py FAST).
+
+The UUID also carries a digest of the package's sources (:func:`source_digest`). numba keeps a cached kernel as long
+as the file that defines it is unchanged, and a closure's key holds only the identities of the dispatchers it calls;
+a kernel built by a factory and compiled into another module's loop (the lanes' relax_runs into
+integrate/batch.py's lanes_batch) would otherwise load from the cache with the code of an older version of its
+factory's module whenever that module changed and batch.py did not. Measured once, in a development tree: a stale
+lanes_batch with an older stage layout wrote past its state array, and the next sweep in the process failed with a
+corrupted heap. With the digest every edit of the package gives its factory-built kernels new keys.
 """
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import sys
+from pathlib import Path
 
 from numba.core import event
 from numba.core.dispatcher import Dispatcher
 from numba.core.extending import _Intrinsic
 
-__all__ = ["compiling", "pin", "pin_module"]
+__all__ = ["compiling", "pin", "pin_module", "source_digest"]
 
 
 class _CompileDepth(event.Listener):
@@ -44,11 +55,21 @@ def compiling() -> bool:
     return _COMPILE_DEPTH.depth > 0
 
 
+@functools.cache
+def source_digest(root: Path = Path(__file__).parent) -> str:
+    """16 hex digits of a SHA-256 over the names and contents of every .py file under ``root`` (default: the sweep
+    package), in sorted order (a few ms, once per process)."""
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        h.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    return h.hexdigest()[:16]
+
+
 def pin(dispatcher: Dispatcher | _Intrinsic, *variant: object) -> Dispatcher | _Intrinsic:
-    """Set a stable UUID "sweep:<module>.<qualname>[:variant...]" on a dispatcher or intrinsic (no-op if it has
-    one)."""
+    """Set a stable UUID "sweep:<source digest>:<module>.<qualname>[:variant...]" on a dispatcher or intrinsic (no-op
+    if it has one)."""
     func = dispatcher.py_func if isinstance(dispatcher, Dispatcher) else dispatcher._defn
-    name = ":".join(["sweep", f"{func.__module__}.{func.__qualname__}", *map(str, variant)])
+    name = ":".join(["sweep", source_digest(), f"{func.__module__}.{func.__qualname__}", *map(str, variant)])
     try:
         dispatcher._set_uuid(name)
     except AssertionError:  # already identified (e.g. pickled before): keep it

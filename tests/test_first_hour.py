@@ -1,14 +1,17 @@
 """What a new user meets in the first hour (issue 16): packaging, one-line errors instead of tracebacks, warnings on
 implausible units, logging and progress. The CLI is run through a subprocess: exit code and the one-line message."""
 
+import shutil
 import subprocess
 import sys
 import tomllib
 from pathlib import Path
 
+import numba
 import pytest
 
 import sweep
+from sweep.jitcache import source_digest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -474,7 +477,26 @@ def test_a_second_process_loads_every_kernel_from_numba_cache():
     second = run()
     assert second.returncode == 0, second.stderr
     again = second.stdout.split()
-    assert again == ["sweep:sweep.integrate.batch.driven_batch.<locals>.batch:aging:inertial"], again
+    assert again == [f"sweep:{source_digest()}:sweep.integrate.batch.driven_batch.<locals>.batch:aging:inertial"], again
+
+
+def test_a_kernels_identity_changes_with_any_source_of_the_package(tmp_path):
+    """Factory-built kernels are keyed in numba's cache by identities that carry a digest of the package's sources
+    (sweep/jitcache.py): an edit of any module gives them new keys, so a kernel compiled into another module's loop
+    never loads with the code of an older version of its factory (a stale lanes_batch once corrupted the heap)."""
+    from sweep.jitcache import pin
+
+    package = tmp_path / "pkg"
+    shutil.copytree(Path(sweep.__file__).parent, package, ignore=shutil.ignore_patterns("__pycache__"))
+    before = source_digest(package)
+    assert before == source_digest(Path(sweep.__file__).parent)  # the names and contents, not where they lie
+    edited = tmp_path / "edited"
+    shutil.copytree(package, edited)
+    module = edited / "integrate" / "lanes_adaptive.py"
+    module.write_text(module.read_text() + "\n# an edit\n")
+    assert source_digest(edited) != before
+    kernel = pin(numba.njit(lambda x: x + 1), "variant")
+    assert kernel._uuid.startswith(f"sweep:{source_digest()}:") and kernel._uuid.endswith(":variant")
 
 
 def test_the_inertial_helper_compiles_the_package_this_process_runs(monkeypatch, tmp_path):

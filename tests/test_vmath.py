@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from sweep.solvers.vmath import exp_f32, exp_f64
+from sweep.solvers.vmath import exp_f32, exp_f64, exp_f64_coarse
 
 
 def _mapper(exp):
@@ -22,7 +22,7 @@ def _mapper(exp):
     return apply
 
 
-_map64, _map32 = _mapper(exp_f64), _mapper(exp_f32)
+_map64, _map32, _map64_coarse = _mapper(exp_f64), _mapper(exp_f32), _mapper(exp_f64_coarse)
 
 
 def _arguments(lo, hi):
@@ -46,9 +46,17 @@ def test_exp_f32_within_one_ulp():
     assert rel.max() <= 1.0 * np.finfo(np.float32).eps
 
 
-@pytest.mark.parametrize("mapper, big", [(_map64, 1e4), (_map32, np.float32(1e4))])
+def test_exp_f64_coarse_within_its_stated_bound():
+    """The degree-7 float64 exp of the first-order inertial correction's source: within 1e-8 relative (its
+    docstring), and no better than it need be (or exp_f64 would do at no extra cost)."""
+    x = _arguments(-708.0, 708.0)
+    rel = np.abs((_map64_coarse(x).astype(np.longdouble) / np.exp(x.astype(np.longdouble))) - 1).astype(float)
+    assert 1e-10 < rel.max() <= 1e-8
+
+
+@pytest.mark.parametrize("mapper, big", [(_map64, 1e4), (_map32, np.float32(1e4)), (_map64_coarse, 1e4)])
 def test_exp_clamps_instead_of_overflowing(mapper, big):
     """Arguments beyond the normal range are clamped (callers test their exponent themselves, EXP_MAX)."""
-    x = np.array([-big, big], dtype=np.float64 if mapper is _map64 else np.float32)
+    x = np.array([-big, big], dtype=np.float32 if mapper is _map32 else np.float64)
     y = mapper(x)
     assert np.all(np.isfinite(y)) and 0.0 < y[0] < 1e-37 and y[1] > 1e38

@@ -41,7 +41,7 @@ from numba import njit
 
 from ..jitcache import pin, pin_module
 from ..solvers.fastmath import FAST
-from ..solvers.vmath import EXP_MAX, exp_f32, exp_f64
+from ..solvers.vmath import EXP_MAX, exp_f32, exp_f64_coarse
 from .stop import tail_integral
 
 __all__ = ["LN_R_MAX", "inertia_negligible", "inertial_system", "make_correction_rate", "quasistatic_system",
@@ -101,7 +101,7 @@ def make_correction_rate(dtype):
     (xi, s, y) and what the quasi-static rate already computed there (w, E and its exponent expo). E^2 e^(-2u) is
     one more exponential, exp(2 (expo - u)): exact, where a third state e^(-u) would add its own truncation error."""
     f = np.dtype(dtype).type
-    exp = exp_f32 if f is np.float32 else exp_f64
+    exp = exp_f32 if f is np.float32 else exp_f64_coarse
     one, two = f(1.0), f(2.0)
 
     @njit(inline="always", fastmath=FAST, error_model="numpy", cache=True)

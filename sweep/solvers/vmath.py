@@ -26,7 +26,7 @@ from numba.extending import intrinsic
 
 from ..jitcache import pin_module
 
-__all__ = ["EXP_MAX", "exp_f64", "exp_f32"]
+__all__ = ["EXP_MAX", "exp_f32", "exp_f64", "exp_f64_coarse"]
 
 EXP_MAX = 700.0
 """Largest exponent a model passes to exp (exp(709.8) overflows float64): beyond it a point is flagged nonfinite
@@ -94,6 +94,23 @@ def exp_f64(x: float) -> float:
     r4 = r2 * r2
     q = ((c[2] + c[3] * r) + (c[4] + c[5] * r) * r2) + ((c[6] + c[7] * r) + (c[8] + c[9] * r) * r2) * r4
     q = q + ((c[10] + c[11] * r) + (c[12] + c[13] * r) * r2) * (r4 * r4)
+    p = c[0] + r * (c[1] + r * q)
+    return p * _bits_as_float((_float_as_bits(t) - _ROUND_BITS + 1023) << 52)
+
+
+@njit(inline="always", fastmath={"nsz": True, "contract": True}, error_model="numpy", cache=True)
+def exp_f64_coarse(x: float) -> float:
+    """exp(x) for float64 to a relative error <= 1e-8 for -708 <= x <= 708 (clamped outside): the range reduction
+    of exp_f64 with the Taylor polynomial of degree 7 (that of exp_f32), about half the operations; for terms that
+    need far less accuracy than a float64 carries (the source of the first-order inertial correction,
+    sweep/models/stop_inertial.py, which decides the model to model_tol)."""
+    x = min(max(x, -708.0), 708.0)
+    t = x * _LOG2E + _ROUND
+    n = t - _ROUND
+    r = (x - n * _LN2_HI) - n * _LN2_LO
+    c = _P64
+    r2 = r * r
+    q = (c[2] + c[3] * r) + (c[4] + c[5] * r) * r2 + (c[6] + c[7] * r) * (r2 * r2)
     p = c[0] + r * (c[1] + r * q)
     return p * _bits_as_float((_float_as_bits(t) - _ROUND_BITS + 1023) << 52)
 
