@@ -99,6 +99,15 @@ def exp_f64(x: float) -> float:
 
 
 @njit(inline="always", fastmath={"nsz": True, "contract": True}, error_model="numpy", cache=True)
+def _taylor7(r, c):
+    """sum_{i <= 7} c_i r^i (c_i = 1/i!, in r's float type) as 1 + r (1 + r q(r)), q in Estrin's scheme: the
+    polynomial of exp_f32 and exp_f64_coarse."""
+    r2 = r * r
+    q = (c[2] + c[3] * r) + (c[4] + c[5] * r) * r2 + (c[6] + c[7] * r) * (r2 * r2)
+    return c[0] + r * (c[1] + r * q)
+
+
+@njit(inline="always", fastmath={"nsz": True, "contract": True}, error_model="numpy", cache=True)
 def exp_f64_coarse(x: float) -> float:
     """exp(x) for float64 to a relative error <= 1e-8 for -708 <= x <= 708 (clamped outside): the range reduction
     of exp_f64 with the Taylor polynomial of degree 7 (that of exp_f32), about half the operations; for terms that
@@ -108,11 +117,7 @@ def exp_f64_coarse(x: float) -> float:
     t = x * _LOG2E + _ROUND
     n = t - _ROUND
     r = (x - n * _LN2_HI) - n * _LN2_LO
-    c = _P64
-    r2 = r * r
-    q = (c[2] + c[3] * r) + (c[4] + c[5] * r) * r2 + (c[6] + c[7] * r) * (r2 * r2)
-    p = c[0] + r * (c[1] + r * q)
-    return p * _bits_as_float((_float_as_bits(t) - _ROUND_BITS + 1023) << 52)
+    return _taylor7(r, _P64) * _bits_as_float((_float_as_bits(t) - _ROUND_BITS + 1023) << 52)
 
 
 @njit(inline="always", fastmath={"nsz": True, "contract": True}, error_model="numpy", cache=True)
@@ -122,10 +127,7 @@ def exp_f32(x):
     t = x * _LOG2E_32 + _ROUND_32
     n = t - _ROUND_32
     r = (x - n * _LN2_HI_32) - n * _LN2_LO_32
-    c = _P32
-    r2 = r * r
-    q = (c[2] + c[3] * r) + (c[4] + c[5] * r) * r2 + (c[6] + c[7] * r) * (r2 * r2)
-    p = c[0] + r * (c[1] + r * q)
+    p = _taylor7(r, _P32)
     # numba widens int32 arithmetic to int64: narrow back before reinterpreting the bits as float32
     return p * _bits_as_float(np.int32((_float_as_bits(t) - _ROUND_BITS_32 + _BIAS_32) << _SHIFT_32))
 
