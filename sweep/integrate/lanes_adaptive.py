@@ -142,8 +142,8 @@ def controller_lines(field, logprev: int, rej: int, h: int) -> list[str]:
 
 _OM = 29  # the attempt's largest exponent so far (the stage loops keep it per lane)
 _STAGES = 30
-"""First of the stage fields: stage j >= 2 of the step under way at _STAGES + width (j - 2) (:func:`_stage_width`;
-:func:`_stage_loops`)."""
+"""First of the stage fields: the derivatives of stage j >= 2 of the step under way, (dx_j, ds_j[, dy_j]) at
+_STAGES + width (j - 2) (:func:`_stage_loops`)."""
 
 
 def _stage_width(correction: bool) -> int:
@@ -152,28 +152,11 @@ def _stage_width(correction: bool) -> int:
     return 5 if correction else 2
 
 
-def _evaluated(tableau) -> int:
-    """Stages evaluated before a step's end (FSAL tableaux: the last stage is the end's derivative)."""
-    return len(tableau.b) - 1 if tableau.fsal else len(tableau.b)
-
-
 def _stage_fields(tableau, correction: bool) -> int:
     """Number of stage fields of :func:`_stage_loops` for ``tableau``."""
-    return _stage_width(correction) * (_evaluated(tableau) - 1)
-
-
-def _stage_sum(weights, comp: int, count: int, first: tuple[str, ...], width: int, last: int) -> str:
-    """sum_j weights_j d_j over stages j = 1..count, component ``comp`` (0: x, 1: s, 2: y) of each stage's
-    derivative: the first stage's is first[comp], stages 2..last are in the stage fields (``width`` per stage), a
-    later one is the end's (FSAL: dxe, dse, dye). Zero weights are left out; the weights are written as literals."""
-    def derivative(j: int) -> str:
-        if j == 1:
-            return first[comp]
-        if j <= last:
-            return f"st[{(_STAGES + width * (j - 2) + comp) * LANES} + l]"
-        return ("dxe", "dse", "dye")[comp]
-
-    return " + ".join(f"{float(weights[j])!r} * {derivative(j + 1)}" for j in range(count) if weights[j] != 0.0)
+    _, _, b, _ = tableau.arrays()
+    last = b.size - 1 if tableau.fsal else b.size
+    return _stage_width(correction) * (last - 1)
 
 
 def _stage_loops(tableau, start: tuple[str, ...], h: str, o_start: str, correction: bool, end: list[str]
@@ -196,14 +179,21 @@ def _stage_loops(tableau, start: tuple[str, ...], h: str, o_start: str, correcti
     steps). With y in the same loop the rounding of xi moved (the contraction into FMAs differed), and 9 of the
     default scene's 20,000 points took other steps."""
     _, A, b, _ = tableau.arrays()
-    last = _evaluated(tableau)
+    last = b.size - 1 if tableau.fsal else b.size
     width = _stage_width(correction)
     W = LANES
     field = lambda f: f"st[{f * W} + l]"  # noqa: E731
-    first = tuple(start[i] for i in ((2, 3, 5) if correction else (2, 3)))
+
+    def derivative(j: int, comp: int) -> str:  # of stage j (1-based); comp 0: x, 1: s, 2: y
+        if j == 1:
+            return start[(2, 3, 5)[comp]]
+        if j <= last:
+            return field(_STAGES + width * (j - 2) + comp)
+        return ("dxe", "dse", "dye")[comp]  # FSAL: the end's derivative
 
     def combination(weights, comp: int, count: int) -> str:
-        return _stage_sum(weights, comp, count, first, width, last)
+        return " + ".join(f"{float(weights[j])!r} * {derivative(j + 1, comp)}" for j in range(count)
+                          if weights[j] != 0.0)
 
     head = ["    for l in range(W):",
             f"        k, a, bb, s_c, h = st[l], {field(_A)}, {field(_B)}, {field(_SC)}, {h}",
@@ -261,9 +251,16 @@ def _lane_source(tableau, correction: bool, fine=None, split: int = 2) -> str:
             fine, tentative, f"{1.0 / split!r} * {field(_H)}", field(_TO), False,
             [f"        {', '.join(tentative)}, {field(_TE)}, {field(_TO)} = xe, se, dxe, dse, Ee, o_max"])),
     ]
+    last = b.size - 1 if tableau.fsal else b.size
+    width = _stage_width(correction)
 
-    def error(comp: int) -> str:  # the embedded estimate, the first stage's derivative from the locals dx1, ds1
-        return _stage_sum(e, comp, b.size, ("dx1", "ds1"), _stage_width(correction), _evaluated(tableau))
+    def derivative(j: int, comp: int) -> str:  # as in _stage_loops, the first stage's from the locals dx1, ds1
+        if j == 1:
+            return ("dx1", "ds1")[comp]
+        return field(_STAGES + width * (j - 2) + comp) if j <= last else ("dxe", "dse")[comp]
+
+    def error(comp: int) -> str:
+        return " + ".join(f"{float(e[j])!r} * {derivative(j + 1, comp)}" for j in range(b.size) if e[j] != 0.0)
 
     close = [
         f"        tol, dx1, ds1 = {field(_TOL)}, {field(_DX)}, {field(_DS)}",
