@@ -146,17 +146,11 @@ _STAGES = 30
 _STAGES + width (j - 2) (:func:`_stage_loops`)."""
 
 
-def _stage_width(correction: bool) -> int:
-    """Fields per stage of :func:`_stage_loops`: dx_j, ds_j, and with the correction dy_j and the stage's E_j and
-    exponent."""
-    return 5 if correction else 2
-
-
 def _stage_fields(tableau, correction: bool) -> int:
     """Number of stage fields of :func:`_stage_loops` for ``tableau``."""
     _, _, b, _ = tableau.arrays()
     last = b.size - 1 if tableau.fsal else b.size
-    return _stage_width(correction) * (last - 1)
+    return (3 if correction else 2) * (last - 1)
 
 
 def _stage_loops(tableau, start: tuple[str, ...], h: str, o_start: str, correction: bool, end: list[str]
@@ -171,16 +165,10 @@ def _stage_loops(tableau, start: tuple[str, ...], h: str, o_start: str, correcti
     relaxed-slip lanes (dop853 with its twin, 1 thread): 1.2-1.27x faster on the default scene and its costly corner
     (benchmarks/peers.py; docs/design.md). The last loop evaluates the step's end: locals x1, s1, xe, se, dxe, dse,
     Ee and o_max (the largest exponent since ``o_start``; with ``correction`` also y1, ye, dye) are then defined
-    for the lines ``end`` that close it.
-
-    With ``correction`` each stage's y has a loop of its own after the stage's (x, s) loop, which also stores the
-    stage's E and exponent for it: the (x, s) loops are then the plain kernel's, and a point that model="auto"
-    leaves quasi-static gets the numbers of model="quasistatic" bit for bit (benchmarks/throughput.py checks its
-    steps). With y in the same loop the rounding of xi moved (the contraction into FMAs differed), and 9 of the
-    default scene's 20,000 points took other steps."""
+    for the lines ``end`` that close it."""
     _, A, b, _ = tableau.arrays()
     last = b.size - 1 if tableau.fsal else b.size
-    width = _stage_width(correction)
+    width = 3 if correction else 2
     W = LANES
     field = lambda f: f"st[{f * W} + l]"  # noqa: E731
 
@@ -198,28 +186,26 @@ def _stage_loops(tableau, start: tuple[str, ...], h: str, o_start: str, correcti
     head = ["    for l in range(W):",
             f"        k, a, bb, s_c, h = st[l], {field(_A)}, {field(_B)}, {field(_SC)}, {h}",
             f"        x1, s1 = {start[0]}, {start[1]}"]
+    if correction:
+        head += [f"        G, y1 = {field(_G)}, {start[4]}"]
     lines = []
     for i in range(2, last + 1):
-        at = lambda c: field(_STAGES + width * (i - 2) + c)  # noqa: E731, B023
-        stage = [f"        xi = x1 + h * ({combination(A[i - 1], 0, i - 1)})",
-                 f"        si = s1 + h * ({combination(A[i - 1], 1, i - 1)})"]
-        lines += head + stage + [
+        lines += head + [
+            f"        xi = x1 + h * ({combination(A[i - 1], 0, i - 1)})",
+            f"        si = s1 + h * ({combination(A[i - 1], 1, i - 1)})",
             "        dxi, dsi, Ei, oi = rate(xi, si, k, a, bb, s_c)",
-            f"        {at(0)}, {at(1)} = dxi, dsi",
+            f"        {field(_STAGES + width * (i - 2))}, {field(_STAGES + width * (i - 2) + 1)} = dxi, dsi",
             f"        {field(_OM)} = max({o_start if i == 2 else field(_OM)}, oi)"]
         if correction:
-            lines[-1:-1] = [f"        {at(3)}, {at(4)} = Ei, oi"]
-            lines += head + [f"        G, y1 = {field(_G)}, {start[4]}"] + stage + [
-                f"        {at(2)} = correction_rate(xi, si, y1 + h * ({combination(A[i - 1], 2, i - 1)}), k, a, bb, "
-                f"G, {at(1)}, {at(3)}, {at(4)})"]
+            lines += [f"        {field(_STAGES + width * (i - 2) + 2)} = correction_rate(xi, si, y1 + h * "
+                      f"({combination(A[i - 1], 2, i - 1)}), k, a, bb, G, dsi, Ei, oi)"]
     lines += head + [
         f"        xe = x1 + h * ({combination(b, 0, last)})",
         f"        se = s1 + h * ({combination(b, 1, last)})",
         "        dxe, dse, Ee, oe = rate(xe, se, k, a, bb, s_c)",
         f"        o_max = max({field(_OM) if last > 1 else o_start}, oe)"]
     if correction:
-        lines += [f"        G, y1 = {field(_G)}, {start[4]}",
-                  f"        ye = y1 + h * ({combination(b, 2, last)})",
+        lines += [f"        ye = y1 + h * ({combination(b, 2, last)})",
                   "        dye = correction_rate(xe, se, ye, k, a, bb, G, dse, Ee, oe)"]
     return lines + end
 
@@ -252,7 +238,7 @@ def _lane_source(tableau, correction: bool, fine=None, split: int = 2) -> str:
             [f"        {', '.join(tentative)}, {field(_TE)}, {field(_TO)} = xe, se, dxe, dse, Ee, o_max"])),
     ]
     last = b.size - 1 if tableau.fsal else b.size
-    width = _stage_width(correction)
+    width = 3 if correction else 2
 
     def derivative(j: int, comp: int) -> str:  # as in _stage_loops, the first stage's from the locals dx1, ds1
         if j == 1:
