@@ -4,12 +4,12 @@ accept/reject decision.
 The fixed-step lanes (:mod:`sweep.integrate.lanes`) spend their evaluations evenly along sigma and need a ladder of
 runs to find the step and the error; an embedded pair (dp5, dop853) puts the steps where the solution needs them and
 reaches tight tolerances with a fraction of the evaluations. Here each of the LANES runs in flight carries its own
-step h and control tolerance, and one pass of the lane loops (one loop per stage: :func:`_stage_loops`) is one
-*attempt* of every lane: the stages, the embedded error norm, the accept mask and the next step are computed for all
-lanes as straight-line code (selects, not branches: a branch in a lane loop stops LLVM's vectoriser), so a rejected
-lane simply keeps its state and retries with a smaller step while its neighbours move on. The step factor needs
-err^(-1/(q+1)), a power that numba would compute with a scalar libm call; it is taken as exp2 of a cheap log2
-(:func:`_log2_approx`, 0.5 % accurate: a step factor needs no more) so that the loop stays vectorised.
+step h and control tolerance, and one pass of the lane loop is one *attempt* of every lane: the stages, the
+embedded error norm, the accept mask and the next step are computed for all lanes as straight-line code (selects,
+not branches: a branch in the lane loop stops LLVM's vectoriser), so a rejected lane simply keeps its state and
+retries with a smaller step while its neighbours move on. The step factor needs err^(-1/(q+1)), a power that numba
+would compute with a scalar libm call; it is taken as exp2 of a cheap log2 (:func:`_log2_approx`, 0.5 % accurate:
+a step factor needs no more) so that the loop stays vectorised.
 
 The per-lane bookkeeping (the closed-form tail test, refilling a finished lane) is a short scalar loop, as in the
 fixed-step lanes; it runs only for lanes whose attempt was accepted. A run's arithmetic does not depend on which
@@ -140,118 +140,46 @@ def controller_lines(field, logprev: int, rej: int, h: int) -> list[str]:
     ]
 
 
-_OM = 29  # the attempt's largest exponent so far (the stage loops keep it per lane)
-_STAGES = 30
-"""First of the stage fields: the derivatives of stage j >= 2 of the step under way, (dx_j, ds_j[, dy_j]) at
-_STAGES + width (j - 2) (:func:`_stage_loops`)."""
-
-
-def _stage_fields(tableau, correction: bool) -> int:
-    """Number of stage fields of :func:`_stage_loops` for ``tableau``."""
-    _, _, b, _ = tableau.arrays()
-    last = b.size - 1 if tableau.fsal else b.size
-    return (3 if correction else 2) * (last - 1)
-
-
-def _stage_loops(tableau, start: tuple[str, ...], h: str, o_start: str, correction: bool, end: list[str]
-                 ) -> list[str]:
-    """Lines of one step of size ``h`` from the state fields ``start`` (x, s, dx, ds[, y, dy]) as a sequence of lane
-    loops, one per stage: each loop reads the earlier stages' derivatives from the stage fields and writes its own.
-
-    Why one loop per stage: a step written as one lane loop is one long chain of dependent operations per lane (each
-    stage needs the one before, and every evaluation an exp, a square root and a division); its vectorised
-    iterations are too long for the processor to overlap two of them, so the loop ran at the latency of that chain. A
-    stage loop is short, and its iterations (groups of lanes) are independent: they overlap. Measured on the
-    relaxed-slip lanes (dop853 with its twin, 1 thread): 1.2-1.27x faster on the default scene and its costly corner
-    (benchmarks/peers.py; docs/design.md). The last loop evaluates the step's end: locals x1, s1, xe, se, dxe, dse,
-    Ee and o_max (the largest exponent since ``o_start``; with ``correction`` also y1, ye, dye) are then defined
-    for the lines ``end`` that close it."""
-    _, A, b, _ = tableau.arrays()
-    last = b.size - 1 if tableau.fsal else b.size
-    width = 3 if correction else 2
-    W = LANES
-    field = lambda f: f"st[{f * W} + l]"  # noqa: E731
-
-    def derivative(j: int, comp: int) -> str:  # of stage j (1-based); comp 0: x, 1: s, 2: y
-        if j == 1:
-            return start[(2, 3, 5)[comp]]
-        if j <= last:
-            return field(_STAGES + width * (j - 2) + comp)
-        return ("dxe", "dse", "dye")[comp]  # FSAL: the end's derivative
-
-    def combination(weights, comp: int, count: int) -> str:
-        return " + ".join(f"{float(weights[j])!r} * {derivative(j + 1, comp)}" for j in range(count)
-                          if weights[j] != 0.0)
-
-    head = ["    for l in range(W):",
-            f"        k, a, bb, s_c, h = st[l], {field(_A)}, {field(_B)}, {field(_SC)}, {h}",
-            f"        x1, s1 = {start[0]}, {start[1]}"]
-    if correction:
-        head += [f"        G, y1 = {field(_G)}, {start[4]}"]
-    lines = []
-    for i in range(2, last + 1):
-        lines += head + [
-            f"        xi = x1 + h * ({combination(A[i - 1], 0, i - 1)})",
-            f"        si = s1 + h * ({combination(A[i - 1], 1, i - 1)})",
-            "        dxi, dsi, Ei, oi = rate(xi, si, k, a, bb, s_c)",
-            f"        {field(_STAGES + width * (i - 2))}, {field(_STAGES + width * (i - 2) + 1)} = dxi, dsi",
-            f"        {field(_OM)} = max({o_start if i == 2 else field(_OM)}, oi)"]
-        if correction:
-            lines += [f"        {field(_STAGES + width * (i - 2) + 2)} = correction_rate(xi, si, y1 + h * "
-                      f"({combination(A[i - 1], 2, i - 1)}), k, a, bb, G, dsi, Ei, oi)"]
-    lines += head + [
-        f"        xe = x1 + h * ({combination(b, 0, last)})",
-        f"        se = s1 + h * ({combination(b, 1, last)})",
-        "        dxe, dse, Ee, oe = rate(xe, se, k, a, bb, s_c)",
-        f"        o_max = max({field(_OM) if last > 1 else o_start}, oe)"]
-    if correction:
-        lines += [f"        ye = y1 + h * ({combination(b, 2, last)})",
-                  "        dye = correction_rate(xe, se, ye, k, a, bb, G, dse, Ee, oe)"]
-    return lines + end
-
-
 def _lane_source(tableau, correction: bool, fine=None, split: int = 2) -> str:
     """Source of attempt_all(st, atol) for an explicit tableau, its coefficients written in as literals (a loop over
     stages with run-time offsets defeats the vectoriser). One attempt is a step h of the returned (coarse) run and,
-    before it in the same pass, ``split`` steps h/split of the fine run with the tableau ``fine`` (default: the same)
-    along the same mesh (:mod:`sweep.integrate.tolerance_ladder`); the coarse step's embedded estimate decides for
-    both. Each step is a sequence of lane loops, one per stage (:func:`_stage_loops`). FSAL tableaux reuse their
-    last stage as the next step's first; the others spend one evaluation at the step's end, which the tail test needs
-    anyway. With ``correction`` the first-order inertial correction y
-    (:func:`sweep.models.stop_inertial.make_correction_rate`) is a third component of the coarse run's stages; it
-    does not enter the error norm (it is needed to model_tol only, and rides on steps chosen for xi at rtol).
-    Generated, not branched, for the reason of :func:`sweep.integrate.lanes._step_source`."""
+    in the same pass, ``split`` steps h/split of the fine run with the tableau ``fine`` (default: the same) along the
+    same mesh (:mod:`sweep.integrate.tolerance_ladder`); the coarse step's embedded estimate decides for both. FSAL
+    tableaux reuse their last stage as the next step's first; the others spend one evaluation at the step's end,
+    which the tail test needs anyway. With ``correction``
+    the first-order inertial correction y (:func:`sweep.models.stop_inertial.make_correction_rate`) is a third
+    component of the coarse run's stages; it does not enter the error norm (it is needed to model_tol only, and
+    rides on steps chosen for xi at rtol). Generated, not branched, for the reason of
+    :func:`sweep.integrate.lanes._step_source`."""
     _, _, b, e = tableau.arrays()
+    n_err = b.size  # FSAL: the last stage is the end's derivative, dx{b.size} (_step_lines)
     W = LANES
     field = lambda f: f"st[{f * W} + l]"  # noqa: E731
     fine = tableau if fine is None else fine
     tentative = (field(_TX), field(_TS), field(_TDX), field(_TDS))
     lines = [
         "def attempt_all(st, atol):",
-        # the fine twin's steps first, into tentative fields: its stage loops written once and run ``split`` times
+        # the fine twin's steps first, into tentative fields: one lane loop written once and run ``split`` times
+        # (written out ``split`` times, the attempt compiled ~1.5x slower), each loop vectorised on its own
         "    for l in range(W):",
         f"        {', '.join(tentative)}, {field(_TO)} = {field(_XF)}, {field(_SF)}, {field(_DXF)}, {field(_DSF)}, "
         f"{field(_EXPO)}",
         f"    for _ in range({split}):",
-        *("    " + line for line in _stage_loops(
-            fine, tentative, f"{1.0 / split!r} * {field(_H)}", field(_TO), False,
-            [f"        {', '.join(tentative)}, {field(_TE)}, {field(_TO)} = xe, se, dxe, dse, Ee, o_max"])),
+        "        for l in range(W):",
+        f"            k, a, bb, s_c, hf = st[l], {field(_A)}, {field(_B)}, {field(_SC)}, {1.0 / split!r} * {field(_H)}",
+        f"            o_max = {field(_TO)}",
+        *("    " + line for line in _step_lines(fine, "f_", tentative, "hf", False)),
+        f"            {', '.join(tentative)}, {field(_TE)}, {field(_TO)} = f_xe, f_se, f_dxe, f_dse, f_Ee, o_max",
+        "    for l in range(W):",
+        f"        k, a, bb, s_c, h = st[l], {field(_A)}, {field(_B)}, {field(_SC)}, {field(_H)}",
+        f"        tol, o_max = {field(_TOL)}, {field(_TO)}",
     ]
-    last = b.size - 1 if tableau.fsal else b.size
-    width = 3 if correction else 2
-
-    def derivative(j: int, comp: int) -> str:  # as in _stage_loops, the first stage's from the locals dx1, ds1
-        if j == 1:
-            return ("dx1", "ds1")[comp]
-        return field(_STAGES + width * (j - 2) + comp) if j <= last else ("dxe", "dse")[comp]
-
-    def error(comp: int) -> str:
-        return " + ".join(f"{float(e[j])!r} * {derivative(j + 1, comp)}" for j in range(b.size) if e[j] != 0.0)
-
-    close = [
-        f"        tol, dx1, ds1 = {field(_TOL)}, {field(_DX)}, {field(_DS)}",
-        f"        ex = h * ({error(0)})",
-        f"        es = h * ({error(1)})",
+    if correction:
+        lines += [f"        G, y1, dy1 = {field(_G)}, {field(_Y)}, {field(_DY)}"]
+    lines += _step_lines(tableau, "", (field(_X), field(_S), field(_DX), field(_DS)), "h", correction)
+    lines += [
+        f"        ex = h * ({_combination(e, 'dx', n_err)})",
+        f"        es = h * ({_combination(e, 'ds', n_err)})",
         # the norm of stop_point.error_norm: xi relative with the atol floor, u = s - xi relative to min(s, max(1, u))
         "        sx = atol + tol * max(abs(x1), abs(xe))",
         "        su = tol * min(abs(se), max(one, abs(se - xe))) + u_rounding * abs(se)",
@@ -262,11 +190,9 @@ def _lane_source(tableau, correction: bool, fine=None, split: int = 2) -> str:
             (_XF, field(_TX), field(_XF)), (_SF, field(_TS), field(_SF)), (_DXF, field(_TDX), field(_DXF)),
             (_DSF, field(_TDS), field(_DSF)), (_EF, field(_TE), field(_EF))]
     if correction:
-        kept += [(_Y, "ye", "y1"), (_DY, "dye", field(_DY))]
-    close += [f"        {field(f)} = {new} if accept else {old}" for f, new, old in kept]
-    close += [f"        {field(_ACC)} = one if accept else zero", f"        {field(_REJ)} = zero if accept else one"]
-    start = (field(_X), field(_S), field(_DX), field(_DS)) + ((field(_Y), field(_DY)) if correction else ())
-    lines += _stage_loops(tableau, start, field(_H), field(_TO), correction, close)
+        kept += [(_Y, "ye", "y1"), (_DY, "dye", "dy1")]
+    lines += [f"        {field(f)} = {new} if accept else {old}" for f, new, old in kept]
+    lines += [f"        {field(_ACC)} = one if accept else zero", f"        {field(_REJ)} = zero if accept else one"]
     return "\n".join(lines) + "\n"
 
 
@@ -329,7 +255,7 @@ def make_adaptive_lane_kernels(tableau, fine, split: int, correction: bool = Fal
     correction_rate = make_correction_rate(f)
     attempt_all = _attempt(f, tableau, correction, fine, split)
     W = LANES
-    n_fields = _STAGES + _stage_fields(tableau, correction)
+    n_fields = _DY + 1 if correction else _TO + 1
     zero, one = 0.0, 1.0
 
     @njit(cache=True, fastmath=FAST, error_model="numpy")
