@@ -12,9 +12,10 @@ The UUID also carries a digest of the package's sources (:func:`source_digest`).
 as the file that defines it is unchanged, and a closure's key holds only the identities of the dispatchers it calls;
 a kernel built by a factory and compiled into another module's loop (the lanes' relax_runs into
 integrate/batch.py's lanes_batch) would otherwise load from the cache with the code of an older version of its
-factory's module whenever that module changed and batch.py did not. Measured once, in a development tree: a stale
-lanes_batch with an older stage layout wrote past its state array, and the next sweep in the process failed with a
-corrupted heap. With the digest every edit of the package gives its factory-built kernels new keys.
+factory's module whenever that module changed and batch.py did not. Seen once, in a development tree, after edits
+of the lanes' state-array layout: a sweep failed with a corrupted heap, and did not with an empty cache (a stale
+lanes_batch writing past the new, smaller state array is the likely cause). With the digest every edit of the
+package gives its factory-built kernels new keys.
 """
 
 from __future__ import annotations
