@@ -83,19 +83,32 @@ _P32 = tuple(_F(1.0 / math.factorial(i)) for i in range(8))
 
 
 @njit(inline="always", fastmath={"nsz": True, "contract": True}, error_model="numpy", cache=True)
-def exp_f64(x: float) -> float:
-    """exp(x) for float64, relative error <= 2.3e-16 for -708 <= x <= 708 (clamped outside)."""
+def _reduce_f64(x):
+    """(t, r) of float64 x clamped to [-708, 708]: x = n ln2 + r, |r| <= ln2/2, with n held in t's low mantissa bits
+    (:func:`_two_to_the_f64` builds 2^n from them)."""
     x = min(max(x, -708.0), 708.0)
     t = x * _LOG2E + _ROUND
     n = t - _ROUND
-    r = (x - n * _LN2_HI) - n * _LN2_LO
+    return t, (x - n * _LN2_HI) - n * _LN2_LO
+
+
+@njit(inline="always", fastmath={"nsz": True, "contract": True}, error_model="numpy", cache=True)
+def _two_to_the_f64(t):
+    """2^n from the t of :func:`_reduce_f64`."""
+    return _bits_as_float((_float_as_bits(t) - _ROUND_BITS + 1023) << 52)
+
+
+@njit(inline="always", fastmath={"nsz": True, "contract": True}, error_model="numpy", cache=True)
+def exp_f64(x: float) -> float:
+    """exp(x) for float64, relative error <= 2.3e-16 for -708 <= x <= 708 (clamped outside)."""
+    t, r = _reduce_f64(x)
     c = _P64  # written out: a loop over the tuple would index it at run time
     r2 = r * r
     r4 = r2 * r2
     q = ((c[2] + c[3] * r) + (c[4] + c[5] * r) * r2) + ((c[6] + c[7] * r) + (c[8] + c[9] * r) * r2) * r4
     q = q + ((c[10] + c[11] * r) + (c[12] + c[13] * r) * r2) * (r4 * r4)
     p = c[0] + r * (c[1] + r * q)
-    return p * _bits_as_float((_float_as_bits(t) - _ROUND_BITS + 1023) << 52)
+    return p * _two_to_the_f64(t)
 
 
 @njit(inline="always", fastmath={"nsz": True, "contract": True}, error_model="numpy", cache=True)
@@ -113,11 +126,8 @@ def exp_f64_coarse(x: float) -> float:
     of exp_f64 with the Taylor polynomial of degree 7 (that of exp_f32), about half the operations; for terms that
     need far less accuracy than a float64 carries (the source of the first-order inertial correction,
     sweep/models/stop_inertial.py, which decides the model to model_tol)."""
-    x = min(max(x, -708.0), 708.0)
-    t = x * _LOG2E + _ROUND
-    n = t - _ROUND
-    r = (x - n * _LN2_HI) - n * _LN2_LO
-    return _taylor7(r, _P64) * _bits_as_float((_float_as_bits(t) - _ROUND_BITS + 1023) << 52)
+    t, r = _reduce_f64(x)
+    return _taylor7(r, _P64) * _two_to_the_f64(t)
 
 
 @njit(inline="always", fastmath={"nsz": True, "contract": True}, error_model="numpy", cache=True)
