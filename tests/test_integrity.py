@@ -531,7 +531,7 @@ def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeyp
 def test_a_bad_scheduler_fails_in_seconds_and_leaves_nothing(tmp_path, config):
     t0 = time.perf_counter()
     line = refused(cli("run", config, "-o", "s.nc", "--scheduler", "tcp://127.0.0.1:9", cwd=tmp_path, timeout=60))
-    assert time.perf_counter() - t0 < 5, time.perf_counter() - t0
+    assert time.perf_counter() - t0 < 15, time.perf_counter() - t0  # ~2 s idle; the broken one waited 30 s
     assert "could not connect to the dask scheduler at 'tcp://127.0.0.1:9'" in line
     assert sorted(os.listdir(tmp_path)) == ["scene.toml"]  # no journal, no lock, no file
 
@@ -549,7 +549,7 @@ def test_a_grid_that_cannot_fit_is_refused_in_under_a_second(tmp_path, capsys):
     (tmp_path / "huge.toml").write_text(HUGE)
     t0 = time.perf_counter()
     assert main(["run", str(tmp_path / "huge.toml"), "--dry-run"]) == 2
-    assert time.perf_counter() - t0 < 1.0
+    assert time.perf_counter() - t0 < 5  # ~0.1 s idle; the margin is for a shared machine
     out, err = capsys.readouterr()
     assert "10,000,000,000 points" in out and "estimated memory" in out and "typical time" in out, out
     assert err.startswith("sweep: error: the grid of 10,000,000,000 points (100000 K/M x 100000 V) needs ~"), err
@@ -562,7 +562,7 @@ def test_a_grid_that_cannot_fit_is_refused_in_under_a_second(tmp_path, capsys):
     t0 = time.perf_counter()
     with pytest.raises(InputError, match="needs ~.* of memory"):
         sweep.run_sweep(sweep.load_scene(tmp_path / "huge.toml"))
-    assert time.perf_counter() - t0 < 1.0
+    assert time.perf_counter() - t0 < 5  # ~0.1 s idle; the margin is for a shared machine
     assert sorted(os.listdir(tmp_path)) == ["huge.toml"]
 
 
