@@ -353,7 +353,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP + "; without --resume, also start over "
                      "from an existing journal (deleted)")
     run.add_argument("--chunk-size", type=_positive_int, default=None,
-                     help="points per chunk (journal entry); default 4096 for stop, 1024 for driven scenes")
+                     help="points per chunk (journal entry); default 4096 for stop (up to 16384 on a large grid, "
+                          "keeping at least 60 chunks), 1024 for driven scenes")
     run.add_argument("--workers", type=_positive_int, default=None,
                      help="run the chunks on a dask LocalCluster of N one-thread worker processes (pip install "
                           "'.[distributed]' from the sweep checkout); same numbers as the default threads backend")

@@ -70,8 +70,8 @@ from .accuracy import (
 from .scene import Scene
 from .solvers import METHODS
 
-__all__ = ["CHUNK_POINTS", "Plan", "PointParams", "make_plan", "choose_method", "line_uses_inertia", "samples_in_lanes",
-           "stop_plan_for_points"]
+__all__ = ["CHUNK_POINTS", "Plan", "PointParams", "chunk_size_for", "make_plan", "choose_method", "line_uses_inertia",
+           "samples_in_lanes", "stop_plan_for_points"]
 
 LANES_METHOD = "dop853"
 """The embedded pair of the adaptive lanes (model "auto", relaxed slip): fewer attempts than dp5 at every rtol of
@@ -79,7 +79,28 @@ LANES_METHOD = "dop853"
 
 CHUNK_POINTS = {"stop": 4096, "driven": 1024}
 """Points per chunk by protocol (one compiled batch call, one progress update, one journal entry): a driven point
-costs ~10-100x a stop point."""
+costs ~10-100x a stop point. The smallest chunk of a large grid: :func:`chunk_size_for`."""
+LARGE_CHUNK_POINTS = 16384
+"""The largest default chunk of a stop scene that samples nothing in time (:func:`chunk_size_for`)."""
+CHUNKS_AT_LEAST = 60
+"""A grid keeps at least this many chunks when its chunks grow (:func:`chunk_size_for`): ~8 a thread on 8 threads to
+share out side by side (sweep/concurrent_chunks.py), the last chunks' idle share small."""
+
+
+def chunk_size_for(scene) -> int:
+    """The default chunk size of ``scene``: CHUNK_POINTS of its protocol, doubled up to LARGE_CHUNK_POINTS while the
+    grid still has CHUNKS_AT_LEAST chunks, for a stop scene that samples nothing in time (a chunk's trajectories
+    are held whole until it is journaled). A chunk has a fixed cost besides its points (~1 ms of numpy between its
+    kernel calls and in the choice of model, ~2.4 ms writing it to the journal: numpy's .npz and a checksum of
+    ~150 kB): at 4096 points it was ~25 % of the compute of a 1e6-point run (2 cores), at 16384 (61 chunks) 7 %:
+    `sweep run` of 1e6 points 2.6-3.2 s against 3.0-3.9 s (benchmarks/end_to_end.py, docs/design.md). The layout
+    depends on the grid only, never on the machine: a journal resumes anywhere."""
+    size = CHUNK_POINTS[scene.protocol]
+    if scene.protocol != "stop" or {"trajectory", "slip_at"} & set(scene.observables):
+        return size
+    while 2 * size <= LARGE_CHUNK_POINTS and scene.n_points >= CHUNKS_AT_LEAST * 2 * size:
+        size *= 2
+    return size
 
 ROUNDOFF = {np.dtype(np.float64): 2.0 * np.finfo(np.float64).eps, np.dtype(np.float32): 2.0 * np.finfo(np.float32).eps}
 """Rounding error per step, relative (added to the estimate as steps * ROUNDOFF * |xi_inf|)."""
@@ -391,7 +412,7 @@ def _common(scene: Scene, chi, mu1, k, a, b, G, finite, inertial) -> dict:
     """The fields of a Plan that every protocol fills the same way."""
     return dict(protocol=scene.protocol, model=scene.model, model_tol=scene.model_tol, max_steps=int(scene.max_steps),
                 chi=chi, mu1=mu1, k=k, a=a, b=b, s_c=time_scale(k, a), finite=finite, G=G, inertial=inertial,
-                chunk_size=CHUNK_POINTS[scene.protocol], state_law=scene.state_law)
+                chunk_size=chunk_size_for(scene), state_law=scene.state_law)
 
 
 def _driven_plan(scene: Scene) -> Plan:

@@ -54,6 +54,21 @@ def test_results_do_not_depend_on_the_chunking(make):
         assert 0 < int(whole["model"].sum()) < scene.n_points  # both models inside the chunks
 
 
+@pytest.mark.parametrize(("side", "observables", "size"), [
+    (141, ("xi_inf",), 4096),  # the default scene's 20,000 points: 5 chunks
+    (1000, ("xi_inf",), 16384),  # 1e6 points: 61 chunks
+    (800, ("xi_inf", "t50"), 8192),  # 640,000 points: 16384 would leave 40 chunks
+    (1000, ("xi_inf", "trajectory"), 4096),  # a chunk's trajectories are held whole until journaled
+])
+def test_default_chunks_grow_with_the_grid_and_leave_enough_chunks(side, observables, size):
+    from sweep.plan import CHUNKS_AT_LEAST, make_plan
+
+    scene = stop_scene(K_over_M=np.logspace(3, 6, side), V=np.logspace(-7, -4, side), observables=observables)
+    plan = make_plan(scene)
+    assert plan.chunk_size == size
+    assert size == 4096 or scene.n_points // size >= CHUNKS_AT_LEAST
+
+
 def test_a_journaled_run_writes_the_file_and_removes_its_journal(tmp_path):
     out = tmp_path / "s.nc"
     ds = sweep.run_sweep(stop_scene(), progress=False, output=out, chunk_size=50)
