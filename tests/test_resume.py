@@ -69,6 +69,31 @@ def test_default_chunks_grow_with_the_grid_and_leave_enough_chunks(side, observa
     assert size == 4096 or scene.n_points // size >= CHUNKS_AT_LEAST
 
 
+COLD_WARM = """
+import sys
+import numpy as np
+sys.path.insert(0, sys.argv[2])
+from test_resume import stop_scene
+import sweep
+ds = sweep.run_sweep(stop_scene(), progress=False)
+np.savez(sys.argv[1], **{name: ds[name].values for name in ("xi_inf", "xi_inf_error", "steps", "model_error")})
+"""
+
+
+def test_a_kernel_compiled_in_the_process_gives_the_bits_of_one_loaded_from_the_cache(tmp_path):
+    """A first run on an empty numba cache (compiling) and a second one (loading what the first cached) give the same
+    bits: a kernel whose callees ran as compiled on their own in the first process and as optimised into their caller
+    in the second gave other numbers (docs/design.md, "Adaptive lanes"), and a resumed run or dask workers then
+    disagreed with the run they continue."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
+    for name in ("cold", "warm"):
+        subprocess.run([sys.executable, "-c", COLD_WARM, str(tmp_path / f"{name}.npz"), str(Path(__file__).parent)],
+                       env=env, check=True, timeout=600)
+    cold, warm = np.load(tmp_path / "cold.npz"), np.load(tmp_path / "warm.npz")
+    for name in cold.files:
+        np.testing.assert_array_equal(cold[name], warm[name], err_msg=name)
+
+
 def test_a_journaled_run_writes_the_file_and_removes_its_journal(tmp_path):
     out = tmp_path / "s.nc"
     ds = sweep.run_sweep(stop_scene(), progress=False, output=out, chunk_size=50)

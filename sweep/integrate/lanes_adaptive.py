@@ -4,16 +4,21 @@ accept/reject decision.
 The fixed-step lanes (:mod:`sweep.integrate.lanes`) spend their evaluations evenly along sigma and need a ladder of
 runs to find the step and the error; an embedded pair (dp5, dop853) puts the steps where the solution needs them and
 reaches tight tolerances with a fraction of the evaluations. Here each of the LANES runs in flight carries its own
-step h and control tolerance, and one pass of the lane loop is one *attempt* of every lane: the stages, the
-embedded error norm, the accept mask and the next step are computed for all lanes as straight-line code (selects,
-not branches: a branch in the lane loop stops LLVM's vectoriser), so a rejected lane simply keeps its state and
-retries with a smaller step while its neighbours move on. The step factor needs err^(-1/(q+1)), a power that numba
-would compute with a scalar libm call; it is taken as exp2 of a cheap log2 (:func:`_log2_approx`, 0.5 % accurate:
-a step factor needs no more) so that the loop stays vectorised.
+step h and control tolerance, and one pass of the lane loops (one loop per stage: :func:`_stage_loops`) is one
+*attempt* of every lane: the stages, the embedded error norm, the accept mask and the next step are computed for all
+lanes as straight-line code (selects, not branches: a branch in a lane loop stops LLVM's vectoriser), so a rejected
+lane simply keeps its state and retries with a smaller step while its neighbours move on. The step factor needs
+err^(-1/(q+1)), a power that numba would compute with a scalar libm call; it is taken as exp2 of a cheap log2
+(:func:`_log2_approx`, 0.5 % accurate: a step factor needs no more) so that the loop stays vectorised.
 
 The per-lane bookkeeping (the closed-form tail test, refilling a finished lane) is a short scalar loop, as in the
 fixed-step lanes; it runs only for lanes whose attempt was accepted. A run's arithmetic does not depend on which
 lane or neighbours it had.
+
+The compiled entry point is ``relax_runs`` itself (``nogil``, every callee inlined in numba's IR), called from Python
+threads by :func:`sweep.integrate.batch.lanes_in_threads` rather than from a ``prange`` loop: a kernel compiled in the
+process and one loaded from numba's cache then run the same code and give the same bits (docs/design.md,
+"Adaptive lanes").
 
 Error estimate of a point: :mod:`sweep.integrate.tolerance_ladder` (two runs at control tolerances a factor apart).
 """
@@ -34,7 +39,7 @@ from ..models.stop_inertial import make_correction_rate, tail_correction
 from ..solvers import EXPLICIT_METHODS
 from ..solvers.controllers import ERR_FLOOR, MAX_FACTOR, MIN_FACTOR, NONFINITE_FACTOR, PI_CONTROLLER, SAFETY
 from ..solvers.vmath import _bits_as_float, _float_as_bits, exp_f64
-from .batch import lanes_batch
+from .batch import lanes_in_threads
 from .stop_point import U_ROUNDING
 
 LANES = 16
@@ -140,46 +145,135 @@ def controller_lines(field, logprev: int, rej: int, h: int) -> list[str]:
     ]
 
 
+_OM = 29  # the attempt's largest exponent so far (the stage loops keep it per lane)
+_STAGES = 30
+"""First of the stage fields: stage j >= 2 of the step under way at _STAGES + width (j - 2) (:func:`_stage_width`;
+:func:`_stage_loops`)."""
+
+
+def _stage_width(correction: bool) -> int:
+    """Fields per stage of :func:`_stage_loops`: dx_j, ds_j, and with the correction dy_j and the stage's E_j and
+    exponent."""
+    return 5 if correction else 2
+
+
+def _evaluated(tableau) -> int:
+    """Stages evaluated before a step's end (FSAL tableaux: the last stage is the end's derivative)."""
+    return len(tableau.b) - 1 if tableau.fsal else len(tableau.b)
+
+
+def _stage_fields(tableau, correction: bool) -> int:
+    """Number of stage fields of :func:`_stage_loops` for ``tableau``."""
+    return _stage_width(correction) * (_evaluated(tableau) - 1)
+
+
+def _stage_sum(weights, comp: int, count: int, first: tuple[str, ...], width: int, last: int) -> str:
+    """sum_j weights_j d_j over stages j = 1..count, component ``comp`` (0: x, 1: s, 2: y) of each stage's
+    derivative: the first stage's is first[comp], stages 2..last are in the stage fields (``width`` per stage), a
+    later one is the end's (FSAL: dxe, dse, dye). Zero weights are left out; the weights are written as literals."""
+    def derivative(j: int) -> str:
+        if j == 1:
+            return first[comp]
+        if j <= last:
+            return f"st[{(_STAGES + width * (j - 2) + comp) * LANES} + l]"
+        return ("dxe", "dse", "dye")[comp]
+
+    return " + ".join(f"{float(weights[j])!r} * {derivative(j + 1)}" for j in range(count) if weights[j] != 0.0)
+
+
+def _stage_loops(tableau, start: tuple[str, ...], h: str, o_start: str, correction: bool, end: list[str]
+                 ) -> list[str]:
+    """Lines of one step of size ``h`` from the state fields ``start`` (x, s, dx, ds[, y, dy]) as a sequence of lane
+    loops, one per stage: each loop reads the earlier stages' derivatives from the stage fields and writes its own.
+
+    Why one loop per stage: a step written as one lane loop is one long chain of dependent operations per lane (each
+    stage needs the one before, and every evaluation an exp, a square root and a division); its vectorised
+    iterations are too long for the processor to overlap two of them, so the loop ran at the latency of that chain. A
+    stage loop is short, and its iterations (groups of lanes) are independent: they overlap. Measured on the
+    relaxed-slip lanes (dop853 with its twin, 1 thread): 1.2-1.27x faster on the default scene and its costly corner
+    (benchmarks/peers.py; docs/design.md). The last loop evaluates the step's end: locals x1, s1, xe, se, dxe, dse,
+    Ee and o_max (the largest exponent since ``o_start``; with ``correction`` also y1, ye, dye) are then defined
+    for the lines ``end`` that close it.
+
+    With ``correction`` each stage's y has a loop of its own after the stage's (x, s) loop, which also stores the
+    stage's E and exponent for it: the (x, s) loops are then the plain kernel's, and a point that model="auto"
+    leaves quasi-static gets the numbers of model="quasistatic" bit for bit (benchmarks/throughput.py checks its
+    steps). With y in the same loop the rounding of xi moved (the contraction into FMAs differed), and 9 of the
+    default scene's 20,000 points took other steps."""
+    _, A, b, _ = tableau.arrays()
+    last = _evaluated(tableau)
+    width = _stage_width(correction)
+    W = LANES
+    field = lambda f: f"st[{f * W} + l]"  # noqa: E731
+    first = tuple(start[i] for i in ((2, 3, 5) if correction else (2, 3)))
+
+    def combination(weights, comp: int, count: int) -> str:
+        return _stage_sum(weights, comp, count, first, width, last)
+
+    head = ["    for l in range(W):",
+            f"        k, a, bb, s_c, h = st[l], {field(_A)}, {field(_B)}, {field(_SC)}, {h}",
+            f"        x1, s1 = {start[0]}, {start[1]}"]
+    lines = []
+    for i in range(2, last + 1):
+        at = lambda c: field(_STAGES + width * (i - 2) + c)  # noqa: E731, B023
+        stage = [f"        xi = x1 + h * ({combination(A[i - 1], 0, i - 1)})",
+                 f"        si = s1 + h * ({combination(A[i - 1], 1, i - 1)})"]
+        lines += head + stage + [
+            "        dxi, dsi, Ei, oi = rate(xi, si, k, a, bb, s_c)",
+            f"        {at(0)}, {at(1)} = dxi, dsi",
+            f"        {field(_OM)} = max({o_start if i == 2 else field(_OM)}, oi)"]
+        if correction:
+            lines[-1:-1] = [f"        {at(3)}, {at(4)} = Ei, oi"]
+            lines += head + [f"        G, y1 = {field(_G)}, {start[4]}"] + stage + [
+                f"        {at(2)} = correction_rate(xi, si, y1 + h * ({combination(A[i - 1], 2, i - 1)}), k, a, bb, "
+                f"G, {at(1)}, {at(3)}, {at(4)})"]
+    lines += head + [
+        f"        xe = x1 + h * ({combination(b, 0, last)})",
+        f"        se = s1 + h * ({combination(b, 1, last)})",
+        "        dxe, dse, Ee, oe = rate(xe, se, k, a, bb, s_c)",
+        f"        o_max = max({field(_OM) if last > 1 else o_start}, oe)"]
+    if correction:
+        lines += [f"        G, y1 = {field(_G)}, {start[4]}",
+                  f"        ye = y1 + h * ({combination(b, 2, last)})",
+                  "        dye = correction_rate(xe, se, ye, k, a, bb, G, dse, Ee, oe)"]
+    return lines + end
+
+
 def _lane_source(tableau, correction: bool, fine=None, split: int = 2) -> str:
     """Source of attempt_all(st, atol) for an explicit tableau, its coefficients written in as literals (a loop over
     stages with run-time offsets defeats the vectoriser). One attempt is a step h of the returned (coarse) run and,
-    in the same pass, ``split`` steps h/split of the fine run with the tableau ``fine`` (default: the same) along the
-    same mesh (:mod:`sweep.integrate.tolerance_ladder`); the coarse step's embedded estimate decides for both. FSAL
-    tableaux reuse their last stage as the next step's first; the others spend one evaluation at the step's end,
-    which the tail test needs anyway. With ``correction``
-    the first-order inertial correction y (:func:`sweep.models.stop_inertial.make_correction_rate`) is a third
-    component of the coarse run's stages; it does not enter the error norm (it is needed to model_tol only, and
-    rides on steps chosen for xi at rtol). Generated, not branched, for the reason of
-    :func:`sweep.integrate.lanes._step_source`."""
+    before it in the same pass, ``split`` steps h/split of the fine run with the tableau ``fine`` (default: the same)
+    along the same mesh (:mod:`sweep.integrate.tolerance_ladder`); the coarse step's embedded estimate decides for
+    both. Each step is a sequence of lane loops, one per stage (:func:`_stage_loops`). FSAL tableaux reuse their
+    last stage as the next step's first; the others spend one evaluation at the step's end, which the tail test needs
+    anyway. With ``correction`` the first-order inertial correction y
+    (:func:`sweep.models.stop_inertial.make_correction_rate`) is a third component of the coarse run's stages; it
+    does not enter the error norm (it is needed to model_tol only, and rides on steps chosen for xi at rtol).
+    Generated, not branched, for the reason of :func:`sweep.integrate.lanes._step_source`."""
     _, _, b, e = tableau.arrays()
-    n_err = b.size  # FSAL: the last stage is the end's derivative, dx{b.size} (_step_lines)
     W = LANES
     field = lambda f: f"st[{f * W} + l]"  # noqa: E731
     fine = tableau if fine is None else fine
     tentative = (field(_TX), field(_TS), field(_TDX), field(_TDS))
     lines = [
         "def attempt_all(st, atol):",
-        # the fine twin's steps first, into tentative fields: one lane loop written once and run ``split`` times
-        # (written out ``split`` times, the attempt compiled ~1.5x slower), each loop vectorised on its own
+        # the fine twin's steps first, into tentative fields: its stage loops written once and run ``split`` times
         "    for l in range(W):",
         f"        {', '.join(tentative)}, {field(_TO)} = {field(_XF)}, {field(_SF)}, {field(_DXF)}, {field(_DSF)}, "
         f"{field(_EXPO)}",
         f"    for _ in range({split}):",
-        "        for l in range(W):",
-        f"            k, a, bb, s_c, hf = st[l], {field(_A)}, {field(_B)}, {field(_SC)}, {1.0 / split!r} * {field(_H)}",
-        f"            o_max = {field(_TO)}",
-        *("    " + line for line in _step_lines(fine, "f_", tentative, "hf", False)),
-        f"            {', '.join(tentative)}, {field(_TE)}, {field(_TO)} = f_xe, f_se, f_dxe, f_dse, f_Ee, o_max",
-        "    for l in range(W):",
-        f"        k, a, bb, s_c, h = st[l], {field(_A)}, {field(_B)}, {field(_SC)}, {field(_H)}",
-        f"        tol, o_max = {field(_TOL)}, {field(_TO)}",
+        *("    " + line for line in _stage_loops(
+            fine, tentative, f"{1.0 / split!r} * {field(_H)}", field(_TO), False,
+            [f"        {', '.join(tentative)}, {field(_TE)}, {field(_TO)} = xe, se, dxe, dse, Ee, o_max"])),
     ]
-    if correction:
-        lines += [f"        G, y1, dy1 = {field(_G)}, {field(_Y)}, {field(_DY)}"]
-    lines += _step_lines(tableau, "", (field(_X), field(_S), field(_DX), field(_DS)), "h", correction)
-    lines += [
-        f"        ex = h * ({_combination(e, 'dx', n_err)})",
-        f"        es = h * ({_combination(e, 'ds', n_err)})",
+
+    def error(comp: int) -> str:  # the embedded estimate, the first stage's derivative from the locals dx1, ds1
+        return _stage_sum(e, comp, b.size, ("dx1", "ds1"), _stage_width(correction), _evaluated(tableau))
+
+    close = [
+        f"        tol, dx1, ds1 = {field(_TOL)}, {field(_DX)}, {field(_DS)}",
+        f"        ex = h * ({error(0)})",
+        f"        es = h * ({error(1)})",
         # the norm of stop_point.error_norm: xi relative with the atol floor, u = s - xi relative to min(s, max(1, u))
         "        sx = atol + tol * max(abs(x1), abs(xe))",
         "        su = tol * min(abs(se), max(one, abs(se - xe))) + u_rounding * abs(se)",
@@ -190,9 +284,11 @@ def _lane_source(tableau, correction: bool, fine=None, split: int = 2) -> str:
             (_XF, field(_TX), field(_XF)), (_SF, field(_TS), field(_SF)), (_DXF, field(_TDX), field(_DXF)),
             (_DSF, field(_TDS), field(_DSF)), (_EF, field(_TE), field(_EF))]
     if correction:
-        kept += [(_Y, "ye", "y1"), (_DY, "dye", "dy1")]
-    lines += [f"        {field(f)} = {new} if accept else {old}" for f, new, old in kept]
-    lines += [f"        {field(_ACC)} = one if accept else zero", f"        {field(_REJ)} = zero if accept else one"]
+        kept += [(_Y, "ye", "y1"), (_DY, "dye", field(_DY))]
+    close += [f"        {field(f)} = {new} if accept else {old}" for f, new, old in kept]
+    close += [f"        {field(_ACC)} = one if accept else zero", f"        {field(_REJ)} = zero if accept else one"]
+    start = (field(_X), field(_S), field(_DX), field(_DS)) + ((field(_Y), field(_DY)) if correction else ())
+    lines += _stage_loops(tableau, start, field(_H), field(_TO), correction, close)
     return "\n".join(lines) + "\n"
 
 
@@ -210,8 +306,8 @@ def _attempt(f, tableau, correction: bool, fine, split: int):
     source = _lane_source(tableau, correction, fine, split)
     exec(compile(source, f"<sweep.integrate.lanes_adaptive: {tableau.name}>", "exec"), namespace)
     # not cached itself (generated source has no file): compiled into relax_runs, which is
-    return pin(njit(fastmath=FAST, error_model="numpy")(namespace["attempt_all"]), tableau.name, fine.name, split,
-               correction)
+    return pin(njit(inline="always", fastmath=FAST, error_model="numpy")(namespace["attempt_all"]), tableau.name,
+               fine.name, split, correction)
 
 
 class AdaptiveRuns(NamedTuple):
@@ -255,10 +351,10 @@ def make_adaptive_lane_kernels(tableau, fine, split: int, correction: bool = Fal
     correction_rate = make_correction_rate(f)
     attempt_all = _attempt(f, tableau, correction, fine, split)
     W = LANES
-    n_fields = _DY + 1 if correction else _TO + 1
+    n_fields = _STAGES + _stage_fields(tableau, correction)
     zero, one = 0.0, 1.0
 
-    @njit(cache=True, fastmath=FAST, error_model="numpy")
+    @njit(inline="always", cache=True, fastmath=FAST, error_model="numpy")
     def load(st, lane, k, a, b, s_c, G, tol, h):
         st[_K * W + lane], st[_A * W + lane], st[_B * W + lane], st[_SC * W + lane] = k, a, b, s_c
         st[_H * W + lane], st[_TOL * W + lane] = h, tol
@@ -272,7 +368,7 @@ def make_adaptive_lane_kernels(tableau, fine, split: int, correction: bool = Fal
             st[_G * W + lane], st[_Y * W + lane] = G, zero
             st[_DY * W + lane] = correction_rate(zero, zero, zero, k, a, b, G, ds, E, expo)
 
-    @njit(cache=True, fastmath=FAST, error_model="numpy")
+    @njit(inline="always", cache=True, fastmath=FAST, error_model="numpy")
     def take_next(st, lane, lane_run, runs, queued, pts, job):
         """Load the next queued run into ``lane`` (or, the queue exhausted, an idle dummy marked -1)."""
         if queued < runs.size:
@@ -286,7 +382,7 @@ def make_adaptive_lane_kernels(tableau, fine, split: int, correction: bool = Fal
         lane_run[lane] = -1
         return queued
 
-    @njit(cache=True, fastmath=FAST, error_model="numpy")
+    @njit(cache=True, nogil=True, fastmath=FAST, error_model="numpy")
     def relax_runs(pts, job, runs, out):
         """Solve the runs ``runs`` of ``job`` to their relaxed slip (and correction) into ``out``."""
         st = np.zeros(n_fields * W)
@@ -331,7 +427,7 @@ def make_adaptive_lane_kernels(tableau, fine, split: int, correction: bool = Fal
 
     for kernel in (load, take_next, relax_runs):
         pin(kernel, tableau.name, fine.name, split, correction)
-    return relax_runs, pin(lanes_batch(relax_runs, W), tableau.name, fine.name, split, correction)
+    return relax_runs, lanes_in_threads(relax_runs, W)
 
 
 LANE_TWINS = {"dop853": ("dop853", 2)}
