@@ -15,6 +15,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import functools
 import math
+import threading
 
 import numba
 import numpy as np
@@ -148,8 +149,8 @@ def _helpers(n: int) -> cf.ThreadPoolExecutor:
 
 def lanes_in_threads(relax_runs, lanes: int):
     """relax_batch(pts, job, groups, out) as :func:`lanes_batch`, with the threads in Python: ``relax_runs`` (compiled
-    ``nogil``) is the compiled entry point, called once per group from numba.get_num_threads() threads, which take
-    the groups as they come free; with one thread, one call over all runs.
+    ``nogil``) is the compiled entry point, called once per group from numba.get_num_threads() threads (this one and
+    helpers), which take the groups as they come free; with one thread, one call over all runs.
 
     Why not prange: a process that compiles a kernel runs its callees' own code, one that loads it from numba's
     cache runs the callees as optimised into their caller; with FMA contraction the two round differently (the
@@ -165,9 +166,23 @@ def lanes_in_threads(relax_runs, lanes: int):
         if threads == 1:
             relax_runs(pts, job, np.arange(n), out)
             return
-        shares = [np.arange(g, n, groups) for g in range(groups)]
-        for done in cf.as_completed([_helpers(threads).submit(relax_runs, pts, job, share, out) for share in shares]):
-            done.result()  # (an error in a group is raised here)
+        shares = iter([np.arange(g, n, groups) for g in range(groups)])
+        taking = threading.Lock()
+
+        def work() -> None:  # the next group, until none is left
+            while True:
+                with taking:
+                    share = next(shares, None)
+                if share is None:
+                    return
+                relax_runs(pts, job, share, out)
+
+        helping = [_helpers(threads - 1).submit(work) for _ in range(threads - 1)]
+        try:
+            work()  # this thread is one of the threads
+        finally:
+            for helper in helping:
+                helper.result()  # (waited for also when this thread's groups failed; a helper's error is raised)
 
     return relax_batch
 
