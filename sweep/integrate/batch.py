@@ -1,6 +1,7 @@
 """Every batch loop of the engine: a parallel loop over a flat batch of points with explicit outputs, one per driver.
 
-This module is where the target of the computation lives: today numba's CPU threads (``prange``); a GPU target
+This module is where the target of the computation lives: today numba's CPU threads (``prange``), and Python
+threads around a ``nogil`` kernel for the adaptive lanes (:func:`lanes_in_threads`: why, there); a GPU target
 (one thread per point or lane) would be a second set of these loops, calling the same per-point drivers of
 :mod:`sweep.integrate`. A point's arithmetic never depends on the other points of its batch, so results do not
 depend on the batch, its order or the number of threads.
