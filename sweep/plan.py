@@ -87,12 +87,12 @@ CHUNKS_AT_LEAST = 60
 share out side by side (sweep/concurrent_chunks.py), the last chunks' idle share small."""
 
 
-def chunk_size_for(scene) -> int:
+def chunk_size_for(scene: Scene) -> int:
     """The default chunk size of ``scene``: CHUNK_POINTS of its protocol, doubled up to LARGE_CHUNK_POINTS while the
     grid still has CHUNKS_AT_LEAST chunks, for a stop scene that samples nothing in time (a chunk's trajectories
     are held whole until it is journaled). A chunk has a fixed cost besides its points (~1 ms of numpy between its
     kernel calls and in the choice of model, ~2.4 ms writing it to the journal: numpy's .npz and a checksum of
-    ~150 kB): at 4096 points it was ~25 % of the compute of a 1e6-point run (2 cores), at 16384 (61 chunks) 7 %:
+    ~150 kB): at 4096 points it was ~25 % of the compute of a 1e6-point run (2 cores), at 16384 (61 chunks) ~7 %:
     `sweep run` of 1e6 points 2.6-3.2 s against 3.0-3.9 s (benchmarks/end_to_end.py, docs/design.md). The layout
     depends on the grid only, never on the machine: a journal resumes anywhere."""
     size = CHUNK_POINTS[scene.protocol]
