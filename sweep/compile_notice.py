@@ -22,6 +22,8 @@ compiled beside it, takes longest), 21.1 s in all. The sampled adaptive lanes (t
 generated attempt alone 26 s, the relaxed lanes' 18 s in the same conditions), the relaxed lanes 13 s beside it.
 A cold first sweep.fit (one curve, 2026-11-27, load ~1): 61 s with the sampled lanes and the per-point path compiled
 one after the other, 38-44 s with the per-point path compiled aside (:func:`compiled_aside`, sweep.fit.core).
+With the adaptive lanes' stage loops and their callees inlined into relax_runs (2026-11-27, load 0.9): relaxed slip
+(model "quasistatic", 3 x 3) 19.5-21.0 s; a cold default `sweep run` 31.8-35.8 s of kernels.
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ __all__ = ["COLD_COMPILE_S", "HELPER_WAIT_S", "SLOW_S", "announce_if_cold", "cac
            "driven_families", "inertial_stop_compiled_aside", "kernel_families", "timed"]
 
 
-COLD_COMPILE_S = {"relaxed-slip engine": 12, "time-resolved stop": 18, "time-resolved lanes": 45, "inertial stop": 18,
+COLD_COMPILE_S = {"relaxed-slip engine": 20, "time-resolved stop": 18, "time-resolved lanes": 45, "inertial stop": 18,
                   "slip-law stop": 6, "driven quasi-static": 8, "driven inertial": 16}
 """Seconds to compile each kernel family from an empty cache on the 2-core development machine (module docstring)."""
 SLOW_S = 3.0
