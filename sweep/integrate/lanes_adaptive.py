@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..accuracy import TAIL_RTOL
+from ..accuracy import TAIL_RTOL, TAIL_SHARE
 from ..jitcache import pin, pin_module
 from ..models.stop import EXP_MAX, FAST, MAX_STEPS, NONFINITE, OK, TAIL_SAFETY, make_rate, tail_error, tail_slip
 from ..models.stop_inertial import make_correction_rate, tail_correction
@@ -313,9 +313,9 @@ def _attempt(f, tableau, correction: bool, fine, split: int):
 class AdaptiveRuns(NamedTuple):
     """The runs of one call: run r solves point ``point[r]`` with local control tolerance ``tol[r]`` from the first
     trial step ``h0[r]`` in sigma, until the closed-form tail's bound is below TAIL_SAFETY (atol + TAIL_RTOL |xi|), as
-    on the per-point path (a few steps more, the steps grow geometrically there; a tail bound at the tolerance, as in
-    the fixed-step lanes, dominated the estimate where the true error is far below it); at most ``max_steps``
-    attempts per run. ``atol`` is also the floor of xi in the error norm."""
+    on the per-point path, or below TAIL_SHARE |x_fine - x|, a small share of the run's own estimate (a tail bound at
+    the tolerance, as in the fixed-step lanes, dominated the estimate where the true error is far below it); at most
+    ``max_steps`` attempts per run. ``atol`` is also the floor of xi in the error norm."""
 
     point: np.ndarray
     tol: np.ndarray
@@ -409,7 +409,8 @@ def make_adaptive_lane_kernels(tableau, fine, split: int, correction: bool = Fal
                 bound = tail_error(k, a, bb, u, E)
                 if not math.isfinite(xi):
                     out.xi_inf[r], out.status[r] = math.nan, NONFINITE
-                elif bound <= TAIL_SAFETY * (TAIL_RTOL * xi + atol):  # negligible: see TAIL_RTOL
+                elif bound <= max(TAIL_SAFETY * (TAIL_RTOL * xi + atol),  # negligible: see TAIL_RTOL
+                                  TAIL_SHARE * abs(st[_XF * W + lane] - xi)):  # or next to the estimate
                     xf, uf, Ef = st[_XF * W + lane], st[_SF * W + lane] - st[_XF * W + lane], st[_EF * W + lane]
                     out.xi_inf[r], out.fine[r], out.status[r] = xi + tail_slip(k, a, bb, u, E), \
                         xf + tail_slip(k, a, bb, uf, Ef), OK
