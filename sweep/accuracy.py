@@ -174,6 +174,17 @@ def lane_control_tolerance(rtol: float) -> float:
     return rtol * min(20.0, 0.5 * math.sqrt(1e-3 / rtol))
 
 
+LANE_H0_FACTOR = 8.0
+"""First trial step of the adaptive lanes, relative to ctrl_tol^(1/(q+1)) (q: the embedded estimate's order): at that
+scale the first step's error norm was 1e-7..1e-5 (dop853 on the default scene, rtol 1e-3), and the PI controller
+then grows the step by ~1.4x a step only (its memory of the tiny first error holds it back), so a run spent 2-3
+attempts reaching the steps its accuracy allows. Measured (model "quasistatic", ``execute``, 1 thread, us a point;
+x1 capped at 0.5 before): default scene x1 / x3 / x5 / x8 / x12: 1.35 / 1.17 / 1.08 / 1.00 / 0.97 at rtol 1e-3,
+1.88 / 1.68 / 1.61 / 1.49 / 1.58 at 1e-6 (x12: 1,771 of 20,000 points run again, against 110 at x1 and 393 at x8),
+4.02 / 3.82 / 3.70 / 3.58 at 1e-9; its costly corner 2.38 -> 2.04 (x8) at 1e-3, 3.36 -> 2.89 at 1e-6, 7.84 -> 7.42
+at 1e-9. The same max errors (0.4-0.5 rtol): a first step too large is rejected like any other."""
+LANE_H0_MAX = 3.0
+"""Cap of that first step in sigma (x8 meets it at rtol >= ~1e-3; larger first steps were measured no faster)."""
 TOL_RATIO = 10.0
 """Tightening of the control tolerance for a point of the adaptive lanes whose estimate exceeds its tolerance
 (sweep/integrate/tolerance_ladder.py)."""

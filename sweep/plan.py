@@ -44,6 +44,8 @@ from .accuracy import (
     GROWTH_RTOL,
     H_MAX,
     H_PILOT,
+    LANE_H0_FACTOR,
+    LANE_H0_MAX,
     MAX_RATIO,
     MAX_RUNS,
     MIN_RATIO,
@@ -500,7 +502,9 @@ def stop_plan_for_points(scene: Scene, points: PointParams) -> Plan:
                 else scene.rtol * CTRL_TOL_FACTOR.get(method, 1.0))
     stable = physics.stable_sliding(chi, mu1, points.A)
     if tab.adaptive:
-        step, source = np.full(k.size, min(0.5, ctrl_tol ** (1.0 / (tab.error_order + 1)))), "controller"
+        scale = ctrl_tol ** (1.0 / (tab.error_order + 1))  # the step whose local error is ~ctrl_tol
+        h0 = min(LANE_H0_MAX, LANE_H0_FACTOR * scale) if lanes else min(0.5, scale)
+        step, source = np.full(k.size, h0), "controller"
     elif scene.step is not None:
         step, source = np.full(k.size, scene.step), "override"
     elif lanes:

@@ -15,8 +15,9 @@ inside the stability region. Two independent adaptive runs at tolerances a decad
 cost instead of 3) do not have this property: their step sequences differ, and their errors stagnated between the
 two tolerances at ~1,500 of the 20,000 default-scene points (up to 0.012 tol relative in the corner), which the
 difference cannot see. The runs go on until the tails' error bounds are negligible (TAIL_RTOL, as on the per-point
-path, or TAIL_SHARE of |x_fine - x|); the bounds are doubled as in :mod:`sweep.integrate.ladder`. Where the rounding of long runs matters the separate
-rounding bound of :func:`sweep.integrate.ladder.rounding_error` carries it.
+path, or TAIL_SHARE of |x_fine - x|); the bounds are doubled as in :mod:`sweep.integrate.ladder`. Where the
+rounding of long runs matters the separate rounding bound of :func:`sweep.integrate.ladder.rounding_error` carries
+it.
 
 A point whose estimate exceeds its tolerance is run again at tol / TOL_RATIO (at most MAX_RUNS runs, none where
 rounding alone exceeds the tolerance).
