@@ -152,9 +152,9 @@ _STAGES = 30
 
 
 def _stage_width(correction: bool) -> int:
-    """Fields per stage of :func:`_stage_loops`: dx_j, ds_j, and with the correction dy_j and the stage's E_j and
-    exponent."""
-    return 5 if correction else 2
+    """Fields per stage of :func:`_stage_loops`: dx_j, ds_j, and with the correction dy_j, the stage's E_j and
+    exponent, and its state x_j, s_j."""
+    return 7 if correction else 2
 
 
 def _evaluated(tableau) -> int:
@@ -196,7 +196,8 @@ def _stage_loops(tableau, start: tuple[str, ...], h: str, o_start: str, correcti
     for the lines ``end`` that close it.
 
     With ``correction`` each stage's y has a loop of its own after the stage's (x, s) loop, which also stores the
-    stage's E and exponent for it: the (x, s) loops are then the plain kernel's, and a point that model="auto"
+    stage's E, exponent and state (x_j, s_j) for it (reading them back instead of recomputing the stage's sums cut the
+    correction's cost by a third): the (x, s) loops are then the plain kernel's, and a point that model="auto"
     leaves quasi-static gets the numbers of model="quasistatic" bit for bit (benchmarks/throughput.py checks its
     steps). With y in the same loop the rounding of xi moved (the contraction into FMAs differed), and 9 of the
     default scene's 20,000 points took other steps."""
@@ -223,10 +224,10 @@ def _stage_loops(tableau, start: tuple[str, ...], h: str, o_start: str, correcti
             f"        {at(0)}, {at(1)} = dxi, dsi",
             f"        {field(_OM)} = max({o_start if i == 2 else field(_OM)}, oi)"]
         if correction:
-            lines[-1:-1] = [f"        {at(3)}, {at(4)} = Ei, oi"]
-            lines += head + [f"        G, y1 = {field(_G)}, {start[4]}"] + stage + [
-                f"        {at(2)} = correction_rate(xi, si, y1 + h * ({combination(A[i - 1], 2, i - 1)}), k, a, bb, "
-                f"G, {at(1)}, {at(3)}, {at(4)})"]
+            lines[-1:-1] = [f"        {at(3)}, {at(4)}, {at(5)}, {at(6)} = Ei, oi, xi, si"]
+            lines += head + [f"        G, y1 = {field(_G)}, {start[4]}"] + [
+                f"        {at(2)} = correction_rate({at(5)}, {at(6)}, y1 + h * ({combination(A[i - 1], 2, i - 1)}), k, "
+                f"a, bb, G, {at(1)}, {at(3)}, {at(4)})"]
     lines += head + [
         f"        xe = x1 + h * ({combination(b, 0, last)})",
         f"        se = s1 + h * ({combination(b, 1, last)})",
