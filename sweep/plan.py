@@ -63,6 +63,7 @@ from .accuracy import (
     STIFF_RATE_FLOOR,
     STIFF_WORK_MIN,
     TAIL_SAFETY,
+    TAIL_SHARE,
     TARGET,
     TIME_RESOLVED_FACTOR,
     TOL_RATIO,
@@ -110,14 +111,16 @@ ROUNDOFF = {np.dtype(np.float64): 2.0 * np.finfo(np.float64).eps, np.dtype(np.fl
 
 def _step_rule(method: str, lanes: bool) -> str:
     tab = METHODS[method]
-    common = (f"time map ds/dsigma = 1/(1/(s + s_c) + r), s = int dtau/psi, u = ln psi = s - xi, "
-              f"r = sqrt(((mu1 + 2 m2 u)/A)^2 + |m2|/(4 A)) + {RATE_FLOOR}, s_c = 1/(1 + (chi + |mu1|)/A); stop when "
-              f"the closed-form tail is accurate to {TAIL_SAFETY}*(rtol*xi + atol)")
+    time_map = (f"time map ds/dsigma = 1/(1/(s + s_c) + r), s = int dtau/psi, u = ln psi = s - xi, "
+                f"r = sqrt(((mu1 + 2 m2 u)/A)^2 + |m2|/(4 A)) + {RATE_FLOOR}, s_c = 1/(1 + (chi + |mu1|)/A)")
+    common = f"{time_map}; stop when the closed-form tail is accurate to {TAIL_SAFETY}*(rtol*xi + atol)"
     if tab.adaptive and lanes:
         return (f"{method} in lanes: adaptive steps in sigma per lane, PI controller on the embedded "
-                f"order-{tab.order_hat} estimate, local tolerance rtol min(20, sqrt(1e-3/rtol)/2), each step also "
-                f"taken as two half steps for the estimate; {TOL_RATIO:g}x tighter where the estimate exceeds the "
-                f"tolerance, at most {MAX_RUNS} runs (sweep/integrate/tolerance_ladder.py); " + common)
+                f"order-{tab.order_hat} estimate, local tolerance tol = rtol min(20, sqrt(1e-3/rtol)), first trial "
+                f"step min({LANE_H0_MAX:g}, {LANE_H0_FACTOR:g} tol^(1/{tab.error_order + 1})), each step also taken "
+                f"as two half steps for the estimate; {TOL_RATIO:g}x tighter where the estimate exceeds the "
+                f"tolerance, at most {MAX_RUNS} runs (sweep/integrate/tolerance_ladder.py); {time_map}; stop when the "
+                f"closed-form tail's bound is below {TAIL_SHARE:g} |fine - run| or {TAIL_SAFETY}*(atol + 2^-52 xi)")
     if tab.adaptive:
         return (f"{method}: adaptive steps in sigma, PI controller on the embedded order-{tab.order_hat} estimate, "
                 f"local tolerance {CTRL_TOL_FACTOR[method]:g} rtol; " + common)
