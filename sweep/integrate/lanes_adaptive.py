@@ -352,7 +352,8 @@ def make_adaptive_lane_kernels(tableau, fine, split: int, correction: bool = Fal
     correction_rate = make_correction_rate(f)
     attempt_all = _attempt(f, tableau, correction, fine, split)
     W = LANES
-    n_fields = _STAGES + _stage_fields(tableau, correction)
+    # the fine twin's stage loops use the same stage fields: room for the larger of the two
+    n_fields = _STAGES + max(_stage_fields(tableau, correction), _stage_fields(fine, False))
     zero, one = 0.0, 1.0
 
     @njit(inline="always", cache=True, fastmath=FAST, error_model="numpy")
