@@ -102,3 +102,21 @@ def test_halving_the_mesh_shows_eighth_order():
             orders.append(np.log2(e_run / e_fine))
     assert len(orders) >= 5, orders
     assert abs(np.median(orders) - 8.0) <= 1.5, sorted(orders)
+
+
+def test_auto_leaves_the_quasistatic_points_bit_for_bit_as_the_quasistatic_model():
+    """model="auto" carries the first-order inertial correction in the same lanes (its own stage loops after each
+    stage's (x, s) loop, docs/design.md "Adaptive lanes"): the (x, s) arithmetic, and so xi_inf, its estimate and the
+    steps of every point that auto leaves quasi-static, are those of model="quasistatic" bit for bit; the correction
+    itself is checked against the inertial solution in tests/test_stop_inertial.py."""
+    base = sweep.default_scene()
+    scene = sweep.Scene(protocol="stop", params=base.params, K_over_M=np.geomspace(1e3, 1e6, 9),
+                        V=np.geomspace(1e-7, 1e-4, 7), model="auto", rtol=1e-6)
+    auto = sweep.run_sweep(scene, progress=False)
+    quasi = sweep.run_sweep(sweep.Scene(protocol="stop", params=base.params, K_over_M=scene.K_over_M, V=scene.V,
+                                        model="quasistatic", rtol=1e-6), progress=False)
+    kept = auto["model"].values == 0
+    assert kept.sum() >= 50  # the default parameters leave most points quasi-static
+    assert np.isfinite(auto["model_error"].values[kept]).all()
+    for name in ("xi_inf", "xi_inf_error", "steps", "status"):
+        np.testing.assert_array_equal(auto[name].values[kept], quasi[name].values[kept], err_msg=name)
