@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from .accuracy import lane_control_tolerance
+from .accuracy import SAMPLED_TOL_SCALE, lane_control_tolerance
 from .integrate.batch import StopOutputs, slip_batch, stop_batch
 from .integrate.ladder import climb
 from .integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
@@ -244,7 +244,7 @@ def _samples_of_lanes(scene: Scene, plan: Plan, g: np.ndarray, targets: np.ndarr
     samples = SampleEstimates.empty(g.size, n_t, scene.rtol, scene.atol["trajectory"], plan.roundoff, with_psi)
     run = _sampled_runner(plan, LANES_METHOD, targets, atol, scene.rtol, with_psi, estimates)
     rows = np.arange(g.size)
-    ctrl = lane_control_tolerance(scene.rtol)
+    ctrl = lane_control_tolerance(scene.rtol, SAMPLED_TOL_SCALE)
     h0 = np.full(g.size, min(0.5, ctrl ** (1.0 / (METHODS[LANES_METHOD].error_order + 1))))
     res = climb_tolerances(lambda entries, tols, h: run(g[entries], entries, tols, h), rows, h0, ctrl, scene.rtol,
                            atol, plan.roundoff, perturbation_growth(plan.k[g], plan.a[g], 1.0), samples, estimates)

@@ -197,10 +197,10 @@ def _stage_loops(tableau, start: tuple[str, ...], h: str, o_start: str, correcti
 
     With ``correction`` each stage's y has a loop of its own after the stage's (x, s) loop, which also stores the
     stage's E, exponent and state (x_j, s_j) for it (reading them back instead of recomputing the stage's sums cut the
-    correction's cost by a third): the (x, s) loops are then the plain kernel's, and a point that model="auto"
-    leaves quasi-static gets the numbers of model="quasistatic" bit for bit (benchmarks/throughput.py checks its
-    steps). With y in the same loop the rounding of xi moved (the contraction into FMAs differed), and 9 of the
-    default scene's 20,000 points took other steps."""
+    correction's cost by about a fifth, +15.6 % -> +12-13 % of the kernel): the (x, s) loops are then the plain
+    kernel's, and a point that model="auto" leaves quasi-static gets the numbers of model="quasistatic" bit for bit
+    (tests/test_lanes_adaptive.py; benchmarks/throughput.py checks its steps). With y in the same loop the rounding of
+    xi moved (the contraction into FMAs differed), and 9 of the default scene's 20,000 points took other steps."""
     _, A, b, _ = tableau.arrays()
     last = _evaluated(tableau)
     width = _stage_width(correction)
