@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..accuracy import TAIL_RTOL, TAIL_SHARE
+from ..accuracy import E_TAIL_MAX, TAIL_RTOL, TAIL_SHARE
 from ..jitcache import pin, pin_module
 from ..models.stop import EXP_MAX, FAST, MAX_STEPS, NONFINITE, OK, TAIL_SAFETY, make_rate, tail_error, tail_slip
 from ..models.stop_inertial import make_correction_rate, tail_correction
@@ -149,7 +149,8 @@ def controller_lines(field, logprev: int, rej: int, h: int) -> list[str]:
 
 
 _OM = 29  # the attempt's largest exponent so far (the stage loops keep it per lane)
-_STAGES = 30
+_DONE = 30  # 1 where the attempt was accepted and the closed-form tail may take over (:func:`_tail_lines`)
+_STAGES = 31
 """First of the stage fields: stage j >= 2 of the step under way at _STAGES + width (j - 2) (:func:`_stage_width`;
 :func:`_stage_loops`)."""
 
@@ -291,9 +292,25 @@ def _lane_source(tableau, correction: bool, fine=None, split: int = 2) -> str:
         kept += [(_Y, "ye", "y1"), (_DY, "dye", field(_DY))]
     close += [f"        {field(f)} = {new} if accept else {old}" for f, new, old in kept]
     close += [f"        {field(_ACC)} = one if accept else zero", f"        {field(_REJ)} = zero if accept else one"]
+    close += _tail_lines(field)
     start = (field(_X), field(_S), field(_DX), field(_DS)) + ((field(_Y), field(_DY)) if correction else ())
     lines += _stage_loops(tableau, start, field(_H), field(_TO), correction, close)
     return "\n".join(lines) + "\n"
+
+
+def _tail_lines(field) -> list[str]:
+    """Generated lines, in the lane loop that closes an attempt: whether the closed-form tail may take over from the
+    accepted state (:func:`sweep.models.stop.tail_error` below TAIL_SAFETY (atol + TAIL_RTOL |xi|) or TAIL_SHARE
+    |x_fine - x|), into the lane field _DONE. Tested here, in the vectorised loop, rather than in the scalar
+    bookkeeping that follows every attempt: there its two divisions and branches cost ~10 % of an attempt."""
+    x, u, E = field(_X), f"({field(_S)} - {field(_X)})", field(_E)
+    return [
+        f"        g_tail = a + two * bb * {u}",
+        f"        bound = {E} * {E} * {E} * (one / (three * g_tail) + k / (two * g_tail * g_tail))",
+        f"        negligible = max(tail_safety * (tail_rtol * {x} + atol), tail_share * abs({field(_XF)} - {x}))",
+        f"        {field(_DONE)} = one if (accept and g_tail > zero and {E} <= e_tail_max and bound <= negligible) "
+        "else zero",
+    ]
 
 
 def _attempt(f, tableau, correction: bool, fine, split: int):
@@ -301,6 +318,8 @@ def _attempt(f, tableau, correction: bool, fine, split: int):
     absolute floor of xi in the error norm."""
     namespace = {"rate": make_rate(f), "correction_rate": make_correction_rate(f), "exp_f64": exp_f64,
                  "_log2_approx": _log2_approx, "W": LANES, "one": f(1.0), "zero": f(0.0), "half": f(0.5),
+                 "two": f(2.0), "three": f(3.0), "e_tail_max": f(E_TAIL_MAX), "tail_safety": f(TAIL_SAFETY),
+                 "tail_rtol": f(TAIL_RTOL), "tail_share": f(TAIL_SHARE),
                  "exp_max": f(EXP_MAX), "u_rounding": f(U_ROUNDING), "safety": f(SAFETY), "max_factor": f(MAX_FACTOR),
                  "min_factor": f(MIN_FACTOR), "nonfinite_factor": f(NONFINITE_FACTOR), "floor2": f(ERR_FLOOR ** 2),
                  # err^(-alpha/(q+1)) err_prev^(beta/(q+1)) with err = sqrt(err2): exp2 of multiples of log2(err2)
@@ -405,8 +424,10 @@ def make_adaptive_lane_kernels(tableau, fine, split: int, correction: bool = Fal
                 if r < 0:
                     continue
                 n[lane] += 1
-                if st[_ACC * W + lane] == zero and n[lane] < max_steps:
-                    continue  # rejected: the lane retries with its smaller step
+                done = st[_DONE * W + lane] != zero  # accepted, and the tail may take over (_tail_lines)
+                if not done and n[lane] < max_steps and (st[_ACC * W + lane] == zero or
+                                                         math.isfinite(st[_X * W + lane])):
+                    continue  # rejected (the lane retries with its smaller step), or not yet in the tail
                 p = job.point[r]
                 k, a, bb = pts.k[p], pts.a[p], pts.b[p]
                 xi, u = st[_X * W + lane], st[_S * W + lane] - st[_X * W + lane]
@@ -414,8 +435,7 @@ def make_adaptive_lane_kernels(tableau, fine, split: int, correction: bool = Fal
                 bound = tail_error(k, a, bb, u, E)
                 if not math.isfinite(xi):
                     out.xi_inf[r], out.status[r] = math.nan, NONFINITE
-                elif bound <= max(TAIL_SAFETY * (TAIL_RTOL * xi + atol),  # negligible: see TAIL_RTOL
-                                  TAIL_SHARE * abs(st[_XF * W + lane] - xi)):  # or next to the estimate
+                elif done:
                     xf, uf, Ef = st[_XF * W + lane], st[_SF * W + lane] - st[_XF * W + lane], st[_EF * W + lane]
                     out.xi_inf[r], out.fine[r], out.status[r] = xi + tail_slip(k, a, bb, u, E), \
                         xf + tail_slip(k, a, bb, uf, Ef), OK
