@@ -199,12 +199,14 @@ def _stage_loops(tableau, start: tuple[str, ...], h: str, o_start: str, correcti
     Ee and o_max (the largest exponent since ``o_start``; with ``correction`` also y1, ye, dye) are then defined
     for the lines ``end`` that close it.
 
-    With ``correction`` each stage's y has a loop of its own after the stage's (x, s) loop, which also stores the
-    stage's E, exponent and state (x_j, s_j) for it (reading them back instead of recomputing the stage's sums cut the
-    correction's cost by about a fifth, +15.6 % -> +12-13 % of the kernel): the (x, s) loops are then the plain
-    kernel's, and a point that model="auto" leaves quasi-static gets the numbers of model="quasistatic" bit for bit
-    (tests/test_lanes_adaptive.py; benchmarks/throughput.py checks its steps). With y in the same loop the rounding of
-    xi moved (the contraction into FMAs differed), and 9 of the default scene's 20,000 points took other steps."""
+    With ``correction`` every stage's y is computed in one loop after the stage (x, s) loops, which also store each
+    stage's E, exponent and state (x_j, s_j) for it (read back, not recomputed from the stage sums); one y loop, not
+    one per stage: the stages' exponentials do not wait on y, so they overlap within it (model "auto" over
+    "quasistatic", 2e5 default-scene points, 1 thread: 1.23-1.24 -> 1.14-1.16 of run_sweep). The (x, s) loops are
+    then the plain kernel's, and a point that model="auto" leaves quasi-static gets the numbers of model="quasistatic"
+    bit for bit (tests/test_lanes_adaptive.py; benchmarks/throughput.py checks its steps). With y in the (x, s) loops
+    the rounding of xi moved (the contraction into FMAs differed), and 9 of the default scene's 20,000 points took
+    other steps."""
     _, A, b, _ = tableau.arrays()
     last = _evaluated(tableau)
     width = _stage_width(correction)
@@ -229,9 +231,13 @@ def _stage_loops(tableau, start: tuple[str, ...], h: str, o_start: str, correcti
             f"        {field(_OM)} = max({o_start if i == 2 else field(_OM)}, oi)"]
         if correction:
             lines[-1:-1] = [f"        {at(3)}, {at(4)}, {at(5)}, {at(6)} = Ei, oi, xi, si"]
-            lines += head + [f"        G, y1 = {field(_G)}, {start[4]}"] + [
-                f"        {at(2)} = correction_rate({at(5)}, {at(6)}, y1 + h * ({combination(A[i - 1], 2, i - 1)}), k, "
-                f"a, bb, G, {at(1)}, {at(3)}, {at(4)})"]
+    if correction:  # every stage's y in one loop after the (x, s) loops: its exponentials do not wait on y
+        lines += head + [f"        G, y1 = {field(_G)}, {start[4]}"]
+        for i in range(2, last + 1):
+            at = lambda c: field(_STAGES + width * (i - 2) + c)  # noqa: E731, B023
+            y_i = f"y1 + h * ({combination(A[i - 1], 2, i - 1)})"
+            lines += [f"        {at(2)} = correction_rate({at(5)}, {at(6)}, {y_i}, k, a, bb, G, {at(1)}, {at(3)}, "
+                      f"{at(4)})"]
     lines += head + [
         f"        xe = x1 + h * ({combination(b, 0, last)})",
         f"        se = s1 + h * ({combination(b, 1, last)})",
