@@ -34,7 +34,18 @@ from numba import njit
 
 from ..accuracy import E_TAIL_MAX, TAIL_RTOL, TAIL_SHARE
 from ..jitcache import pin, pin_module
-from ..models.stop import EXP_MAX, FAST, MAX_STEPS, NONFINITE, OK, TAIL_SAFETY, make_rate, tail_error, tail_slip
+from ..models.stop import (
+    EXP_MAX,
+    FAST,
+    MAX_STEPS,
+    NONFINITE,
+    OK,
+    TAIL_SAFETY,
+    make_rate,
+    tail_bound,
+    tail_error,
+    tail_slip,
+)
 from ..models.stop_inertial import make_correction_rate, tail_correction
 from ..solvers import EXPLICIT_METHODS
 from ..solvers.controllers import ERR_FLOOR, MAX_FACTOR, MIN_FACTOR, NONFINITE_FACTOR, PI_CONTROLLER, SAFETY
@@ -306,13 +317,13 @@ def _lane_source(tableau, correction: bool, fine=None, split: int = 2) -> str:
 
 def _tail_lines(field) -> list[str]:
     """Generated lines, in the lane loop that closes an attempt: whether the closed-form tail may take over from the
-    accepted state (:func:`sweep.models.stop.tail_error` below TAIL_SAFETY (atol + TAIL_RTOL |xi|) or TAIL_SHARE
-    |x_fine - x|), into the lane field _DONE. Tested here, in the vectorised loop, rather than in the scalar
-    bookkeeping that follows every attempt: there its two divisions and branches cost ~10 % of an attempt."""
-    x, u, E = field(_X), f"({field(_S)} - {field(_X)})", field(_E)
+    accepted state (its error bound, :func:`sweep.models.stop.tail_bound`, below TAIL_SAFETY (atol + TAIL_RTOL |xi|)
+    or TAIL_SHARE |x_fine - x|), into the lane field _DONE. Tested here, in the vectorised loop, rather than in the
+    scalar bookkeeping that follows every attempt: there its two divisions and branches cost ~10 % of an attempt."""
+    x, E = field(_X), field(_E)
     return [
-        f"        g_tail = a + two * bb * {u}",
-        f"        bound = {E} * {E} * {E} * (one / (three * g_tail) + k / (two * g_tail * g_tail))",
+        f"        g_tail = a + two * bb * ({field(_S)} - {x})",
+        f"        bound = tail_bound(k, g_tail, {E})",
         f"        negligible = max(tail_safety * (tail_rtol * {x} + atol), tail_share * abs({field(_XF)} - {x}))",
         f"        {field(_DONE)} = one if (accept and g_tail > zero and {E} <= e_tail_max and bound <= negligible) "
         "else zero",
@@ -324,7 +335,7 @@ def _attempt(f, tableau, correction: bool, fine, split: int):
     absolute floor of xi in the error norm."""
     namespace = {"rate": make_rate(f), "correction_rate": make_correction_rate(f), "exp_f64": exp_f64,
                  "_log2_approx": _log2_approx, "W": LANES, "one": f(1.0), "zero": f(0.0), "half": f(0.5),
-                 "two": f(2.0), "three": f(3.0), "e_tail_max": f(E_TAIL_MAX), "tail_safety": f(TAIL_SAFETY),
+                 "tail_bound": tail_bound, "two": f(2.0), "e_tail_max": f(E_TAIL_MAX), "tail_safety": f(TAIL_SAFETY),
                  "tail_rtol": f(TAIL_RTOL), "tail_share": f(TAIL_SHARE),
                  "exp_max": f(EXP_MAX), "u_rounding": f(U_ROUNDING), "safety": f(SAFETY), "max_factor": f(MAX_FACTOR),
                  "min_factor": f(MIN_FACTOR), "nonfinite_factor": f(NONFINITE_FACTOR), "floor2": f(ERR_FLOOR ** 2),

@@ -84,6 +84,14 @@ def tail_slip(k: float, a: float, b: float, u: float, E: float) -> float:
     return math.log1p(k * T) / k
 
 
+@njit(inline="always", fastmath=FAST, error_model="numpy", cache=True)
+def tail_bound(k: float, g: float, E: float) -> float:
+    """The bound of :func:`tail_error` where the tail applies (g = a + 2 b u > 0, E <= E_TAIL_MAX), without those
+    checks: straight-line code for the vectorised lane loops (sweep/integrate/lanes_adaptive.py), which test them
+    as selects."""
+    return E * E * E * (1.0 / (3.0 * g) + k / (2.0 * g * g))
+
+
 @njit(cache=True, fastmath=FAST)
 def tail_error(k: float, a: float, b: float, u: float, E: float) -> float:
     """Bound on the closed-form tail's own error (absolute, reduced); inf where it does not apply yet.
@@ -94,7 +102,7 @@ def tail_error(k: float, a: float, b: float, u: float, E: float) -> float:
     g = a + 2.0 * b * u
     if g <= 0.0 or E > E_TAIL_MAX:
         return math.inf
-    return E * E * E * (1.0 / (3.0 * g) + k / (2.0 * g * g))
+    return tail_bound(k, g, E)
 
 
 @njit(cache=True, fastmath=FAST)
