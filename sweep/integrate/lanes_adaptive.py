@@ -11,16 +11,17 @@ lane simply keeps its state and retries with a smaller step while its neighbours
 err^(-1/(q+1)), a power that numba would compute with a scalar libm call; it is taken as exp2 of a cheap log2
 (:func:`_log2_approx`, 0.5 % accurate: a step factor needs no more) so that the loop stays vectorised.
 
-The per-lane bookkeeping (the closed-form tail test, refilling a finished lane) is a short scalar loop, as in the
-fixed-step lanes; it runs only for lanes whose attempt was accepted. A run's arithmetic does not depend on which
-lane or neighbours it had.
+Whether the closed-form tail may take over is tested in the vectorised loop that closes an attempt
+(:func:`_tail_lines`); the per-lane bookkeeping (finishing a run, refilling its lane) is a short scalar loop, as in
+the fixed-step lanes. A run's arithmetic does not depend on which lane or neighbours it had.
 
 The compiled entry point is ``relax_runs`` itself (``nogil``, every callee inlined in numba's IR), called from Python
 threads by :func:`sweep.integrate.batch.lanes_in_threads` rather than from a ``prange`` loop: a kernel compiled in the
 process and one loaded from numba's cache then run the same code and give the same bits (docs/design.md,
 "Adaptive lanes").
 
-Error estimate of a point: :mod:`sweep.integrate.tolerance_ladder` (two runs at control tolerances a factor apart).
+Error estimate of a point: :mod:`sweep.integrate.tolerance_ladder` (each run's fine twin on the mesh halved, and a
+run again at a tighter control tolerance where the estimate exceeds the tolerance).
 """
 
 from __future__ import annotations
