@@ -1,11 +1,11 @@
 """Where the chunks of a sweep run: in this process (numba's own threads; past the first chunk, chunks side by side
 in threads of one numba thread each: sweep/concurrent_chunks.py) or on a dask.distributed cluster.
 
-Either way a chunk is the same task, :func:`sweep.runner.chunk_task` (the chunk's share of the plan made once by the
-driver for the whole scene, the chunk's points, the same compiled kernels), and its results come back to the driver, the
-single writer of the journal and of the file. A point's numbers depend on that point only and the kernels use no
-reassociating fastmath flags, so the results are bitwise the same whatever the backend, the chunking and the number
-of workers (on one instruction set).
+Either way a chunk is the same task, :func:`sweep.runner.chunk_task` (a worker is sent the chunk's share of the plan
+made once by the driver for the whole scene, threads read the whole plan; the chunk's points; the same compiled
+kernels), and its results come back to the driver, the single writer of the journal and of the file. A point's
+numbers depend on that point only and the kernels use no reassociating fastmath flags, so the results are bitwise
+the same whatever the backend, the chunking and the number of workers (on one instruction set).
 
 dask workers run one thread each with NUMBA_NUM_THREADS=1, set through ``distributed.nanny.pre-spawn-environ``
 (the nanny does not set it, and numba reads it once, at import): otherwise every worker process would start as
