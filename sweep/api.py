@@ -21,6 +21,7 @@ from .engine import n_samples
 from .errors import InputError, OutputError
 from .hopf import with_simulated_line
 from .io import open_dataset, write
+from .jitcache import source_digest
 from .journal import Journal, journal_path
 from .lock import output_lock
 from .model_choice import warm_up_models
@@ -206,8 +207,10 @@ def prepare_run(scene: Scene, output: str | os.PathLike | None = None, resume: b
         imap = stack.enter_context(open_backend(backend, workers, scheduler))  # connect first: fails in seconds
         journal = None
         if output is not None:
+            # the sources' digest: a journal of another version of sweep (or of edited sources) may hold chunks whose
+            # numbers this version would not give, which the plan's hash alone does not see
             identity = {"scene": scene.to_toml(), "plan_hash": plan.hash(), "chunk_size": chunk_size,
-                        "n_points": scene.n_points}
+                        "n_points": scene.n_points, "sweep_source": source_digest()}
             journal = Journal.open(output, identity, chunk_ranges(plan.n_points, chunk_size), resume, overwrite)
         yield PreparedRun(scene, plan, chunk_size, output, overwrite, journal, imap)
 

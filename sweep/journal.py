@@ -9,7 +9,8 @@ one. A single writer consolidates the chunks into the netCDF file at the end, af
 What binds a journal to its run:
 
 * ``manifest.json``, written atomically before any chunk, records the run's identity: the journal format, the scene's
-  canonical TOML, the plan hash and the chunk layout (points, chunk size, number of chunks). A run resumes a
+  canonical TOML, the plan hash, the digest of sweep's own sources (another version, or edited sources, may give
+  other numbers for the same plan) and the chunk layout (points, chunk size, number of chunks). A run resumes a
   journal only if that identity is the same.
 * every chunk carries a record (the member ``JOURNAL_RECORD`` of its .npz): the run's id (a digest of the identity),
   the plan hash, its index, the range of points it covers and a checksum of its arrays. A chunk is checked against
@@ -207,7 +208,7 @@ class Journal:
         differ = sorted(k for k in set(saved) | set(self.identity) if saved.get(k) != self.identity.get(k))
         if differ:
             raise InputError(f"cannot resume from {self.path}: the run there differs in {', '.join(differ)} (the "
-                             f"scene, plan or chunking changed); start over with --overwrite (overwrite=True), which "
+                             f"scene, plan, chunking or version of sweep changed); start over with --overwrite (overwrite=True), which "
                              f"deletes that journal")
         return True
 

@@ -150,6 +150,12 @@ def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, 
         sweep.run_sweep(stop_scene(rtol=1e-5, **kw), progress=False, output=out, chunk_size=50, resume=True)
     with pytest.raises(InputError, match="differs in chunk_size"):
         sweep.run_sweep(scene, progress=False, output=out, chunk_size=60, resume=True)
+    import sweep.api as api  # another version of sweep (its sources' digest) may give other numbers: refused
+
+    with monkeypatch.context() as m:
+        m.setattr(api, "source_digest", lambda: "0123456789abcdef")
+        with pytest.raises(InputError, match="differs in sweep_source .*version of sweep"):
+            sweep.run_sweep(scene, progress=False, output=out, chunk_size=50, resume=True)
 
     computed = []
 
