@@ -25,6 +25,7 @@ scaled log time sigma of :mod:`sweep.models.stop`, and the step count is chosen 
 from __future__ import annotations
 
 import hashlib
+import zlib
 from dataclasses import dataclass, replace
 from typing import NamedTuple
 
@@ -341,7 +342,9 @@ class Plan:
         """Digest of everything that determines the numbers (compared on resume): the plan's choices, the per-point
         arrays and the values of the calibrated constants (sweep/accuracy.py), not the prose of :meth:`describe`.
         Computed once per plan (its arrays are not changed after make_plan): a run with an output needs it for the
-        journal and for the file, and at 1e6 points it hashes ~60 MB (~35 ms)."""
+        journal and for the file. The per-point arrays enter by their CRC-32 (zlib, ~4 GB/s against SHA-256's
+        ~1.7 GB/s: 0.25 instead of 0.6 ms at 20,000 points, 3 % of a default-scene run at rtol 1e-3; it guards
+        against accidental change, not against forgery)."""
         cached = self.__dict__.get("_hash")
         if cached is not None:
             return cached
@@ -355,7 +358,8 @@ class Plan:
         h.update(repr((choices, constants)).encode())
         for arr in (self.k, self.a, self.b, self.s_c, self.step, self.finite, self.tau_samples, self.point_method,
                     self.G, self.inertial):
-            h.update(np.ascontiguousarray(arr))  # the buffer itself: the same bytes as tobytes(), without a copy
+            arr = np.ascontiguousarray(arr)  # the buffer itself: the same bytes as tobytes(), without a copy
+            h.update(f"{arr.dtype.str}{arr.shape}{zlib.crc32(arr):08x}".encode())
         self.__dict__["_hash"] = h.hexdigest()[:16]  # a frozen dataclass: its __setattr__ refuses
         return self.__dict__["_hash"]
 
