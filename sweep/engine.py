@@ -165,14 +165,16 @@ def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray, correction: np.ndar
     ``correction`` (over g, NaN-filled): the first-order inertial correction of the rk4 points is written there from
     the ladder's first run (:func:`_lane_runner`)."""
     out = RawResult.empty(g.size, 0, 0)
-    out.status[~plan.finite[g]] = NO_FINITE_LIMIT
-    out.steps[~plan.finite[g]] = 0
+    finite = plan.finite[g]
+    out.status[~finite] = NO_FINITE_LIMIT
     for m, method in enumerate(plan.point_methods):
-        live = np.flatnonzero(plan.finite[g] & (plan.point_method[g] == m))
+        live = np.flatnonzero(finite & (plan.point_method[g] == m))
         if live.size == 0:
             continue
+        if live.size == g.size:  # every point (the usual chunk): slices instead of gathers and scatters
+            live = slice(None)
         pts = g[live]
-        carried = (np.full(live.size, np.nan) if correction is not None and not METHODS[method].implicit
+        carried = (np.full(pts.size, np.nan) if correction is not None and not METHODS[method].implicit
                    else None)
         growth = perturbation_growth(plan.k[pts], plan.a[pts], 1.0)
         if plan.adaptive:
