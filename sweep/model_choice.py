@@ -91,17 +91,18 @@ def _estimate(scene: Scene, plan: Plan, pts: np.ndarray, carried: np.ndarray, pr
     run per point at ESTIMATE_STEP in the lanes carries it (float64 whatever the scene's type), and the per-point
     Rosenbrock module (:func:`_relax`) takes the points where that run failed or needed more than
     ESTIMATE_MAX_STEPS. ``xi_inf`` is NaN where the caller's own relaxed slip stands (the carried rows)."""
-    out = {"xi_inf": np.full(pts.size, np.nan), "correction": carried.astype(float),
-           "status": np.where(np.isfinite(carried), Status.OK, Status.NONFINITE).astype(np.int8)}
     lanes = ~np.isfinite(carried)
-    if lanes.any():
-        p = pts[lanes]
-        with Progress(p.size, enabled=progress, label="model error") as bar:
-            run = lane_runs(plan, "rk4", p, np.full(p.size, ESTIMATE_STEP), ESTIMATE_RTOL,
-                            scene.atol["xi_inf"] * ESTIMATE_RTOL / scene.rtol, correction=True,
-                            dtype=np.dtype(np.float64), max_steps=ESTIMATE_MAX_STEPS)
-            bar.update(p.size)
-        out["xi_inf"][lanes], out["correction"][lanes], out["status"][lanes] = run.xi_inf, run.correction, run.status
+    if not lanes.any():  # the relaxed-slip lanes carried every point's correction (the usual chunk)
+        return {"xi_inf": np.full(pts.size, np.nan), "correction": carried, "status": np.full(pts.size, OK, np.int8)}
+    out = {"xi_inf": np.full(pts.size, np.nan), "correction": carried.astype(float),
+           "status": np.where(lanes, Status.NONFINITE, Status.OK).astype(np.int8)}
+    p = pts[lanes]
+    with Progress(p.size, enabled=progress, label="model error") as bar:
+        run = lane_runs(plan, "rk4", p, np.full(p.size, ESTIMATE_STEP), ESTIMATE_RTOL,
+                        scene.atol["xi_inf"] * ESTIMATE_RTOL / scene.rtol, correction=True,
+                        dtype=np.dtype(np.float64), max_steps=ESTIMATE_MAX_STEPS)
+        bar.update(p.size)
+    out["xi_inf"][lanes], out["correction"][lanes], out["status"][lanes] = run.xi_inf, run.correction, run.status
     rest = np.flatnonzero((out["status"] != Status.OK) | ~np.isfinite(out["correction"]))
     if rest.size:
         per_point = _relax(scene, plan, pts[rest], False, (ESTIMATE_RTOL,), progress, "model error")[0]
@@ -141,11 +142,10 @@ def choose_stop_models(scene: Scene, plan: Plan, raw: RawResult, idx: np.ndarray
     pts = idx[finite]
     carried = np.full(n, np.nan) if correction is None else correction
     estimate = _estimate(scene, plan, pts, carried[finite], progress)
-    xi = np.where(np.isnan(estimate["xi_inf"]), raw.xi_inf[finite], estimate["xi_inf"])  # carried: the ladder's
     model_error = np.full(n, np.nan)
     measure = np.zeros(n, bool)
-    _route(finite, pts, xi, estimate["correction"], estimate["status"], plan.G, plan.k, plan.a, scene.model_tol,
-           model_error, measure)
+    _route(finite, pts, estimate["xi_inf"], raw.xi_inf, estimate["correction"], estimate["status"], plan.G, plan.k,
+           plan.a, scene.model_tol, model_error, measure)
     rows = np.flatnonzero(measure)
     if rows.size == 0:  # every point keeps the quasi-static model (the default scene's chunks)
         return ModelChoice(measure, model_error)
@@ -190,16 +190,18 @@ def _margins(tau):
 
 
 @njit(cache=True)
-def _route(rows, pts, xi, correction, status, G, k, a, model_tol, model_error, measure):
+def _route(rows, pts, estimated_xi, xi_inf, correction, status, G, k, a, model_tol, model_error, measure):
     """The model of the points ``pts`` (plan points, at the rows ``rows`` of a chunk): model_error = |correction /
-    xi| where the estimate is ok and xi finite, and ``measure`` (solve with inertia) where it is not, or where
+    xi| where the estimate is ok and xi finite (xi: the estimate's own run where it made one, else the chunk's
+    ``xi_inf``, whose run carried the correction), and ``measure`` (solve with inertia) where it is not, or where
     routing_margin(tau) x model_error > model_tol. One pass (as numpy expressions over a chunk's points: 0.2 ms of
     its ~4 ms), the same arithmetic (tau = G (1 + k + |a|), as the numpy expression orders it)."""
     for r in range(rows.size):
         i, p = rows[r], pts[r]
-        ok = status[r] == OK and math.isfinite(xi[r])
+        xi = xi_inf[i] if math.isnan(estimated_xi[r]) else estimated_xi[r]
+        ok = status[r] == OK and math.isfinite(xi)
         if ok:
-            model_error[i] = abs(correction[r] / xi[r])
+            model_error[i] = abs(correction[r] / xi)
         margin = _margin(G[p] * ((1.0 + k[p]) + abs(a[p])))
         measure[i] = not ok or not (margin * model_error[i] <= model_tol)
 
