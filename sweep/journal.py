@@ -208,8 +208,8 @@ class Journal:
         differ = sorted(k for k in set(saved) | set(self.identity) if saved.get(k) != self.identity.get(k))
         if differ:
             raise InputError(f"cannot resume from {self.path}: the run there differs in {', '.join(differ)} (the "
-                             f"scene, plan, chunking or version of sweep changed); start over with --overwrite (overwrite=True), which "
-                             f"deletes that journal")
+                             f"scene, plan, chunking or version of sweep changed); start over with --overwrite "
+                             f"(overwrite=True), which deletes that journal")
         return True
 
     def _check_files(self) -> None:
