@@ -17,10 +17,9 @@ __all__ = ["driven_chunk"]
 
 
 def driven_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.ndarray]]:
-    """compute(points) -> per-point arrays of a driven ``scene`` (points: indices into ``plan``, a chunk's share
-    or the whole plan):
-    one simulation per point with the plan's model, and with model="auto" a second one with inertia where the
-    quasi-static run broke down (regime runaway)."""
+    """compute(points) -> per-point arrays of a driven ``scene`` (points: indices into ``plan``, a chunk's share or
+    the whole plan): one simulation per point with the plan's model, and with model="auto" a second one with inertia
+    where the quasi-static run broke down (regime runaway)."""
     settings = DrivenSettings(scene.perturbation, driven_stepper_rtol(scene.rtol), scene.max_cycles, scene.max_steps)
 
     def simulate(points: np.ndarray, inertial: np.ndarray) -> dict[str, np.ndarray]:
