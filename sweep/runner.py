@@ -51,7 +51,7 @@ def chunk_task(scene: Scene, plan: Plan, points: np.ndarray, shared: bool = Fals
 
     t0 = time.perf_counter()
     compute = driven_chunk if plan.protocol == "driven" else stop_chunk
-    arrays = compute(scene, plan)(np.asarray(points) if shared else np.arange(points.size))
+    arrays = compute(scene, plan)(_rows(points, shared))
     arrays["seconds"] = np.array(time.perf_counter() - t0)
     return arrays
 
@@ -60,10 +60,17 @@ def kernel_task(scene: Scene, plan: Plan, points: np.ndarray, shared: bool = Fal
     """The stop kernels alone on one chunk (no choice of model, no error marks): :func:`execute`'s task (arguments
     as :func:`chunk_task`'s)."""
     t0 = time.perf_counter()
-    raw = run_points(scene, plan, np.asarray(points) if shared else np.arange(points.size))
+    raw = run_points(scene, plan, _rows(points, shared))
     arrays = {name: value for name, value in vars(raw).items() if isinstance(value, np.ndarray)}
     arrays["seconds"] = np.array(time.perf_counter() - t0)
     return arrays
+
+
+def _rows(points: np.ndarray, shared: bool) -> np.ndarray:
+    """The chunk's rows in its plan: its points themselves in the whole plan (``shared``), as a writable copy (the
+    chunk layout's arrays are read-only, and numba compiles a kernel again for a read-only array: ~20 s more on a
+    cold cache), else 0..n-1 in the chunk's share."""
+    return np.array(points, dtype=np.int64) if shared else np.arange(points.size)
 
 
 def in_process(scene: Scene, plan: Plan, todo: Iterable[tuple[int, np.ndarray]], task=chunk_task):

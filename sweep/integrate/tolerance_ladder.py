@@ -69,7 +69,8 @@ def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, to
     n = points.size
     out = LadderResult(np.full(n, np.nan), np.full(n, np.inf), np.zeros(n, np.int8), np.zeros(n, np.int32),
                        np.full(n, float(tol0)), np.zeros(n, np.int8), np.zeros(n, np.int64))
-    growth = np.ascontiguousarray(np.broadcast_to(np.asarray(growth, dtype=float), (n,)))  # one compiled variant
+    # a writable copy: numba compiles _judge and _sample_estimates again for a read-only array (a broadcast view)
+    growth = np.array(np.broadcast_to(np.asarray(growth, dtype=float), (n,)))
     if not estimates:
         x, _, _, status, attempts, *sampled = run(points, out.step, h0)
         out.xi[:], out.steps[:], out.runs[:], out.work[:] = x, attempts, 1, attempts
