@@ -3,6 +3,7 @@ against the independent scipy reference (tests/reference.py): the premise of the
 halved is at least twice as accurate as the run), the per-lane independence of the results, the step limit, and the
 branch-free log2 of the step-size controller."""
 
+import dataclasses
 import functools
 
 import numpy as np
@@ -120,3 +121,30 @@ def test_auto_leaves_the_quasistatic_points_bit_for_bit_as_the_quasistatic_model
     assert np.isfinite(auto["model_error"].values[kept]).all()
     for name in ("xi_inf", "xi_inf_error", "steps", "status"):
         np.testing.assert_array_equal(auto[name].values[kept], quasi[name].values[kept], err_msg=name)
+
+
+def test_a_sweep_compiles_each_adaptive_kernel_once():
+    """The chunks of every backend path (one chunk at a time, side by side on 2 threads, the reruns of the tolerance
+    ladder) hand the compiled kernels arrays of one type: a read-only array (the chunk layout's are) made numba
+    compile the adaptive lanes a second time, ~20 s on a cold cache."""
+    import numba
+
+    from sweep.integrate.lanes_adaptive import adaptive_lane_kernels
+    from sweep.integrate.tolerance_ladder import _judge
+    from sweep.model_choice import _route
+
+    d = sweep.default_scene()
+    scene = dataclasses.replace(d, K_over_M=d.K_over_M[::16], V=d.V[::8], rtol=1e-3)  # 13 x 13
+    threads = numba.get_num_threads()
+    try:
+        for n in sorted({1, min(2, numba.config.NUMBA_NUM_THREADS)}):
+            numba.set_num_threads(n)
+            sweep.run_sweep(scene, progress=False, chunk_size=8)  # 22 chunks: side by side on 2 threads
+    finally:
+        numba.set_num_threads(threads)
+    kernels = {"relax_runs (auto)": adaptive_lane_kernels(sweep.plan.LANES_METHOD, True)[0], "_judge": _judge,
+               "_route": _route}
+    assert {name: len(k.signatures) for name, k in kernels.items()} == dict.fromkeys(kernels, 1)
+    # the warm-up (sweep.runner.warm_up, the command line's) and the dask workers pass writable arrays
+    readonly = {name: str(k.signatures[0]) for name, k in kernels.items() if "readonly" in str(k.signatures[0])}
+    assert not readonly, readonly
