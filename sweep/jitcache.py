@@ -16,12 +16,22 @@ factory's module whenever that module changed and batch.py did not. Seen once, i
 of the lanes' state-array layout: a sweep failed with a corrupted heap, and did not with an empty cache (a stale
 lanes_batch writing past the new, smaller state array is the likely cause). With the digest every edit of the
 package gives its factory-built kernels new keys.
+
+numba's cache files are also serialised between processes here (:func:`serialise_cache_files`, applied on import):
+numba saves a compiled overload by reading the function's index, picking the first free data-file number and
+writing the index back, with no lock. Two processes that save different overloads of one function at once (a
+factory's variants, compiled side by side: the cold first run's helper process, sweeps started together on a
+cold cache) can both pick data file 1: the index then names one overload's key and the file holds the other's code,
+which a later process loads as if it were the first (seen once: a fresh-clone test run aborted in LLVM while
+loading the driven kernel from its cache, and passed from the same cache files afterwards).
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
+import os
 import sys
 from pathlib import Path
 
@@ -29,7 +39,7 @@ from numba.core import event
 from numba.core.dispatcher import Dispatcher
 from numba.core.extending import _Intrinsic
 
-__all__ = ["compiling", "pin", "pin_module", "source_digest"]
+__all__ = ["compiling", "pin", "pin_module", "serialise_cache_files", "source_digest"]
 
 
 class _CompileDepth(event.Listener):
@@ -86,3 +96,50 @@ def pin_module(name: str) -> None:
             pin(value)
         elif isinstance(value, _Intrinsic) and value._defn.__module__ == name:
             pin(value)
+
+
+CACHE_LOCK = ".sweep-numba-cache.lock"
+"""The lock file :func:`serialise_cache_files` takes, one per cache folder."""
+
+
+def serialise_cache_files() -> None:
+    """Make numba's save of a cached overload (read the index, pick a data file, write both) exclusive, and its
+    load shared, under an flock of the cache folder's CACHE_LOCK, in every process that imports sweep (module
+    docstring). Where flock is missing (not POSIX) or the folder is not writable (numba then saves nothing there),
+    numba's own behaviour stands."""
+    try:
+        import fcntl
+
+        from numba.core.caching import IndexDataCacheFile
+    except ImportError:
+        return
+    if getattr(IndexDataCacheFile, "_sweep_serialised", False):
+        return
+    save, load = IndexDataCacheFile.save, IndexDataCacheFile.load
+
+    @contextlib.contextmanager
+    def locked(cache_file, kind):
+        try:
+            fd = os.open(os.path.join(cache_file._cache_path, CACHE_LOCK), os.O_RDWR | os.O_CREAT, 0o666)
+        except OSError:
+            yield
+            return
+        try:
+            fcntl.flock(fd, kind)
+            yield
+        finally:
+            os.close(fd)  # (releases the lock)
+
+    def locked_save(self, key, data):
+        with locked(self, fcntl.LOCK_EX):
+            return save(self, key, data)
+
+    def locked_load(self, key):
+        with locked(self, fcntl.LOCK_SH):
+            return load(self, key)
+
+    IndexDataCacheFile.save, IndexDataCacheFile.load = locked_save, locked_load
+    IndexDataCacheFile._sweep_serialised = True
+
+
+serialise_cache_files()
