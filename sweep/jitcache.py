@@ -105,8 +105,8 @@ CACHE_LOCK = ".sweep-numba-cache.lock"
 def serialise_cache_files() -> None:
     """Make numba's save of a cached overload (read the index, pick a data file, write both) exclusive, and its
     load shared, under an flock of the cache folder's CACHE_LOCK, in every process that imports sweep (module
-    docstring). Where flock is missing (not POSIX) or the folder is not writable (numba then saves nothing there),
-    numba's own behaviour stands."""
+    docstring). Where flock is missing (not POSIX) or fails (a file system without locks), or the folder is not
+    writable (numba then saves nothing there), numba's own behaviour stands."""
     try:
         import fcntl
 
@@ -125,7 +125,8 @@ def serialise_cache_files() -> None:
             yield
             return
         try:
-            fcntl.flock(fd, kind)
+            with contextlib.suppress(OSError):  # a file system without locks (some network mounts): as numba does
+                fcntl.flock(fd, kind)
             yield
         finally:
             os.close(fd)  # (releases the lock)
