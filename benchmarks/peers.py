@@ -463,6 +463,29 @@ def best_pass(rows, new):
     return merged
 
 
+def time_scope(tool, scope, scene, plan, tols, repeats, ref, sub):
+    """One pass of ``tool`` over its tolerances on ``scope`` ("grid": every point, "sub": the subsample ``sub``):
+    (its rows, None), or (the rows before the failure, why) where an installed peer fails (the others go on)."""
+    idx = None if scope == "grid" else sub
+    rows = []
+    for rt in tool_tols(tool, tols):
+        t0 = time.perf_counter()
+        try:
+            row = time_tool(tool, scene, plan, idx, rt, repeats, ref if idx is None else ref[idx],
+                            sub if idx is None else None)
+        except Exception as exc:
+            if tool.family == "engine":
+                raise
+            why = f"{type(exc).__name__}: {exc}"[:500]
+            print(f"    {tool.name:22s} {scope:4s} rtol {rt:7.0e}: failed ({why})", flush=True)
+            return rows, why
+        rows.append(row)
+        err = "-" if row["max_rel_err"] is None else f"{row['max_rel_err']:.1e}"
+        print(f"    {tool.name:22s} {scope:4s} rtol {rt:7.0e}: {row['us_per_traj_per_core']:10.2f} us/traj/core"
+              f"  max err {err:>9s}  ({time.perf_counter() - t0:.1f} s)", flush=True)
+    return rows, None
+
+
 def bench_scene(name, scene, tools, tols, repeats, n_sub, n_check, passes=1):
     plan = sweep.make_plan(scene)
     sub = subsample(plan.n_points, n_sub, SEED)
@@ -481,28 +504,11 @@ def bench_scene(name, scene, tools, tols, repeats, n_sub, n_check, passes=1):
             if "failed" in entry:
                 continue
             for scope in tool.scopes:
-                idx = None if scope == "grid" else sub
-                rows = []
-                for rt in tool_tols(tool, tols):
-                    t0 = time.perf_counter()
-                    try:
-                        row = time_tool(tool, scene, plan, idx, rt, repeats, ref if idx is None else ref[idx],
-                                        sub if idx is None else None)
-                    except Exception as exc:  # an installed peer that fails: recorded, the others go on
-                        if tool.family == "engine":
-                            raise
-                        entry["failed"] = f"{type(exc).__name__}: {exc}"[:500]
-                        print(f"    {tool.name:22s} {scope:4s} rtol {rt:7.0e}: failed ({entry['failed']})",
-                              flush=True)
-                        break
-                    rows.append(row)
-                    err = "-" if row["max_rel_err"] is None else f"{row['max_rel_err']:.1e}"
-                    print(f"    {tool.name:22s} {scope:4s} rtol {rt:7.0e}: {row['us_per_traj_per_core']:10.2f} "
-                          f"us/traj/core  max err {err:>9s}  ({time.perf_counter() - t0:.1f} s)", flush=True)
-                failed = "failed" in entry
-                if rows and not (failed and scope in entry["scopes"]):  # a failed later pass keeps the earlier rows
+                rows, why = time_scope(tool, scope, scene, plan, tols, repeats, ref, sub)
+                if rows and not (why and scope in entry["scopes"]):  # a failed later pass keeps the earlier rows
                     entry["scopes"][scope] = best_pass(entry["scopes"].get(scope), rows)
-                if failed:
+                if why:
+                    entry["failed"] = why
                     break
     return {"shape": list(scene.shape), "points": plan.n_points,
             "K_over_M_range": [float(scene.K_over_M.min()), float(scene.K_over_M.max())],

@@ -85,9 +85,8 @@ def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, to
         # the first pass takes every point: slices (views) instead of gathers through an index array
         i = slice(None) if entries.size == n else entries
         x, fine, tail, status, attempts, *sampled = run(points[i], out.step[i], h0[i])
-        within = np.ones(entries.size, np.bool_)
-        if samples is not None:
-            within = samples.keep(entries, sampled[0], attempts, growth[i], tail)
+        within = (np.ones(entries.size, np.bool_) if samples is None
+                  else samples.keep(entries, sampled[0], attempts, growth[i], tail))
         n_again = _judge(entries, x, fine, tail, status, attempts, within, growth, roundoff, rtol, atol, out.xi,
                          out.error, out.status, out.steps, out.step, out.runs, out.work, again)
         entries = again[:n_again].copy()
