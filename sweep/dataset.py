@@ -15,6 +15,7 @@ import xarray as xr
 
 from . import physics
 from .accuracy import ESTIMATE_RTOL, TIGHTER
+from .assemble import assemble
 from .engine import SAMPLED, RawResult
 from .model_choice import MODEL_FLAG, ModelChoice
 from .plan import Plan, line_uses_inertia
@@ -161,7 +162,7 @@ def build_dataset(scene: Scene, plan: Plan, raw: RawResult, choice: ModelChoice,
     attrs["plan_hash"] = plan.hash()
     attrs.update({f"plan_{k}": v for k, v in plan.describe().items()})
     attrs["plan_model"] = _describe_models(scene, choice)
-    return xr.Dataset(data, coords=_coords(scene), attrs=attrs)
+    return assemble(data, _coords(scene), attrs)
 
 
 def sampled_variables(scene: Scene, n_traj: int, dims: tuple[str, ...], xi_at: np.ndarray, u_at: np.ndarray,
@@ -281,4 +282,4 @@ def build_driven_dataset(scene: Scene, out: dict[str, np.ndarray], seconds: floa
                    "(driven scene)", "regime runaway is status quasistatic_breakdown", history, seconds)
     attrs["runaway_slip_velocity_over_V"] = RUNAWAY_XI_DOT
     attrs.update({f"plan_{k}": v for k, v in description.items()})
-    return xr.Dataset(data, coords=coords, attrs=attrs)
+    return assemble(data, coords, attrs)

@@ -34,6 +34,10 @@ FILE_PER_POINT = {"stop": 80, "driven": 80}
 FILE_PER_VALUE = {"t50": 16, "t90": 16, "trajectory": 32, "slip_at": 16}
 """Bytes per point that each observable adds to the file, per value (trajectory: per sampled time, xi, psi and
 their errors; slip_at: per time of t_obs, with its error)."""
+UNCHECKED_MEMORY = 32 * 2**20
+"""Bytes of memory a run may need without a look at what the machine has (:func:`check_fits`): less than the
+process's own imports took (numba, xarray: ~200 MB), and the look (/proc/meminfo, the control group's files) costs
+0.05-0.2 ms, a few percent of a sweep of a few thousand points."""
 CORE_SECONDS_PER_POINT = {"stop": 2.2e-5, "driven": 3.2e-4}
 """Typical core-seconds a point takes (module docstring); a scene's own cost can differ tenfold either way, which the
 dry run's pilot measures where the grid can be planned."""
@@ -119,7 +123,9 @@ def available_memory() -> int | None:
 
 def check_fits(scene: Scene, size: RunSize) -> None:
     """InputError, before any plan is made, if ``size`` needs more memory than is available: the message says how
-    to split the grid (each part its own scene and file)."""
+    to split the grid (each part its own scene and file). A run of at most UNCHECKED_MEMORY is not checked."""
+    if size.memory <= UNCHECKED_MEMORY:
+        return
     available = available_memory()
     if available is None or size.memory <= available:
         return
