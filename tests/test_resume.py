@@ -54,19 +54,25 @@ def test_results_do_not_depend_on_the_chunking(make):
         assert 0 < int(whole["model"].sum()) < scene.n_points  # both models inside the chunks
 
 
-@pytest.mark.parametrize(("side", "observables", "size"), [
-    (141, ("xi_inf",), 4096),  # the default scene's 20,000 points: 5 chunks
-    (1000, ("xi_inf",), 16384),  # 1e6 points: 61 chunks
-    (800, ("xi_inf", "t50"), 8192),  # 640,000 points: 16384 would leave 40 chunks
-    (1000, ("xi_inf", "trajectory"), 4096),  # a chunk's trajectories are held whole until journaled
+@pytest.mark.parametrize(("side", "observables", "model", "size"), [
+    (141, ("xi_inf",), "auto", 4096),  # the default scene's 20,000 points: 5 chunks
+    (1000, ("xi_inf",), "auto", 16384),  # 1e6 points: 61 chunks
+    (800, ("xi_inf", "t50"), "auto", 8192),  # 640,000 points: 16384 would leave 40 chunks
+    (1000, ("xi_inf", "trajectory"), "auto", 4096),  # a chunk's trajectories are held whole until journaled
+    (141, ("xi_inf",), "quasistatic", 141 * 141),  # a small quasi-static grid: one chunk (plan.ONE_CHUNK_POINTS)
+    (182, ("xi_inf",), "quasistatic", 4096),  # 33,124 points: beyond it
+    (141, ("xi_inf", "trajectory"), "quasistatic", 4096),
+    (141, ("xi_inf",), "inertial", 4096),  # an inertial point costs ~1 ms: the chunks are the progress
 ])
-def test_default_chunks_grow_with_the_grid_and_leave_enough_chunks(side, observables, size):
-    from sweep.plan import CHUNKS_AT_LEAST, make_plan
+def test_default_chunks_grow_with_the_grid_and_leave_enough_chunks(side, observables, model, size):
+    from sweep.plan import CHUNKS_AT_LEAST, ONE_CHUNK_POINTS, make_plan
 
-    scene = stop_scene(K_over_M=np.logspace(3, 6, side), V=np.logspace(-7, -4, side), observables=observables)
+    scene = stop_scene(K_over_M=np.logspace(3, 6, side), V=np.logspace(-7, -4, side), observables=observables,
+                       model=model)
     plan = make_plan(scene)
     assert plan.chunk_size == size
-    assert size == 4096 or scene.n_points // size >= CHUNKS_AT_LEAST
+    assert size in (4096, scene.n_points) or scene.n_points // size >= CHUNKS_AT_LEAST
+    assert size < scene.n_points or scene.n_points <= ONE_CHUNK_POINTS
 
 
 COLD_WARM = """
