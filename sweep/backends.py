@@ -176,11 +176,12 @@ def _check_workers(workers: int) -> None:
 
 @contextmanager
 def open_backend(backend: str = "threads", workers: int | None = None, scheduler: str | None = None) -> Iterator:
-    """A function imap(scene, plan, todo) -> iterator of (chunk index, arrays) as chunks complete, for the duration
-    of the context (a dask cluster started here is shut down on exit)."""
+    """A function imap(scene, plan, todo, progress=False) -> iterator of (chunk index, arrays) as chunks complete,
+    for the duration of the context (a dask cluster started here is shut down on exit; ``progress``: see
+    runner.in_process, not shown from dask workers)."""
     check_backend(backend, workers, scheduler)
     if backend == "threads":
         yield in_process
         return
     with _dask(workers, scheduler) as client:
-        yield lambda scene, plan, todo: _on_dask(client, scene, plan, todo)
+        yield lambda scene, plan, todo, progress=False: _on_dask(client, scene, plan, todo)

@@ -54,6 +54,10 @@ ESTIMATE_MAX_STEPS = 20_000
 Rosenbrock module instead: explicit steps are limited by stability where the quasi-static stop is stiff (the default
 scene's 209 ros4 points: 509 steps on average, 3.3x faster than RODAS3 at ESTIMATE_RTOL, and within 0.25 % of a
 tight integration against its 1.9 %), the Rosenbrock steps are not."""
+RELAX_BATCH = 256
+"""Points per call of the per-point module (:func:`_relax`): an inertial point takes ~1 ms, so a batch ends every
+~0.1 s on two threads and the progress bar moves (a grid of up to plan.ONE_CHUNK_POINTS is one chunk, whose
+inertial points could otherwise take half a minute in one silent call)."""
 MODEL_FLAG = {"flag_values": np.array([0, 1], np.int8), "flag_meanings": "quasistatic inertial"}
 QUASISTATIC, INERTIAL = 0, 1
 
@@ -77,9 +81,13 @@ def _relax(scene: Scene, plan: Plan, pts: np.ndarray, inertial: bool, rtols: tup
     outs = []
     with Progress(pts.size * len(rtols), enabled=progress, label=label) as bar:
         for rtol in rtols:
-            outs.append(relax_points(plan.k[p], plan.a[p], plan.b[p], plan.G[p], inertial, rtol,
-                                     scene.atol["xi_inf"] * rtol / scene.rtol, scene.max_steps))
-            bar.update(p.size)
+            parts = []
+            for lo in range(0, p.size, RELAX_BATCH):  # (a point's numbers do not depend on its batch)
+                q = p[lo:lo + RELAX_BATCH]
+                parts.append(relax_points(plan.k[q], plan.a[q], plan.b[q], plan.G[q], inertial, rtol,
+                                          scene.atol["xi_inf"] * rtol / scene.rtol, scene.max_steps))
+                bar.update(q.size)
+            outs.append({key: np.concatenate([part[key] for part in parts]) for key in RELAX_KEYS})
     back = np.argsort(order)
     return [{key: out[key][back] for key in RELAX_KEYS} for out in outs]
 

@@ -87,14 +87,15 @@ costs ~10-100x a stop point. The smallest chunk of a large grid: :func:`chunk_si
 LARGE_CHUNK_POINTS = 16384
 """The largest default chunk of a stop scene that samples nothing in time (:func:`chunk_size_for`)."""
 ONE_CHUNK_POINTS = 32768
-"""A quasi-static stop grid that samples nothing in time is one chunk up to this many points (:func:`chunk_size_for`):
-such a point costs ~1-10 us on one core (the default grid at rtol 1e-3, its costly corner at rtol 1e-10), so the
-chunk ends within a fraction of a second and needs no progress of its own, and the chunk's fixed cost is paid once:
-the tolerance ladder's numpy between its kernel calls, the kernel calls' hand-over to the threads and each call's
-last runs, on which the other threads wait. Measured (default scene with model "quasistatic", 20,000 points, rtol 1e-3,
-``run_sweep``, best of 30 twice): 5 chunks of 4096 points 18.9-19.2 ms on 1 thread and 12.4-13.9 ms on 2, one chunk
-18.4 and 11.3 ms. Not with model "auto" or "inertial": an inertial point costs ~1 ms (12.8 s for the default grid
-forced inertial on 2 threads), and the chunks are then what the progress bar counts."""
+"""A stop grid that samples nothing in time, of model "quasistatic" or "auto", is one chunk up to this many points
+(:func:`chunk_size_for`): a quasi-static point costs ~1-10 us on one core (the default grid at rtol 1e-3, its costly
+corner at rtol 1e-10), and the chunk's fixed cost is paid once: the tolerance ladder's numpy between its kernel
+calls, the choice of model, the kernel calls' hand-over to the threads and each call's last runs, on which the other
+threads wait. Measured (default scene, 20,000 points, rtol 1e-6, ``run_sweep``, best of 20 twice; 5 chunks of 4096
+points -> one): model "quasistatic" 27.9 -> 26.6 ms on 1 thread, 16.8 -> 15.8 ms on 2; model "auto" 31.8 -> 30.9 ms,
+19.2 -> 18.0 ms. The points that "auto" solves with inertia (~1 ms each) are solved in batches with a bar of their
+own (model_choice.RELAX_BATCH, runner.in_process), which the run's bar, counting chunks, would not show until the
+end. Not with model "inertial", whose chunks are its progress."""
 CHUNKS_AT_LEAST = 60
 """A grid keeps at least this many chunks when its chunks grow (:func:`chunk_size_for`): ~8 a thread on 8 threads to
 share out side by side (sweep/concurrent_chunks.py), the last chunks' idle share small."""
@@ -111,7 +112,7 @@ def chunk_size_for(scene: Scene) -> int:
     size = CHUNK_POINTS[scene.protocol]
     if scene.protocol != "stop" or {"trajectory", "slip_at"} & set(scene.observables):
         return size
-    if scene.model == "quasistatic" and scene.n_points <= ONE_CHUNK_POINTS:
+    if scene.model != "inertial" and scene.n_points <= ONE_CHUNK_POINTS:
         return max(1, scene.n_points)
     while 2 * size <= LARGE_CHUNK_POINTS and scene.n_points >= CHUNKS_AT_LEAST * 2 * size:
         size *= 2

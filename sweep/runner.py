@@ -42,23 +42,26 @@ def chunk_ranges(n: int, chunk_size: int | None) -> list[tuple[int, int]]:
     return [(int(points.min()), int(points.max()) + 1) for points in chunk_points(n, chunk_size)]
 
 
-def chunk_task(scene: Scene, plan: Plan, points: np.ndarray, shared: bool = False) -> dict[str, np.ndarray]:
+def chunk_task(scene: Scene, plan: Plan, points: np.ndarray, shared: bool = False,
+               progress: bool | None = False) -> dict[str, np.ndarray]:
     """Compute one chunk (any backend): per-point arrays plus ``seconds``, the time it took. ``plan``: the chunk's
     share of the scene's plan (Plan.take, made once by the driver for the whole scene: what a dask worker is sent),
     ``points`` its points in the grid; with ``shared``, the whole plan itself, ``points`` the chunk's points in it
-    (the threads backend: no copy of the chunk's share, ~0.1 ms a chunk of 4096 points)."""
+    (the threads backend: no copy of the chunk's share, ~0.1 ms a chunk of 4096 points). ``progress``: a bar of the
+    chunk's inertial points (stop scene; see :func:`in_process`)."""
     from .driven_sweep import driven_chunk
 
     t0 = time.perf_counter()
-    compute = driven_chunk if plan.protocol == "driven" else stop_chunk
-    arrays = compute(scene, plan)(_rows(points, shared))
+    compute = driven_chunk(scene, plan) if plan.protocol == "driven" else stop_chunk(scene, plan, progress)
+    arrays = compute(_rows(points, shared))
     arrays["seconds"] = np.array(time.perf_counter() - t0)
     return arrays
 
 
-def kernel_task(scene: Scene, plan: Plan, points: np.ndarray, shared: bool = False) -> dict[str, np.ndarray]:
+def kernel_task(scene: Scene, plan: Plan, points: np.ndarray, shared: bool = False,
+                progress: bool | None = False) -> dict[str, np.ndarray]:
     """The stop kernels alone on one chunk (no choice of model, no error marks): :func:`execute`'s task (arguments
-    as :func:`chunk_task`'s)."""
+    as :func:`chunk_task`'s; no inertial points, so no bar)."""
     t0 = time.perf_counter()
     raw = run_points(scene, plan, _rows(points, shared))
     arrays = {name: value for name, value in vars(raw).items() if isinstance(value, np.ndarray)}
@@ -73,14 +76,17 @@ def _rows(points: np.ndarray, shared: bool) -> np.ndarray:
     return np.array(points, dtype=np.int64) if shared else np.arange(points.size)
 
 
-def in_process(scene: Scene, plan: Plan, todo: Iterable[tuple[int, np.ndarray]], task=chunk_task):
+def in_process(scene: Scene, plan: Plan, todo: Iterable[tuple[int, np.ndarray]], task=chunk_task,
+               progress: bool | None = False):
     """The threads backend (sweep/concurrent_chunks.py): with one numba thread, or a threading layer that is not
     safe to enter from two threads at once, the chunks one after another in this thread (numba's threads inside
     each); else the first chunk so, then the others side by side, one chunk per numba thread (where there are enough
-    of them: concurrent_chunks.MIN_CHUNKS_PER_THREAD). Every chunk reads the one plan (``shared``)."""
+    of them: concurrent_chunks.MIN_CHUNKS_PER_THREAD). Every chunk reads the one plan (``shared``). A lone chunk
+    (a small grid is one: plan.ONE_CHUNK_POINTS) gets ``progress`` for its inertial points, which the run's bar,
+    counting chunks, would not show until the end."""
     todo = list(todo)
     for n, (i, points) in enumerate(todo):
-        yield i, task(scene, plan, points, shared=True)
+        yield i, task(scene, plan, points, shared=True, progress=progress if len(todo) == 1 else False)
         workers = side_by_side(len(todo) - n - 1)
         if workers > 1:
             rest = iter(todo[n + 1:])
@@ -119,7 +125,7 @@ def run_chunks(scene: Scene, plan: Plan, chunk_size: int | None, journal: Journa
         bar.update(sum(chunks[i].size for i in done))
         try:
             with writes as keep:
-                for i, arrays in imap(scene, plan, todo):
+                for i, arrays in imap(scene, plan, todo, progress=progress):
                     keep(i, arrays)
                     consolidate(chunks[i], arrays)  # into the flat arrays at once: no second copy of the chunks
                     bar.update(chunks[i].size)
@@ -158,9 +164,10 @@ def warm_up(scene: Scene, plan: Plan) -> float:
     return time.perf_counter() - t0
 
 
-def stop_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.ndarray]]:
+def stop_chunk(scene: Scene, plan: Plan, progress: bool | None = False
+               ) -> Callable[[np.ndarray], dict[str, np.ndarray]]:
     """compute(points) of the stop protocol: the quasi-static kernels (unless the model is forced inertial), the
-    choice of model, the inertial points, the error_above_tol marks."""
+    choice of model, the inertial points (with a bar if ``progress``), the error_above_tol marks."""
     n_t = n_samples(scene, plan)
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
@@ -172,7 +179,7 @@ def stop_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.
         else:
             raw = run_points(scene, plan, points, correction=carried)
             mark_error_above_tol(scene, raw)
-        choice = choose_stop_models(scene, plan, raw, points, correction=carried)
+        choice = choose_stop_models(scene, plan, raw, points, progress=progress, correction=carried)
         mark_error_above_tol(scene, raw)
         arrays = {name: value for name, value in vars(raw).items() if isinstance(value, np.ndarray)}
         arrays["inertial"] = choice.inertial

@@ -42,8 +42,8 @@ def interrupt_after(monkeypatch, chunks: int) -> list[int]:
 
     real, sizes = runner.stop_chunk, []
 
-    def stopped(scene, plan):
-        compute = real(scene, plan)
+    def stopped(scene, plan, progress=False):
+        compute = real(scene, plan, progress)
 
         def counted(points):
             if len(sizes) == chunks:
@@ -160,8 +160,8 @@ def _folder_in_the_way(path: Path) -> None:
 
 def _wrapped(stop_chunk, action):
     """``stop_chunk`` (sweep.runner) calling ``action()`` before each chunk it computes."""
-    def wrapped(scene, plan):
-        compute = stop_chunk(scene, plan)
+    def wrapped(scene, plan, progress=False):
+        compute = stop_chunk(scene, plan, progress)
 
         def run(points):
             action()

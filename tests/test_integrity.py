@@ -292,8 +292,8 @@ def test_two_runs_on_one_output(tmp_path, config, monkeypatch, capsys, reference
     out = tmp_path / "s.nc"
     real, started, release = runner.stop_chunk, threading.Event(), threading.Event()
 
-    def held(sc, plan):
-        compute = real(sc, plan)
+    def held(sc, plan, progress=False):
+        compute = real(sc, plan, progress)
         return lambda points: started.set() or release.wait(120) and compute(points)
 
     monkeypatch.setattr(runner, "stop_chunk", held)
@@ -499,8 +499,8 @@ def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeyp
         if when == "chunks":
             real = runner.stop_chunk
 
-            def filling(sc, plan):
-                compute = real(sc, plan)
+            def filling(sc, plan, progress=False):
+                compute = real(sc, plan, progress)
                 # the disk fills once the first 5 chunks are on disk (journaled in a helper thread: waited for)
                 return lambda points: (computed_.append(1), len(computed_) == 6
                                        and (chunks_on_disk(out, 5), fill(disk)), compute(points))[-1]

@@ -55,12 +55,12 @@ def test_results_do_not_depend_on_the_chunking(make):
 
 
 @pytest.mark.parametrize(("side", "observables", "model", "size"), [
-    (141, ("xi_inf",), "auto", 4096),  # the default scene's 20,000 points: 5 chunks
+    (141, ("xi_inf",), "auto", 141 * 141),  # the default scene's 20,000 points: one chunk (plan.ONE_CHUNK_POINTS)
     (1000, ("xi_inf",), "auto", 16384),  # 1e6 points: 61 chunks
     (800, ("xi_inf", "t50"), "auto", 8192),  # 640,000 points: 16384 would leave 40 chunks
     (1000, ("xi_inf", "trajectory"), "auto", 4096),  # a chunk's trajectories are held whole until journaled
-    (141, ("xi_inf",), "quasistatic", 141 * 141),  # a small quasi-static grid: one chunk (plan.ONE_CHUNK_POINTS)
-    (182, ("xi_inf",), "quasistatic", 4096),  # 33,124 points: beyond it
+    (141, ("xi_inf",), "quasistatic", 141 * 141),
+    (182, ("xi_inf",), "auto", 4096),  # 33,124 points: beyond it
     (141, ("xi_inf", "trajectory"), "quasistatic", 4096),
     (141, ("xi_inf",), "inertial", 4096),  # an inertial point costs ~1 ms: the chunks are the progress
 ])
@@ -165,8 +165,8 @@ def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, 
 
     computed = []
 
-    def counting_stop_chunk(sc, plan):
-        compute = real_chunk(sc, plan)
+    def counting_stop_chunk(sc, plan, progress=False):
+        compute = real_chunk(sc, plan, progress)
         return lambda points: computed.append(points.size) or compute(points)
 
     monkeypatch.setattr(runner, "stop_chunk", counting_stop_chunk)
