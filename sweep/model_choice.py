@@ -82,8 +82,8 @@ def _relax(scene: Scene, plan: Plan, pts: np.ndarray, inertial: bool, rtols: tup
     with Progress(pts.size * len(rtols), enabled=progress, label=label) as bar:
         for rtol in rtols:
             parts = []
-            for lo in range(0, p.size, RELAX_BATCH):  # (a point's numbers do not depend on its batch)
-                q = p[lo:lo + RELAX_BATCH]
+            # batches of at most RELAX_BATCH points (one, empty, for none): a point's numbers do not depend on its batch
+            for q in np.array_split(p, max(1, -(-p.size // RELAX_BATCH))):
                 parts.append(relax_points(plan.k[q], plan.a[q], plan.b[q], plan.G[q], inertial, rtol,
                                           scene.atol["xi_inf"] * rtol / scene.rtol, scene.max_steps))
                 bar.update(q.size)
