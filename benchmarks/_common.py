@@ -28,7 +28,7 @@ from _machine import cpu_model, loadavg, usable_cpus  # noqa: F401 (re-exported)
 from scipy.integrate import BDF, LSODA, Radau
 
 import sweep
-from sweep.models.stop import E_TAIL_MAX, EXP_MAX, TAIL_SAFETY, tail_is_accurate, tail_slip
+from sweep.integrate.models.stop import E_TAIL_MAX, EXP_MAX, TAIL_SAFETY, tail_is_accurate, tail_slip
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -112,7 +112,7 @@ def timed(fn, repeats):
 
 
 def tail_ok(k, a, b, u, E, tol):
-    """sweep.models.stop.tail_is_accurate in plain Python (same expression, same order of operations).
+    """sweep.integrate.models.stop.tail_is_accurate in plain Python (same expression, same order of operations).
 
     Calling the njit original from Python costs ~1.7 us per call (dispatch), comparable to a scipy step;
     scipy gets this copy so that the per-step test does not inflate its cost. check_tail_ok() verifies that

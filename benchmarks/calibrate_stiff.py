@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Calibration of the Rosenbrock (ros4) lanes against RK4 in the stiff region: sweep.plan.STIFF_K_MAX,
+"""Calibration of the Rosenbrock (ros4) lanes against RK4 in the stiff region: sweep.plan.plan.STIFF_K_MAX,
 STIFF_WORK_MIN and C_STIFF come from this script.
 
     python benchmarks/calibrate_stiff.py [--quick] [--out benchmarks/results/calibrate_stiff.json]
@@ -21,9 +21,9 @@ import json
 from pathlib import Path
 
 import numpy as np
+from sweep.plan.plan import time_scale
 
 from sweep.integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
-from sweep.plan import time_scale
 
 HERE = Path(__file__).resolve().parent
 EVALS_PER_STEP = {"rk4": 4, "ros4": 3}

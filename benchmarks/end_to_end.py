@@ -32,7 +32,7 @@ kernel time.
 
 Parts that run in other threads at the same time (the netCDF written while the picture is drawn, chunks journaled
 in the background) are timed in their own thread, so their sum can exceed ``total``; ``overlapped_s`` says by how
-much. Chunks computed side by side (sweep/concurrent_chunks.py: one chunk per numba thread, N at once) count their
+much. Chunks computed side by side (sweep/run/concurrent_chunks.py: one chunk per numba thread, N at once) count their
 parts at 1/N of their time in each thread: ``kernel`` is then the kernels' thread-seconds over the N threads, the
 wall time the kernels alone would take on them with nothing serial between (one chunk at a time on N numba threads,
 it is the wall time inside the kernel calls, as before). Writes JSON (machine, versions, load average) and a PNG
@@ -59,20 +59,20 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
+import sweep.plot.files  # noqa: E402
 from _common import loadavg, machine_info, sweep_digest, write_result  # noqa: E402
 
 import sweep  # noqa: E402
-import sweep.api  # noqa: E402
 import sweep.cli  # noqa: E402
-import sweep.engine  # noqa: E402
-import sweep.journal  # noqa: E402
-import sweep.model_choice  # noqa: E402
-import sweep.plot  # noqa: E402
-import sweep.runner  # noqa: E402
+import sweep.protocols.stop.engine  # noqa: E402
+import sweep.protocols.stop.model_choice  # noqa: E402
+import sweep.run.api  # noqa: E402
+import sweep.run.journal  # noqa: E402
+import sweep.run.runner  # noqa: E402
 
 DEFAULT_OUT = HERE / "results" / "end_to_end.json"
 CHUNK_THREAD = "sweep-chunk"
-"""Name prefix of the threads that compute chunks side by side (sweep/concurrent_chunks.py)."""
+"""Name prefix of the threads that compute chunks side by side (sweep/run/concurrent_chunks.py)."""
 TARGET_RATIO = 1.3
 SIDES = {"full": (1000, 1000), "quick": (20, 10)}
 FRESH_REPEATS = 2
@@ -88,7 +88,7 @@ class Stopwatch:
 
     def __init__(self, workers: int = 1) -> None:
         self.workers = workers
-        """Chunks computed side by side (the run's numba threads, sweep/concurrent_chunks.py)."""
+        """Chunks computed side by side (the run's numba threads, sweep/run/concurrent_chunks.py)."""
         self.own: dict[str, float] = {}
         self.calls: dict[str, int] = {}
         self.helper: set[str] = set()
@@ -109,7 +109,7 @@ class Stopwatch:
             if stack:
                 stack[-1] += spent
             thread = threading.current_thread()
-            # a chunk computed side by side with others (sweep/concurrent_chunks.py) holds 1/workers of the machine
+            # a chunk computed side by side with others (sweep/run/concurrent_chunks.py) holds 1/workers of the machine
             share = 1.0 / self.workers if thread.name.startswith(CHUNK_THREAD) else 1.0
             with self._lock:
                 self.own[key] = self.own.get(key, 0.0) + (spent - inner) * share
@@ -130,25 +130,25 @@ class Stopwatch:
 def instrumented(watch: Stopwatch):
     """The package's functions wrapped in ``watch``'s sections (module docstring) for the duration of the block."""
     patches = [
-        (sweep.engine, "climb", "ladder_numpy"),
-        (sweep.engine, "climb_tolerances", "ladder_numpy"),
-        (sweep.engine, "stop_batch", "kernel"),
-        (sweep.engine, "slip_batch", "kernel"),
-        (sweep.model_choice, "relax_points", "kernel"),
-        (sweep.runner, "choose_stop_models", "model_choice"),
-        (sweep.runner, "run_points", "chunk_other"),
-        (sweep.journal.Journal, "write", "journal"),
-        (sweep.api, "run_chunks", "consolidate"),
-        (sweep.api, "make_plan", "planning"),
-        (sweep.api, "prepare_run", "prepare_other"),
-        (sweep.api, "warm_up_kernels", "warm_up"),
-        (sweep.api, "build_dataset", "dataset"),
-        (sweep.api, "write", "netcdf"),
-        (sweep.plot, "plot_file", "png"),
+        (sweep.protocols.stop.engine, "climb", "ladder_numpy"),
+        (sweep.protocols.stop.engine, "climb_tolerances", "ladder_numpy"),
+        (sweep.protocols.stop.engine, "stop_batch", "kernel"),
+        (sweep.protocols.stop.engine, "slip_batch", "kernel"),
+        (sweep.protocols.stop.model_choice, "relax_points", "kernel"),
+        (sweep.run.runner, "choose_stop_models", "model_choice"),
+        (sweep.run.runner, "run_points", "chunk_other"),
+        (sweep.run.journal.Journal, "write", "journal"),
+        (sweep.run.api, "run_chunks", "consolidate"),
+        (sweep.run.api, "make_plan", "planning"),
+        (sweep.run.api, "prepare_run", "prepare_other"),
+        (sweep.run.api, "warm_up_kernels", "warm_up"),
+        (sweep.run.api, "build_dataset", "dataset"),
+        (sweep.run.api, "write", "netcdf"),
+        (sweep.plot.files, "plot_file", "png"),
     ]
-    lane_kernels, adaptive_kernels = sweep.engine.lane_kernels, sweep.engine.adaptive_lane_kernels
-    if hasattr(sweep.journal.Journal, "background"):  # chunks journaled in a helper thread
-        patches.append((sweep.journal.Journal, "background", "journal_wait"))
+    lane_kernels, adaptive_kernels = sweep.protocols.stop.engine.lane_kernels, sweep.protocols.stop.engine.adaptive_lane_kernels
+    if hasattr(sweep.run.journal.Journal, "background"):  # chunks journaled in a helper thread
+        patches.append((sweep.run.journal.Journal, "background", "journal_wait"))
     saved = [(owner, name, getattr(owner, name)) for owner, name, _ in patches]
     try:
         for owner, name, key in patches:
@@ -159,11 +159,11 @@ def instrumented(watch: Stopwatch):
                 setattr(owner, name, _timed_background(watch, original, key))
             else:
                 setattr(owner, name, watch.wrap(original, key))
-        sweep.engine.lane_kernels = lambda *a, **k: _lane_kernels_timed(watch, lane_kernels, *a, **k)
-        sweep.engine.adaptive_lane_kernels = lambda *a, **k: _lane_kernels_timed(watch, adaptive_kernels, *a, **k)
+        sweep.protocols.stop.engine.lane_kernels = lambda *a, **k: _lane_kernels_timed(watch, lane_kernels, *a, **k)
+        sweep.protocols.stop.engine.adaptive_lane_kernels = lambda *a, **k: _lane_kernels_timed(watch, adaptive_kernels, *a, **k)
         yield
     finally:
-        sweep.engine.lane_kernels, sweep.engine.adaptive_lane_kernels = lane_kernels, adaptive_kernels
+        sweep.protocols.stop.engine.lane_kernels, sweep.protocols.stop.engine.adaptive_lane_kernels = lane_kernels, adaptive_kernels
         for owner, name, original in saved:
             setattr(owner, name, original)
 

@@ -10,7 +10,7 @@
 * throughput of the driven scene: run_sweep on a 40 x 20 (K/M, V) grid of sample2, quasi-static, points per
   second, per regime (mean steps and cycles), 1 thread and 2 threads; and with model="auto", where the
   quasi-static breakdowns (regime runaway) are run again with inertia (gamma/A 2e-5..2e-3 there: stiff);
-* the regime map with the analytic and the simulated Hopf lines (sweep.plot.plot_regimes, PNG).
+* the regime map with the analytic and the simulated Hopf lines (sweep.plot.files.plot_regimes, PNG).
 
 Writes benchmarks/results/hopf.json and hopf.png. Run: python benchmarks/hopf.py (~1 min on 2 cores).
 
@@ -35,11 +35,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import loadavg, machine_info, sweep_digest  # noqa: E402
+from sweep.plot.files import plot_regimes  # noqa: E402
 
 import sweep  # noqa: E402
 from sweep import physics  # noqa: E402
 from sweep.integrate.driven import Regime  # noqa: E402
-from sweep.plot import plot_regimes  # noqa: E402
 
 OUT = Path(__file__).resolve().parent / "results"
 PARAMS = sweep.presets["sample2"]

@@ -1,23 +1,30 @@
-"""Rewrite the numbers of README.md that come from measurements, from where they were measured.
+"""Render docs/benchmarks.md and the measured numbers of the README and docs/ from benchmarks/results/*.json.
 
-Each such number sits in a marked span, ``<!-- n:KEY -->27<!-- /n -->`` (invisible in the rendered README); this
-script replaces the text of every span with the value of KEY in :data:`NUMBERS`, read from the benchmark JSON in
-benchmarks/results/ (or, for the compile times, from sweep/compile_notice.py, where they are measured and
-documented). Run it after a benchmark run:
+Measured figures are never typed by hand into user documentation. Two things come from the JSON files that the
+benchmark scripts write into benchmarks/results/:
 
-    python benchmarks/readme_numbers.py          # rewrite README.md
-    python benchmarks/readme_numbers.py --check  # exit 1 if README.md is not up to date (tests/test_first_hour.py)
-    python benchmarks/readme_numbers.py --out /tmp/n.json   # README.md left alone: the numbers as JSON
+- docs/benchmarks.md, written whole by :func:`render_benchmarks`: every figure once, each section with the
+  machine, date, commit and versions that its JSON records (the only page of the docs that names them);
+- marked spans ``<!-- n:KEY -->27<!-- /n -->`` (invisible in the rendered markdown) in README.md and in the docs
+  pages of :data:`PAGES`: the text of each span is the value of KEY in :data:`NUMBERS`.
+
+Run it after a benchmark run:
+
+    python benchmarks/readme_numbers.py          # rewrite docs/benchmarks.md and the marked spans
+    python benchmarks/readme_numbers.py --check  # exit 1 if any of them is out of date; write nothing
+    python benchmarks/readme_numbers.py --out /tmp/n.json   # write nothing but the numbers as JSON
 
 With --out the script only reads: it writes every key's value, the README's spans and whether README.md is up to
-date to that JSON, and leaves README.md as it is. --quick changes nothing (the script reads a few small files);
-it is accepted so that every script in benchmarks/ takes the same smoke-run flags (tests/test_benchmarks.py).
+date to that JSON. --quick changes nothing (the script reads a few small files); it is accepted so that every
+script in benchmarks/ takes the same smoke-run flags (tests/test_benchmarks.py). The script imports nothing from
+sweep.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import re
 import sys
 from collections.abc import Callable
@@ -25,6 +32,10 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
+README = ROOT / "README.md"
+BENCHMARKS_MD = ROOT / "docs" / "benchmarks.md"
+PAGES = [README, *(ROOT / "docs" / name for name in ("index.md", "user-guide.md", "cli.md", "physics.md"))]
+"""The pages whose marked spans are filled (docs/benchmarks.md is rendered whole)."""
 SPAN = re.compile(r"<!-- n:(?P<key>[\w.]+) -->(?P<text>.*?)<!-- /n -->")
 
 
@@ -33,18 +44,46 @@ def _json(name: str) -> dict:
 
 
 def _sci(x: float) -> str:
-    """4.7e-4 (two digits, no zero-padded exponent)."""
+    """4.7e-4, 1e-6 (at most two digits, no zero-padded exponent)."""
     mantissa, exponent = f"{x:.1e}".split("e")
-    return f"{mantissa}e{int(exponent)}"
+    return f"{mantissa.removesuffix('.0')}e{int(exponent)}"
 
 
-def _compile_seconds() -> int:
-    """Seconds to compile the default scene's kernel families from an empty cache (sweep/compile_notice.py)."""
-    sys.path.insert(0, str(ROOT))
-    from sweep.compile_notice import COLD_COMPILE_S, kernel_families
-    from sweep.scene import default_scene
+def _level(x: float | str) -> str:
+    """1e-3 for 0.001 (an error level or a tolerance)."""
+    return f"1e{int(round(math.log10(float(x))))}"
 
-    return sum(COLD_COMPILE_S[f] for f in kernel_families(default_scene()))
+
+def _x(x: float, digits: int = 1) -> str:
+    return f"{x:.{digits}f}x"
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.1f} %"
+
+
+def _int(x: float) -> str:
+    return f"{round(x):,}"
+
+
+# --- the figures -------------------------------------------------------------------------------------------------
+
+def _peer_rows(scene: str) -> list[tuple[str, str, float | None, float | None]]:
+    """(error level, best peer, run_sweep 1 thread speed-up, kernel path 1 thread speed-up) of one scene."""
+    rows = []
+    for level, entry in _json("peers")["scenes"][scene]["ratios"]["grid"]["matched_accuracy"].items():
+        speedup = entry.get("engine_speedup_vs_best_peer") or {}
+        rows.append((_level(level), entry.get("best_peer") or "", speedup.get("engine_run_sweep_1t"),
+                     speedup.get("engine_execute_1t")))
+    return rows
+
+
+def _peer_speedups(scene: str) -> list[float]:
+    return [r[2] for r in _peer_rows(scene) if r[2] is not None]
+
+
+def _peer_levels(scene: str) -> list[str]:
+    return [r[0] for r in _peer_rows(scene) if r[2] is not None]
 
 
 def _auto() -> dict:
@@ -52,15 +91,290 @@ def _auto() -> dict:
 
 
 NUMBERS: dict[str, Callable[[], str]] = {
+    "peers_points": lambda: f"{_json('peers')['scenes']['default']['points']:,}",
+    "peers_min": lambda: f"{min(_peer_speedups('default')):.1f}",
+    "peers_max": lambda: f"{max(_peer_speedups('default')):.1f}",
+    "peers_loosest": lambda: _peer_levels("default")[0],
+    "peers_tightest": lambda: _peer_levels("default")[-1],
     "auto_inertial_points": lambda: f"{_auto()['auto']['inertial_points']:,}",
     "auto_points": lambda: f"{_auto()['points']:,}",
     "auto_largest_quasistatic_error": lambda: _sci(
         _auto()["model_error_vs_inertial_rtol_1e-6"]["auto"]["max_true_error_on_quasistatic_points"]),
     "cold_process_s": lambda: f"{_json('throughput')['cold_start']['process_wall_s_median']:.1f}",
     "cold_import_s": lambda: f"{_json('throughput')['cold_start']['import_only_process_wall_s_median']:.1f}",
-    "compile_s": lambda: f"{_compile_seconds()}",
 }
 """Key of a marked span -> its text, from the measurement."""
+
+
+# --- docs/benchmarks.md ------------------------------------------------------------------------------------------
+
+def _record(name: str) -> str:
+    """What benchmarks/results/NAME.json records about where and when it was measured, as one paragraph."""
+    d = _json(name)
+    machine = d.get("machine") or {}
+    versions = {**(machine.get("versions") or {}), **(d.get("versions") or {})}
+    for key in ("python", "numpy", "numba"):  # some scripts record the versions beside the machine
+        if key in machine and key not in versions:
+            versions[key] = machine[key]
+    commit = versions.pop("git_commit", None) or versions.pop("sweep_git_commit", None)
+    dirty = versions.pop("sweep_tree_dirty", None)
+    cpu = machine.get("cpu") or machine.get("cpu_model") or "CPU not recorded"
+    cpus = machine.get("logical_cpus")
+    parts = [f"date {d['date']}" if d.get("date") else "date not recorded",
+             f"commit {commit}" + (" (with uncommitted changes)" if dirty else "") if commit else
+             "commit not recorded",
+             cpu + (f", {cpus} logical CPUs" if cpus else ""),
+             machine.get("platform", "platform not recorded")]
+    if machine.get("NUMBA_NUM_THREADS"):
+        parts.append(f"NUMBA_NUM_THREADS {machine['NUMBA_NUM_THREADS']}")
+    text = f"Recorded in `benchmarks/results/{name}.json`: " + "; ".join(parts)
+    if versions:
+        text += "; " + ", ".join(f"{k} {v}" for k, v in versions.items())
+    return text + "."
+
+
+def _table(header: list[str], rows: list[list[str]]) -> list[str]:
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    return lines + ["| " + " | ".join(row) + " |" for row in rows]
+
+
+def _fmt(x: float | None, digits: int = 1) -> str:
+    return "-" if x is None else _x(x, digits)
+
+
+def _peers() -> list[str]:
+    d = _json("peers")
+    default, corner = d["scenes"]["default"], d["scenes"]["corner"]
+    rows = []
+    for (level, peer, rs, ex), (_, cpeer, crs, cex) in zip(_peer_rows("default"), _peer_rows("corner"), strict=True):
+        rows.append([level, peer or "none reaches it", _fmt(rs), _fmt(ex), cpeer or "none reaches it", _fmt(crs),
+                     _fmt(cex)])
+    return [
+        "## The engine against the tools a user would pick instead", "",
+        "`python benchmarks/peers.py` (extra `[bench]`): numbalsoda's LSODA from an njit prange loop, diffrax Tsit5 "
+        "under jax.vmap on CPU and scipy, each given the engine's own contact-age formulation and closed-form "
+        "tail, on the same points. A tool's figure at an error level is its cheapest run whose largest relative "
+        "error over the grid is at most that level; the speed-up is the best peer's time per trajectory per core "
+        "over the engine's (one thread; compile time excluded for every tool).", "",
+        f"Scenes: the default scene ({default['points']:,} points, model quasistatic) and its corner "
+        f"(chi/A <= 0.1 and mu1 < 0, {corner['points']:,} points).", "",
+        *_table(["max error", "best peer (default)", "`run_sweep`", "kernel path", "best peer (corner)",
+                 "`run_sweep`", "kernel path"], rows), "",
+        _record("peers"), "",
+    ]
+
+
+def _work_precision() -> list[str]:
+    d = _json("work_precision")
+    rows = [[_level(r["level"]), f"`{r['engine_best']}`", f"{r['engine_us']:.2f}", f"`{r['scipy_best']}`",
+             f"{r['scipy_us']:.0f}", _x(r["speedup"], 0)] for r in d["summary"]["speedup_by_error_level"]]
+    auto = [[_level(r["rtol"]), f"{r['auto_over_fastest']:.2f}"] for r in d["summary"]["auto_vs_fastest"]]
+    return [
+        "## Work against precision", "",
+        f"`python benchmarks/work_precision.py`: achieved error against CPU time per trajectory on "
+        f"{len(d['problems'])} stop problems (the stiff corner and a slow tail included), for every engine "
+        "configuration and scipy's DOP853, LSODA and Radau, against a reference at relative error 1e-13; one "
+        "thread. At each error level, the fastest configuration of each side that reaches it:", "",
+        *_table(["error", "engine", "us", "scipy", "us", "speed-up"], rows), "",
+        "`method=\"auto\"` at each rtol, time over the fastest float64 configuration that meets the same error "
+        "(picked after the fact):", "",
+        *_table(["rtol", "auto / fastest"], auto), "",
+        _record("work_precision"), "",
+    ]
+
+
+def _throughput() -> list[str]:
+    d = _json("throughput")
+    one, two = d["engine"]["threads_1"], d["engine"]["threads_2"]
+    cold = d["cold_start"]
+    lines = [
+        "## Throughput, a new process and the dry run's estimate", "",
+        f"`python benchmarks/throughput.py` on the default scene at rtol {_sci(d['scene']['rtol'])}, "
+        f"method `{d['engine']['method']}` as planned at the recorded commit:", "",
+        f"- trajectories per second: {_int(one['traj_per_s'])} on 1 thread, {_int(two['traj_per_s'])} on 2 "
+        f"threads; {one['ns_per_stage_eval_per_core']:.1f} ns per stage evaluation (1 thread);",
+        f"- a numpy-vectorised RK4 doing the same runs: {d['numpy_rk4']['numpy_over_engine_per_eval']:.1f}x the "
+        "engine's time per evaluation;",
+        f"- a new process that imports sweep and runs a 10 x 10 sweep with the kernels in numba's cache: "
+        f"{cold['process_wall_s_median']:.1f} s (median), {cold['import_only_process_wall_s_median']:.1f} s of it "
+        "importing sweep;",
+    ]
+    for e in d["estimate"]:
+        lines.append(f"- `--dry-run`'s time estimate on {e['scene']}: {e['estimate_over_measured']:.2f}x the "
+                     "measured time;")
+    lines[-1] = lines[-1][:-1] + "."
+    return [*lines, "", _record("throughput"), ""]
+
+
+def _models() -> list[str]:
+    d = _json("models")
+    default, inertia = d["cost"]["default_scene"], d["cost"]["inertia_scene"]
+    acc = d["accuracy_inertia_scene_model_tol_1e-2"]
+    tol_rows = [[_level(r["model_tol"]), f"{r['inertial_fraction']:.0%}".replace("%", " %"),
+                 _sci(r["max_true_error"]), f"{r['wall_s_best_of_3']:.2f}"] for r in d["model_tol_sweep_inertia_scene"]]
+    gamma = inertia["gamma_over_A_range"]
+    return [
+        "## What the choice of model costs and buys", "",
+        "`python benchmarks/models.py`: `model=\"auto\"` against the forced quasi-static and inertial models, "
+        "wall time best of 3; true errors against an inertial reference at rtol 1e-9.", "",
+        *_table(["scene", "points", "solved with inertia (auto)", "auto / quasistatic", "inertial / quasistatic",
+                 "largest quasi-static error"], [
+            ["default", f"{default['points']:,}", f"{default['auto']['inertial_points']:,}",
+             "next section", _x(default["inertial_over_quasistatic"]["wall"], 0),
+             _sci(default["model_error_vs_inertial_rtol_1e-6"]["quasistatic"]["max_true_error"])],
+            [f"inertia scene (gamma/A {_sci(gamma[0])}..{gamma[1]:.1f})", f"{inertia['points']:,}",
+             f"{inertia['auto']['inertial_points']:,}", _x(inertia["auto_over_quasistatic"]["wall"], 0),
+             _x(inertia["inertial_over_quasistatic"]["wall"], 0), _sci(acc["quasistatic"]["max_true_error"])],
+        ]), "",
+        f"The inertia scene is {d['settings']['inertia_scene']}. On it, at model_tol 1e-2, auto's largest true "
+        f"error is {_sci(acc['auto']['max_true_error'])} ({acc['auto']['violations_true_error_above_model_tol']} "
+        "points above model_tol). Over model_tol:", "",
+        *_table(["model_tol", "solved with inertia", "largest true error", "wall s"], tol_rows), "",
+        _record("models"), "",
+    ]
+
+
+def _auto_cost() -> list[str]:
+    d = _json("auto_cost")
+    rows = [[f"{r['points']:,}", str(r["threads"]), _x(r["auto_over_quasistatic"], 2),
+             str(r["auto_inertial_points"])] for r in d["rows"]]
+    return [
+        "## The cost of `model=\"auto\"` on the default parameters", "",
+        "`python benchmarks/auto_cost.py`: `run_sweep` wall time with `model=\"auto\"` over the same sweep forced "
+        "quasi-static (sample2, rtol 1e-6):", "",
+        *_table(["points", "threads", "auto / quasistatic", "points solved with inertia"], rows), "",
+        _record("auto_cost"), "",
+    ]
+
+
+def _end_to_end() -> list[str]:
+    d = _json("end_to_end")
+    best, scene = d["best"], d["scene"]
+    parts = sorted(best["parts_s"].items(), key=lambda kv: -kv[1])[:5]
+    return [
+        "## End to end", "",
+        f"`python benchmarks/end_to_end.py`: `sweep run` of a {scene['shape'][0]} x {scene['shape'][1]} grid "
+        f"({scene['points']:,} points, {scene['preset']}, rtol {_sci(scene['rtol'])}, model {scene['model']}) "
+        "into a netCDF file and its picture, in process:", "",
+        f"- {best['total_s']:.2f} s in all, {best['ratio_total_over_kernel']:.2f}x the kernels' "
+        f"{best['parts_s']['kernel']:.2f} s (parts overlap: the journal and the netCDF file are written in helper "
+        "threads);",
+        "- the largest parts, s: " + ", ".join(f"{k} {v:.2f}" for k, v in parts) + ";",
+        f"- the same from a new process (`sweep run` on the command line): {d['fresh_process']['best']['wall_s']:.1f}"
+        " s.", "",
+        _record("end_to_end"), "",
+    ]
+
+
+def _hopf() -> list[str]:
+    d = _json("hopf")
+    line, grid, auto = d["line"], d["driven_grid"], d["driven_grid_auto"]
+    deep = d["inertial_driven_deep_stick_slip"]
+    return [
+        "## Hopf line and driven grids", "",
+        "`python benchmarks/hopf.py`:", "",
+        f"- the Hopf line by simulation over {line['velocities']} velocities: {line['seconds_simulation_1thread']:.3f}"
+        f" s on one thread ({line['seconds_simulation_with_type_1thread']:.1f} s with the bifurcation type), "
+        f"{_sci(line['simulation_over_analytic'])}x the analytic line; largest relative distance to eq. 3: "
+        f"{_sci(line['max_rel_distance_to_linear'])};",
+        f"- a quasi-static driven grid of {grid['shape'][0]} x {grid['shape'][1]} points: "
+        f"{_int(grid['threads_1']['points_per_s'])} points/s on 1 thread, {_int(grid['threads_2']['points_per_s'])} "
+        "on 2;",
+        f"- the same grid with `model=\"auto\"` ({auto['points_run_with_inertia']} points run with inertia): "
+        f"{_int(auto['points_per_s'])} points/s on {auto['threads']} threads;",
+        f"- an inertial driven grid deep in stick-slip ({deep['shape'][0]} x {deep['shape'][1]}): "
+        f"{deep['points_per_s']:.0f} points/s on one thread.", "",
+        _record("hopf"), "",
+    ]
+
+
+def _scaling() -> list[str]:
+    d = _json("scaling")
+    rows = [[f"{int(n):,}", _int(v["threads_1"]["points_per_s_wall"]), _int(v["threads_2"]["points_per_s_wall"])]
+            for n, v in d["threads"].items()]
+    mem = [[f"{int(n):,}", f"{v['process_wall_s']:.1f}", f"{v['peak_rss_bytes'] / 2**30:.2f}"]
+           for n, v in d["memory"].items()]
+    traj = [[f"{int(n):,} (with `trajectory`)", f"{v['process_wall_s']:.1f}", f"{v['peak_rss_bytes'] / 2**30:.2f}"]
+            for n, v in d["memory_trajectories"].items()]
+    t = d["targets"]
+    return [
+        "## Scaling with the number of points, threads and dask", "",
+        f"`python benchmarks/scaling.py`: {d['settings']['scene']}; points per second of `run_sweep` wall time:", "",
+        *_table(["points", "1 thread", "2 threads"], rows), "",
+        f"The dask backend with 2 workers over the threads backend at 1,000,000 points: "
+        f"+{_pct(t['dask_overhead_at_1000000_running_cluster'])} on a running cluster, "
+        f"+{_pct(t['dask_overhead_at_1000000_new_cluster'])} where the call starts and stops its own. "
+        "Peak memory of `sweep run` in a process of its own:", "",
+        *_table(["points", "wall s", "peak RSS GiB"], mem + traj), "",
+        _record("scaling"), "",
+    ]
+
+
+def _axes() -> list[str]:
+    d = _json("axes")
+    s, r = d["settings"], d["throughput_ratios"]
+    return [
+        "## Extra axes", "",
+        f"`python benchmarks/axes.py`: points per second of a sweep over (K/M, V, A, m1) over those of a 2-D sweep "
+        f"of as many points ({s['n_side']} x {s['n_side']}, rtol {_sci(s['rtol'])}): {r['4d_over_2d']:.2f}; "
+        f"with the same physics on both sides: {r['4d_same_physics_over_2d']:.2f}.", "",
+        _record("axes"), "",
+    ]
+
+
+def _error_coverage() -> list[str]:
+    d = _json("error_coverage")
+    rows = [[_level(r["rtol"]), f"{r['points']:,}", str(r["ok_beyond_tol"]), _pct(r["bounded"]),
+             f"{r['max_true_over_estimate']:.1f}", str(r["error_above_tol"]), str(r["false_alarms"])]
+            for r in d["rows"]]
+    return [
+        "## Error estimates on a table of extremes", "",
+        "`python benchmarks/error_coverage.py`: points over A, chi/A, mu1/A and m2/A far beyond the presets, "
+        f"method {d['rows'][0]['method']}, against a scipy reference. *ok beyond tol*: points with status ok whose "
+        "true error exceeds the tolerance; *bounded*: the share of points whose estimate is at least the true "
+        "error; *false alarms*: `error_above_tol` points whose true error is below rtol/10.", "",
+        *_table(["rtol", "points", "ok beyond tol", "bounded", "largest true / estimate", "error_above_tol",
+                 "false alarms"], rows), "",
+        _record("error_coverage"), "",
+    ]
+
+
+def _fit() -> list[str]:
+    d = _json("fit")
+    s = d["settings"]
+    return [
+        "## Fits", "",
+        f"`python benchmarks/fit.py`: {', '.join(s['free'])} free, curves of {s['samples']} samples at K/M "
+        f"{_sci(s['K_over_M'])} s-2, V {_sci(s['V'])} m/s with relative noise {s['noise_relative_to_relaxed_slip']}"
+        " (docs/fit.md):", "",
+        f"- one curve with the global stage, least squares and profiles: {d['one_curve']['wall_s']:.3f} s;",
+        f"- {d['many_curves']['curves']} curves in one call: {d['many_curves']['wall_s']:.2f} s;",
+        f"- scipy's least_squares over solve_ivp ({d['scipy']['method']}, no global stage, no profiles): "
+        f"{d['scipy']['wall_s_per_curve']:.2f} s a curve, {d['ratio_per_curve']:.0f}x the engine's time per curve "
+        f"by wall time, {d['ratio_per_curve_cpu']:.0f}x by CPU time.", "",
+        _record("fit"), "",
+    ]
+
+
+SECTIONS = [_peers, _work_precision, _throughput, _models, _auto_cost, _end_to_end, _scaling, _axes, _hopf,
+            _error_coverage, _fit]
+
+
+def render_benchmarks() -> str:
+    """docs/benchmarks.md, whole, from benchmarks/results/*.json."""
+    lines = [
+        "# Benchmarks", "",
+        "<!-- Generated by `python benchmarks/readme_numbers.py` from benchmarks/results/*.json: do not edit. -->",
+        "",
+        "What was measured, by which script in `benchmarks/`, and where: each section ends with the machine, date, "
+        "commit and versions that its results file records. A figure measured at an older commit stays here until "
+        "its script is run again; the scripts, their options and the targets are described in "
+        "`benchmarks/README.md`. After a run, `python benchmarks/readme_numbers.py` renders this page again and "
+        "fills the numbers quoted elsewhere in the documentation.", "",
+    ]
+    for section in SECTIONS:
+        lines += section()
+    return "\n".join(lines).rstrip() + "\n"
 
 
 def rewrite(text: str) -> str:
@@ -68,33 +382,50 @@ def rewrite(text: str) -> str:
     return SPAN.sub(lambda m: f"<!-- n:{m['key']} -->{NUMBERS[m['key']]()}<!-- /n -->", text)
 
 
+def rendered() -> dict[Path, tuple[str, str]]:
+    """Path -> (its text now, the text it should have), for every page this script writes."""
+    out = {}
+    for page in PAGES:
+        if page.is_file():
+            old = page.read_text()
+            out[page] = (old, rewrite(old))
+    out[BENCHMARKS_MD] = (BENCHMARKS_MD.read_text() if BENCHMARKS_MD.is_file() else "", render_benchmarks())
+    return out
+
+
 def main(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--check", action="store_true", help="exit 1 if README.md is not up to date; write nothing")
-    ap.add_argument("--out", type=Path, help="write the numbers as JSON here and leave README.md alone")
+    ap.add_argument("--check", action="store_true", help="exit 1 if a page is not up to date; write nothing")
+    ap.add_argument("--out", type=Path, help="write the numbers as JSON here and leave every page alone")
     ap.add_argument("--quick", action="store_true", help="accepted for the smoke run; the script is already quick")
     args = ap.parse_args(argv)
-    readme = ROOT / "README.md"
-    old = readme.read_text()
-    new = rewrite(old)
+    pages = rendered()
+    stale_pages = [p for p, (old, new) in pages.items() if old != new]
     if args.out is not None:
+        old = README.read_text()
         spans = [m["key"] for m in SPAN.finditer(old)]
         stale = sorted({m["key"] for m in SPAN.finditer(old) if m["text"] != NUMBERS[m["key"]]()})
         result = {"benchmark": "benchmarks/readme_numbers.py", "results_dir": str(RESULTS),
                   "numbers": {key: value() for key, value in NUMBERS.items()}, "readme_spans": spans,
-                  "readme_stale_keys": stale, "readme_up_to_date": new == old}
+                  "readme_stale_keys": stale, "readme_up_to_date": README not in stale_pages,
+                  "pages_out_of_date": [str(p.relative_to(ROOT)) for p in stale_pages]}
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(json.dumps(result, indent=1) + "\n")
-        print(f"{len(spans)} marked numbers in README.md, {len(stale)} stale; wrote {args.out} (README.md untouched)")
+        print(f"{len(spans)} marked numbers in README.md, {len(stale)} stale; {len(stale_pages)} page(s) out of "
+              f"date; wrote {args.out} (no page touched)")
     if args.check:
-        if new != old:
-            print("README.md numbers are stale: run python benchmarks/readme_numbers.py", file=sys.stderr)
+        if stale_pages:
+            names = ", ".join(str(p.relative_to(ROOT)) for p in stale_pages)
+            print(f"out of date: {names}: run python benchmarks/readme_numbers.py", file=sys.stderr)
             return 1
         return 0
     if args.out is not None:
         return 0
-    readme.write_text(new)
-    print(f"README.md: {len(SPAN.findall(new))} numbers from benchmarks/results and sweep/compile_notice.py")
+    for page in stale_pages:
+        page.write_text(pages[page][1])
+    spans = sum(len(SPAN.findall(new)) for _, new in pages.values())
+    print(f"{len(stale_pages)} page(s) rewritten; {spans} marked numbers and docs/benchmarks.md from "
+          "benchmarks/results")
     return 0
 
 

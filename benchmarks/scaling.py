@@ -66,9 +66,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import loadavg, machine_info, sweep_digest  # noqa: E402
+from sweep.plan.plan import CHUNK_POINTS, CHUNKS_AT_LEAST, LARGE_CHUNK_POINTS  # noqa: E402
 
 import sweep  # noqa: E402
-from sweep.plan import CHUNK_POINTS, CHUNKS_AT_LEAST, LARGE_CHUNK_POINTS  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "results"

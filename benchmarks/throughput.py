@@ -3,7 +3,7 @@
 
     python benchmarks/throughput.py [--quick] [--out benchmarks/results/throughput.json] [--no-png]
 
-Every engine number goes through the public path (sweep.make_plan + sweep.runner.execute, what run_sweep runs,
+Every engine number goes through the public path (sweep.make_plan + sweep.run.runner.execute, what run_sweep runs,
 or run_sweep itself), so the script does not depend on the kernels' internals. Every point is solved as the
 engine always solves it: down its step ladder (sweep/integrate/ladder.py: a pilot pair at 2 h0, h0, then up to three
 finer runs at steps chosen from the point's own error; with a step given by the user, Scene(step=h), the fixed
@@ -29,7 +29,7 @@ per-point path). Sections (benchmarks/README.md explains every number):
                the engine's xi_inf, and cost per RK4 stage evaluation from numpy's own step counts and the
                engine's work (target: engine >= 3x cheaper per evaluation).
 4. cold start  a new Python process: import sweep + a 10 x 10 sweep, JIT cache on disk (median of 3).
-5. estimate    sweep.estimate.estimate_seconds vs the measured time, default scene and sample1 100 x 100.
+5. estimate    sweep.protocols.stop.estimate.estimate_seconds vs the measured time, default scene and sample1 100 x 100.
 
 No longer measured (the code it measured is gone or internal): the parallel diagnostic that called the compiled
 per-point batch kernel (stop_batch) directly, in grid order and shuffled, to show the load imbalance of a static
@@ -63,10 +63,10 @@ from scipy.integrate import DOP853, LSODA
 
 import sweep
 from sweep import physics
-from sweep.estimate import estimate_seconds
-from sweep.models.stop import E_TAIL_MAX, EXP_MAX, RATE_FLOOR, TAIL_SAFETY
-from sweep.runner import execute
-from sweep.solvers import METHODS
+from sweep.integrate.models.stop import E_TAIL_MAX, EXP_MAX, RATE_FLOOR, TAIL_SAFETY
+from sweep.integrate.solvers import METHODS
+from sweep.protocols.stop.estimate import estimate_seconds
+from sweep.run.runner import execute
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_OUT = HERE / "results" / "throughput.json"
@@ -111,7 +111,7 @@ def random_indices(scene: sweep.Scene, n: int, seed: int = RANDOM_SEED) -> np.nd
 
 
 def evals_per_step(method: str) -> int:
-    """Right-hand-side evaluations per accepted step of a method of sweep.solvers.METHODS: the stages after the
+    """Right-hand-side evaluations per accepted step of a method of sweep.integrate.solvers.METHODS: the stages after the
     first, whose derivative is the previous step's end, plus the end derivative (an FSAL tableau's last stage is
     that derivative). A Rosenbrock stage with the same evaluation point as the one before reuses its value
     (Shampine's ROS4: 3 evaluations for 4 stages)."""
@@ -346,7 +346,7 @@ def _tail_slip(k, a, b, u, E):
 def numpy_lockstep(plan, method, run_point, run_h, rtol, atol):
     """The engine's fixed-step stepper as lockstep numpy over runs (a run = one point at one step h in sigma):
     state (xi, s), ds/dsigma = w = 1/(1/(s + s_c) + r(u)) with r = sqrt(g^2 + |b|/4) + RATE_FLOOR, g = a + 2 b u
-    (sweep.models.stop.make_rate), the explicit tableau of ``method`` (RK4: stage i from stage i-1 only) with the end
+    (sweep.integrate.models.stop.make_rate), the explicit tableau of ``method`` (RK4: stage i from stage i-1 only) with the end
     derivative
     reused as the next step's first stage, each run frozen (removed from the active set) once its tail test
     passes (or it leaves the finite range), then the closed-form tail. Returns per run (xi_inf, status, steps),
@@ -677,7 +677,7 @@ def main(argv=None):
                       "engine_mean_steps_subsample": eng_sub["mean_steps"],
                       "engine_mean_steps_grid": eng["steps_per_point"]["mean"]},
         "formulation": "dxi/ds = exp(-(chi xi + mu1 u + m2 u^2)/A), u = s - xi, xi(0) = 0 (reduced); stepped "
-                       "with the scipy OdeSolver class (what solve_ivp drives) until sweep.models.stop."
+                       "with the scipy OdeSolver class (what solve_ivp drives) until sweep.integrate.models.stop."
                        "tail_is_accurate(k, a, b, u, E, rtol_scene*xi + atol) passes at a step end (a plain-"
                        "Python copy, checked equal on random inputs, to avoid ~1.7 us numba dispatch per step), "
                        "then + tail_slip: the engine's own stopping rule and tail. LSODA gets the analytic "

@@ -56,6 +56,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(HERE))
 
 import reference as refmod  # noqa: E402  (tests/reference.py: scipy only, independent of sweep)
+import sweep.plan.plan  # noqa: E402
 from _common import (  # noqa: E402  (benchmarks/_common.py)
     check_tail_ok,
     loadavg,
@@ -67,8 +68,7 @@ from _common import (  # noqa: E402  (benchmarks/_common.py)
 from cases import STOP_CASES, case_params  # noqa: E402
 
 import sweep  # noqa: E402
-import sweep.plan  # noqa: E402
-from sweep.runner import execute  # noqa: E402
+from sweep.run.runner import execute  # noqa: E402
 
 DEFAULT_OUT = HERE / "results" / "work_precision.json"
 PROBLEMS = (
@@ -160,17 +160,17 @@ def build_reference(pbs):
 # -------------------------------------------------------------------------------------------- engine
 
 def rtol_for_step(h: float, lo: float, hi: float) -> float:
-    """The rtol whose planned RK4 step (sweep.plan's rule, stable side) is h, clipped to [lo, hi]: with a fixed
+    """The rtol whose planned RK4 step (sweep.plan.plan's rule, stable side) is h, clipped to [lo, hi]: with a fixed
     step the scene's rtol only sets the tail test (0.001 (rtol xi + atol)) and the status threshold, so it is
     matched to the error that step gives, rather than spending steps on a needlessly tight tail."""
-    c = (getattr(sweep.plan, "STEP_SAFETY", 2.0) * getattr(sweep.plan, "ERROR_GAIN", 15.0)
-         * getattr(sweep.plan, "C_STABLE", 6e-4))
+    c = (getattr(sweep.plan.plan, "STEP_SAFETY", 2.0) * getattr(sweep.plan.plan, "ERROR_GAIN", 15.0)
+         * getattr(sweep.plan.plan, "C_STABLE", 6e-4))
     return float(min(hi, max(lo, c * h**4)))
 
 
 def time_engine(scene, plan, target_s, repeats, n_min=64, n_max=400_000, probes=3):
     """Best-of-``repeats`` seconds per trajectory (CPU, wall) of the problem repeated N times through
-    sweep.runner.execute (the kernel path run_sweep takes, without building the Dataset); N is chosen so that
+    sweep.run.runner.execute (the kernel path run_sweep takes, without building the Dataset); N is chosen so that
     one call lasts about ``target_s``, from probes at growing N (a call has a fixed cost of ~0.4 ms, so a probe
     at 64 points overstates the cost per point several times at loose rtol and would leave batches of a few
     hundred points, timed mostly on that fixed cost). Returns (CPU s per trajectory, wall s per trajectory, N,
@@ -195,7 +195,7 @@ def run_engine_config(pbs, refs, label, family, kw_for, threads2, target_s, repe
     for pb, ref in zip(pbs, refs):
         kw = kw_for(pb)
         scene = scene_for(pb, **kw)
-        plan = sweep.plan.make_plan(scene)
+        plan = sweep.plan.plan.make_plan(scene)
         ds = sweep.run_sweep(scene, progress=False)
         x = float(ds["xi_inf"].values.item())
         est = float(ds["xi_inf_error"].values.item())
@@ -275,7 +275,7 @@ def engine_configs(half=False, quick=False):
     cfgs = []
     hs = STEPS_H[::2] if half else STEPS_H
     hs32 = STEPS_H_F32[::2] if half else STEPS_H_F32
-    # fixed steps: rk4 alone, and method auto (RK4, and ros4 at the stiff points: sweep.plan.stiff_points)
+    # fixed steps: rk4 alone, and method auto (RK4, and ros4 at the stiff points: sweep.plan.plan.stiff_points)
     for method, name, family in (("rk4", "rk4", "engine rk4"), ("auto", "auto", "engine auto (rk4 + ros4)")):
         for precision, tag, steps, rtol_min in (("float64", "", hs, 1e-10), ("float32", " f32", hs32, 1e-5)):
             for h in steps:
@@ -594,7 +594,7 @@ def main(argv=None):
             "error": "max over problems of |xi_inf/ref - 1|; per problem in per_problem",
             "time": "mean over problems of the per-problem CPU time per trajectory (time.process_time; the "
                     "best wall time is kept beside it as *_wall); engine: best of "
-                    f"{repeats} calls of sweep.runner.execute on the problem repeated N times (N so that a call "
+                    f"{repeats} calls of sweep.run.runner.execute on the problem repeated N times (N so that a call "
                     f"lasts ~{target_s:g} s) in each of {passes} passes over all configurations, best of all; 1 thread;"
                     " scipy: best of 7 single trajectories (3 if one takes > 50 ms, 1 if > 1 s), plus 3 more per later "
                     "pass; 2 threads: us_per_traj_per_core_2threads = 2 x best wall / N",

@@ -10,15 +10,18 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
+from . import _moved
 from ._version import __version__
 from .errors import InputError
-from .params import FrictionParams
-from .presets import presets, provenance  # eager: the name would otherwise be the submodule sweep.presets
+from .scene.params import FrictionParams
+from .scene.presets import presets, provenance  # eager: the name would otherwise be the submodule sweep.presets
+
+_moved.install()  # the module paths of earlier layouts (sweep.io, sweep.api, ...) stay importable, with a warning
 
 _PUBLIC = {
-    "run_sweep": "api", "solve_point": "api", "local_cluster": "backends", "locate_hopf": "hopf",
-    "open": ("files", "open_sweep_file"), "save": "io", "Plan": "plan", "make_plan": "plan", "Scene": "scene",
-    "default_scene": "scene", "load_scene": "scene", "Status": "status",
+    "run_sweep": "run.api", "solve_point": "run.api", "local_cluster": "run.backends", "locate_hopf": "analysis.hopf",
+    "open": ("write.read", "open_sweep_file"), "save": "write.netcdf", "Plan": "plan.plan", "make_plan": "plan.plan",
+    "Scene": "scene.scene", "default_scene": "scene.scene", "load_scene": "scene.scene", "Status": "status",
 }
 # sweep.fit is a callable subpackage (sweep/fit/__init__.py): the submodule fallback of __getattr__ imports it
 """Public name -> module of the package (or (module, name in it))."""
@@ -48,11 +51,11 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
-    from .api import run_sweep, solve_point
-    from .backends import local_cluster
-    from .hopf import locate_hopf
-    from .io import open_dataset as open
-    from .io import save
-    from .plan import Plan, make_plan
-    from .scene import Scene, default_scene, load_scene
+    from .analysis.hopf import locate_hopf
+    from .plan.plan import Plan, make_plan
+    from .run.api import run_sweep, solve_point
+    from .run.backends import local_cluster
+    from .scene.scene import Scene, default_scene, load_scene
     from .status import Status
+    from .write.netcdf import open_dataset as open
+    from .write.netcdf import save

@@ -2,7 +2,7 @@
 
 Grouped by the part of the engine that reads it. A constant here is a choice that trades cost for accuracy and was
 set by a measurement (named in its docstring, with the benchmark or test that repeats it); structural constants of
-a method (tableau coefficients, controller SAFETY/MIN/MAX factors: sweep/solvers/controllers.py) live with it.
+a method (tableau coefficients, controller SAFETY/MIN/MAX factors: sweep/integrate/solvers/controllers.py) live with it.
 Changing a value here changes the numbers of the runs that use it, and the plan's hash (a resume of a run made
 with the old value is refused).
 """
@@ -69,7 +69,7 @@ rtol/TIGHTER^(1, 2, 3), x2 returned (sweep/integrate/stop_slip.py): as the step 
 stays within 100x of it."""
 
 # ---------------------------------------------------------------------------------------------------------------
-# Quasi-static stop: the closed-form tail and the time map (sweep/models/stop.py)
+# Quasi-static stop: the closed-form tail and the time map (sweep/integrate/models/stop.py)
 # ---------------------------------------------------------------------------------------------------------------
 
 E_TAIL_MAX = 0.05
@@ -80,7 +80,7 @@ RATE_FLOOR = 0.1
 """Floor of the late rate r(u) of the time map (bounds the step in s by h/RATE_FLOOR)."""
 
 # ---------------------------------------------------------------------------------------------------------------
-# Stiff points: the Rosenbrock step rule (sweep/models/stop_stiff.py)
+# Stiff points: the Rosenbrock step rule (sweep/integrate/models/stop_stiff.py)
 # ---------------------------------------------------------------------------------------------------------------
 
 STIFF_RATE_FLOOR = 0.03
@@ -88,7 +88,7 @@ STIFF_RATE_FLOOR = 0.03
 a third fewer steps than 0.1 in the costly corner at equal error: benchmarks/work_precision.py)."""
 
 # ---------------------------------------------------------------------------------------------------------------
-# Step rules of the stop scene (sweep/plan.py)
+# Step rules of the stop scene (sweep/plan/plan.py)
 # ---------------------------------------------------------------------------------------------------------------
 
 C_STABLE = 6.0e-4
@@ -110,7 +110,7 @@ AUTO_METHOD = (("rk4", 2e-4), ("dp5", 0.0))
 cheaper per point of rk4 (fixed step) and dp5 (adaptive), measured on a 40 x 25 default-scene grid with a 200-sample
 trajectory (1 thread, load ~1, us a point rk4 / dp5): 272 / 323 at rtol 1e-2 and 288 / 324 at 1e-3 (dp5 flagging
 3-32 points error_above_tol there), 373 / 337 at 1e-4, 539 / 349 at 1e-5, 851 / 379 at 1e-6, 2617 / 504 at 1e-8.
-Relaxed-slip scenes take the adaptive lanes instead (sweep.plan.LANES_METHOD)."""
+Relaxed-slip scenes take the adaptive lanes instead (sweep.plan.plan.LANES_METHOD)."""
 STEP_SAFETY = 2.0
 """Margin of the fixed-step rule: the error estimate (~ERROR_GAIN times the error) stays below rtol / STEP_SAFETY on
 the calibration set."""
@@ -162,7 +162,7 @@ MAX_RUNS = 5
 
 ERROR_GAIN = 15.0
 """Nominal ratio of the Richardson estimate of a fine solution, ERROR_GAIN/(2^p - 1) |fine - coarse|, to its true
-error: the estimate of the relaxed-slip lanes (sweep.engine), whose step rules (sweep.plan) are calibrated on it."""
+error: the estimate of the relaxed-slip lanes (sweep.protocols.stop.engine), whose step rules (sweep.plan.plan) are calibrated on it."""
 def lane_control_tolerance(rtol: float, scale: float = 1.0) -> float:
     """Local tolerance of the adaptive lanes' first run for a scene's rtol (sweep/integrate/tolerance_ladder.py):
     rtol min(20, ``scale`` sqrt(1e-3 / rtol)); the sampled lanes take SAMPLED_TOL_SCALE.
@@ -240,7 +240,7 @@ step below sqrt(THETA_MISS rtol) ends the iteration, one fewer than a fixed 1e-8
 a 200-sample curve instead of 17-22 at rtol 1e-6)."""
 
 # ---------------------------------------------------------------------------------------------------------------
-# The choice of model per point (sweep/model_choice.py)
+# The choice of model per point (sweep/protocols/stop/model_choice.py)
 # ---------------------------------------------------------------------------------------------------------------
 
 ESTIMATE_RTOL = 1e-3
@@ -248,7 +248,7 @@ ESTIMATE_RTOL = 1e-3
 117 points where it is trusted, estimate/true gap spans the same 0.946..1.106 at 1e-3 as at 1e-4, in half the steps
 (37 vs 74). In the lanes it is the tail test's tolerance; the steps are ESTIMATE_STEP."""
 ESTIMATE_STEP = H_MAX
-"""Fixed RK4 step in sigma of the lane run that carries the first-order correction (sweep/model_choice.py). Against
+"""Fixed RK4 step in sigma of the lane run that carries the first-order correction (sweep/protocols/stop/model_choice.py). Against
 the correction at rtol 1e-7 (per-point RODAS3), |y/xi_inf| where it exceeds 1e-4: within 0.41 % on the default grid
 (9,329 points, 24 steps per point) and 0.88 % over chi/A 1e2..1e7 x V 1e-8..1e-3 (724 points; 42 steps); at half
 the step 0.25 % in twice the steps, at twice the step 12-26 %; the per-point RODAS3 at ESTIMATE_RTOL was within
@@ -272,7 +272,7 @@ inertia. (Trusted only up to tau = 2 before, the default scene solved 27 points 
 with measured gaps ~3e-4 against model_tol 1e-2, at more cost than its 20,000 quasi-static points.)"""
 
 # ---------------------------------------------------------------------------------------------------------------
-# The Hopf line located by simulation (sweep/hopf.py)
+# The Hopf line located by simulation (sweep/analysis/hopf.py)
 # ---------------------------------------------------------------------------------------------------------------
 
 SIGN_PERTURBATION = 1e-5

@@ -23,14 +23,14 @@ DEFAULT_OUT = Path("sweep-out") / "landscape.nc"
 FIGURES_OUT = Path("sweep-out") / "figures"
 OVERWRITE_HELP = "replace output files that exist (without it, an existing file is never replaced)"
 FIGURE_NAMES = ("fig2", "fig3a", "fig3b", "fig4a", "fig4b")
-"""The keys of sweep.figures.FIGURES, spelt out so that the parser needs no matplotlib (tests check they agree)."""
+"""The keys of sweep.plot.figures.FIGURES, spelt out so that the parser needs no matplotlib (tests check they agree)."""
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from .compile_notice import announce_if_cold
-    from .plausibility import warn_implausible
-    from .scene import default_scene, load_scene
-    from .size import check_fits, estimate_size
+    from .run.compile_notice import announce_if_cold
+    from .run.size import check_fits, estimate_size
+    from .scene.plausibility import warn_implausible
+    from .scene.scene import default_scene, load_scene
 
     scene = load_scene(args.config) if args.config else default_scene()
     warn_implausible(scene.K_over_M, scene.V)  # before any work, the dry run included
@@ -42,7 +42,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     announce_if_cold(scene)  # within a second of the start, before the plan imports and compiles anything
     if scene.protocol == "driven":
         return _run_driven(scene, args)
-    from .compile_notice import SLOW_S
+    from .run.compile_notice import SLOW_S
 
     picture = _StagedPicture(_png(args))
     try:
@@ -78,7 +78,7 @@ class _StagedPicture:
     def __call__(self, ds) -> None:
         import tempfile
 
-        from .plot import plot_file
+        from .plot.files import plot_file
 
         try:
             self.png.parent.mkdir(parents=True, exist_ok=True)
@@ -108,9 +108,9 @@ def _png(args: argparse.Namespace) -> Path:
 
 
 def _check_run_targets(scene, args: argparse.Namespace) -> None:
-    """Before any work: the data file and the pictures ``sweep run`` will write (sweep/outputs.py), none of them the
+    """Before any work: the data file and the pictures ``sweep run`` will write (sweep/write/targets.py), none of them the
     scene file or one another; the data file's folder, free space and lock are checked by api.prepare_run."""
-    from .outputs import check_targets, picture_paths
+    from .write.targets import check_targets, picture_paths
 
     targets = {"data": args.output}
     if not args.output.is_dir():  # (refused below; its picture's name cannot be made from a folder's)
@@ -124,7 +124,7 @@ def _check_run_targets(scene, args: argparse.Namespace) -> None:
 def _dry_run(scene, size) -> int:
     """``sweep run --dry-run``: the size from the grid's shape (refused, like the run, if it does not fit in
     memory), then the plan and the pilot's estimate of the time, both from a subsample where the grid is large."""
-    from .size import check_fits
+    from .run.size import check_fits
 
     axes = " x ".join(f"{n} {name}" for n, name in zip(scene.shape, ("K/M", "V", *scene.dims[2:])))
     print(f"{'grid':>28}: {axes} = {scene.n_points:,} points, "
@@ -134,8 +134,8 @@ def _dry_run(scene, size) -> int:
         print(line)
     sys.stdout.flush()
     check_fits(scene, size)  # before the imports of the plan and the kernels (~1 s): a refusal answers at once
-    from .estimate import estimate_seconds, plan_sample
-    from .plan import make_plan
+    from .plan.plan import make_plan
+    from .protocols.stop.estimate import estimate_seconds, plan_sample
 
     planned, note = plan_sample(scene)
     if note:
@@ -168,7 +168,7 @@ def _plan_text(scene, plan) -> str:
 
 def _run_driven(scene, args: argparse.Namespace) -> int:
     """``sweep run`` of a driven scene: one simulation per point (no plan, no pilot estimate)."""
-    from .plot import plot_regimes
+    from .plot.files import plot_regimes
 
     ds, _, elapsed, _ = _run_to_file(scene, args, warm=False)
     out = args.output
@@ -187,7 +187,7 @@ is the model's answer) exits with code 1."""
 
 def _most_failed(ds, out: Path) -> int:
     """Exit code of a finished run: 1, with a one-line summary on stderr, where most points failed (NOT_FAILED)."""
-    from .plausibility import not_ok_summary
+    from .scene.plausibility import not_ok_summary
 
     bad, text = not_ok_summary(ds["status"].values, ds["status"].attrs["flag_meanings"].split(), failed_only=True)
     if bad <= MOST_FAILED * ds["status"].size:
@@ -207,8 +207,8 @@ def _run_to_file(scene, args: argparse.Namespace, warm: bool, picture=None):
     lock and the journal's check before the kernels are loaded (``warm``: separately, timed; a dask run always
     warms up before its fan-out); ``picture(ds)`` drawn while the file is written (api.PreparedRun.finish).
     Returns (Dataset, seconds warming up, seconds running (the picture included), seconds of the chunk loop)."""
-    from .api import prepare_run, warm_up_kernels
-    from .compile_notice import timed
+    from .run.api import prepare_run, warm_up_kernels
+    from .run.compile_notice import timed
 
     dask = args.workers is not None or args.scheduler is not None
     with prepare_run(scene, args.output, resume=args.resume, overwrite=args.overwrite, chunk_size=args.chunk_size,
@@ -246,9 +246,9 @@ def _model_summary(ds) -> str:
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:
-    from .files import read_sweep_file
-    from .outputs import check_targets, picture_paths
-    from .plot import has_trajectories, plot_file
+    from .plot.files import has_trajectories, plot_file
+    from .write.read import read_sweep_file
+    from .write.targets import check_targets, picture_paths
 
     ds, kind = read_sweep_file(args.file)
     png = args.output or Path(args.file).with_suffix(".png")
@@ -267,7 +267,7 @@ FLAGS = ("status", "regime", "bifurcation", "model")
 
 def _cmd_info(args: argparse.Namespace) -> int:
     """``sweep info FILE``: what the file is, where it comes from, its axes, flag counts and value ranges."""
-    from .files import read_sweep_file
+    from .write.read import read_sweep_file
 
     ds, kind = read_sweep_file(args.file)
     print(f"{args.file}: {ds.attrs.get('title', '')} ({kind} file)")
@@ -292,11 +292,11 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 def _cmd_hopf(args: argparse.Namespace) -> int:
     """``sweep hopf CONFIG.toml -o hopf.nc``: the Hopf line over the file's V axis, netCDF + PNG."""
-    from .hopf import locate_hopf
-    from .io import save
-    from .outputs import check_targets
-    from .plot import plot_hopf
-    from .scene import hopf_config
+    from .analysis.hopf import locate_hopf
+    from .plot.files import plot_hopf
+    from .scene.scene import hopf_config
+    from .write.netcdf import save
+    from .write.targets import check_targets
 
     params, v, kwargs = hopf_config(args.config)
     check_targets({"data": args.output, **({} if args.output.is_dir() else {"picture": _png(args)})},
@@ -313,7 +313,7 @@ def _cmd_hopf(args: argparse.Namespace) -> int:
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     """``sweep reproduce NAME -o DIR``: the paper's figures, each as netCDF + PNG + a text of key numbers."""
-    from .figures import reproduce
+    from .plot.figures import reproduce
 
     for done in reproduce(args.name, args.output, overwrite=args.overwrite):
         print(f"{done.name}: computed in {done.seconds:.2f} s; wrote {done.data}, {done.png}, {done.text}")
@@ -397,7 +397,7 @@ def build_parser() -> argparse.ArgumentParser:
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
     """Warnings of sweep (implausible inputs, failed points, files refused from a journal) as one line
     ``sweep: warning: ...``; others as usual."""
-    from .plausibility import PlausibilityWarning
+    from .scene.plausibility import PlausibilityWarning
 
     if issubclass(category, (PlausibilityWarning, JournalWarning)):
         print(f"sweep: warning: {message}", file=sys.stderr)
@@ -422,12 +422,12 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(f"error: {exc}", 2)
     except (FileNotFoundError, PermissionError, IsADirectoryError, NotADirectoryError) as exc:
         return _fail(f"error: {exc}", 2)
-    except OSError as exc:  # OutputError (sweep/outputs.py: a write failed during the run), or a picture
+    except OSError as exc:  # OutputError (sweep/write/targets.py: a write failed during the run), or a picture
         return _fail(f"error: {exc}", 3)
     except KeyboardInterrupt:
         return _fail("interrupted (Ctrl-C)", 130)
     except Exception as exc:
-        from .runner import Interrupted
+        from .run.runner import Interrupted
 
         if isinstance(exc, Interrupted):  # Ctrl-C during a journaled run: nothing finished is lost
             return _fail(str(exc), 130)

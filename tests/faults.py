@@ -38,7 +38,7 @@ def interrupt_after(monkeypatch, chunks: int) -> list[int]:
     """Make the next stop runs raise KeyboardInterrupt when chunk number ``chunks`` + 1 starts (the journal then holds
     ``chunks`` chunks, as a run killed at that moment leaves it); undo with ``monkeypatch.undo()``. Returns the list
     the sizes of the chunks computed before the interrupt go into."""
-    import sweep.runner as runner
+    import sweep.run.runner as runner
 
     real, sizes = runner.stop_chunk, []
 
@@ -59,7 +59,7 @@ def interrupt_after(monkeypatch, chunks: int) -> list[int]:
 def trace_chunks(monkeypatch) -> None:
     """Print :data:`TRACE` on stderr before each chunk of a stop run is computed (the ``trace-chunks`` fault of a
     command, in this process)."""
-    import sweep.runner as runner
+    import sweep.run.runner as runner
 
     monkeypatch.setattr(runner, "stop_chunk", _wrapped(runner.stop_chunk, lambda: sys.stderr.write(TRACE + "\n")))
 
@@ -98,7 +98,7 @@ def _error(code: int, path) -> OSError:
 
 
 def _failing_chunk_writes(code: int, after: int) -> None:
-    import sweep.journal as journal
+    import sweep.run.journal as journal
 
     real, calls = journal._save_arrays, [0]
 
@@ -147,7 +147,7 @@ def _read_only(folder: Path) -> None:
 
 
 def _folder_in_the_way(path: Path) -> None:
-    import sweep.api as api
+    import sweep.run.api as api
 
     real = api.write
 
@@ -159,7 +159,7 @@ def _folder_in_the_way(path: Path) -> None:
 
 
 def _wrapped(stop_chunk, action):
-    """``stop_chunk`` (sweep.runner) calling ``action()`` before each chunk it computes."""
+    """``stop_chunk`` (sweep.run.runner) calling ``action()`` before each chunk it computes."""
     def wrapped(scene, plan, progress=False):
         compute = stop_chunk(scene, plan, progress)
 
@@ -172,7 +172,7 @@ def _wrapped(stop_chunk, action):
 
 
 def _before_each_chunk(action) -> None:
-    import sweep.runner as runner
+    import sweep.run.runner as runner
 
     runner.stop_chunk = _wrapped(runner.stop_chunk, action)
 

@@ -26,7 +26,7 @@ def test_xi_inf_within_rtol_of_reference(case, rtol):
     ref = reference_stop(case.chi, case.A, case.mu1, case.m2)
     assert int(pt["status"]) == sweep.Status.OK
     err = abs(float(pt["xi_inf"]) - ref.xi_inf)
-    assert err <= rtol * abs(ref.xi_inf) + sweep.scene.DEFAULT_ATOL["xi_inf"], (err / ref.xi_inf, int(pt["steps"]))
+    assert err <= rtol * abs(ref.xi_inf) + sweep.scene.scene.DEFAULT_ATOL["xi_inf"], (err / ref.xi_inf, int(pt["steps"]))
 
 
 @pytest.mark.parametrize("rtol", (1e-4, 1e-7))
@@ -37,9 +37,9 @@ def test_rosenbrock_forced_everywhere_is_right_or_says_so(case, rtol):
     pt, _ = engine_point(case, rtol, observables=("xi_inf",), method="ros4")
     ref = reference_stop(case.chi, case.A, case.mu1, case.m2)
     err = abs(float(pt["xi_inf"]) - ref.xi_inf)
-    assert err <= float(pt["xi_inf_error"]) + sweep.scene.DEFAULT_ATOL["xi_inf"], (err, float(pt["xi_inf_error"]))
+    assert err <= float(pt["xi_inf_error"]) + sweep.scene.scene.DEFAULT_ATOL["xi_inf"], (err, float(pt["xi_inf_error"]))
     if int(pt["status"]) == sweep.Status.OK:
-        assert err <= rtol * abs(ref.xi_inf) + sweep.scene.DEFAULT_ATOL["xi_inf"]
+        assert err <= rtol * abs(ref.xi_inf) + sweep.scene.scene.DEFAULT_ATOL["xi_inf"]
     else:
         assert int(pt["status"]) == sweep.Status.ERROR_ABOVE_TOL
 

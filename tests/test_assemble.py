@@ -1,13 +1,13 @@
-"""sweep/assemble.py: a sweep's Dataset built without xarray's merge is the one the public constructor builds, and
+"""sweep/assemble/construct.py: a sweep's Dataset built without xarray's merge is the one the public constructor builds, and
 anything else falls back to the public constructor."""
 
 import numpy as np
 import pytest
+import sweep.assemble.construct as assemble_module
 import xarray as xr
+from sweep.assemble.construct import assemble
 
 import sweep
-import sweep.assemble as assemble_module
-from sweep.assemble import assemble
 
 
 def public(ds: xr.Dataset) -> xr.Dataset:

@@ -17,8 +17,8 @@ from reference import reference_stop
 
 import sweep
 from sweep.cli import main
-from sweep.io import open_dataset
-from sweep.journal import journal_path
+from sweep.run.journal import journal_path
+from sweep.write.netcdf import open_dataset
 
 P2 = sweep.presets["sample2"]
 K, V = np.logspace(4, 6, 3), np.logspace(-7, -5.5, 2)
@@ -98,7 +98,7 @@ def test_the_file_is_cf_with_units_on_every_coordinate_and_its_scene_round_trips
 
 
 def test_a_4d_sweep_resumes_to_the_same_numbers(tmp_path, monkeypatch):
-    import sweep.runner as runner
+    import sweep.run.runner as runner
 
     sc, out = scene({"A": [0.006, 0.009], "m1": [0.005, 0.0125]}, **TIME_RESOLVED), tmp_path / "r.nc"
     real_chunk = runner.stop_chunk

@@ -1,4 +1,4 @@
-"""Chunks computed side by side (sweep/concurrent_chunks.py): the same bits as one chunk at a time, every finished
+"""Chunks computed side by side (sweep/run/concurrent_chunks.py): the same bits as one chunk at a time, every finished
 chunk handed back before a failure is raised, nothing left running when the consumer stops."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep.concurrent_chunks import as_completed_in_threads, side_by_side
+from sweep.run.concurrent_chunks import as_completed_in_threads, side_by_side
 
 
 def _chunks(n: int):
@@ -124,8 +124,8 @@ def test_a_run_interrupted_side_by_side_resumes_to_the_uninterrupted_file(tmp_pa
     interrupt is in the journal, and --resume computes the rest into the same numbers as a run never interrupted."""
     from faults import interrupt_after
 
-    import sweep.runner as runner
-    from sweep.journal import journal_path
+    import sweep.run.runner as runner
+    from sweep.run.journal import journal_path
 
     scene = dataclasses.replace(sweep.default_scene(), K_over_M=np.logspace(3, 6, 24), V=np.logspace(-7, -4, 20),
                                 model="quasistatic", observables=("xi_inf", "trajectory"))

@@ -1,10 +1,10 @@
 """The engine's two batch paths agree, and results do not depend on how the grid is chunked."""
 
 import numpy as np
+from sweep.plan.plan import make_plan
 
 import sweep
-from sweep.plan import make_plan
-from sweep.runner import execute
+from sweep.run.runner import execute
 
 PARAMS = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0033, D0=0.7e-6)
 
@@ -29,7 +29,7 @@ def test_lanes_path_matches_the_per_point_path():
     for ds in (lanes, per_point):
         # scene() keeps the default rtol = 1e-6
         st, val, err = ds["status"].values, ds["xi_inf"].values, ds["xi_inf_error"].values
-        over = err > 1e-6 * np.abs(val) + sweep.scene.DEFAULT_ATOL["xi_inf"]
+        over = err > 1e-6 * np.abs(val) + sweep.scene.scene.DEFAULT_ATOL["xi_inf"]
         assert np.all(st[finished & over] == sweep.Status.ERROR_ABOVE_TOL)
         assert np.all(st[finished & ~over] == sweep.Status.OK)
     statuses = set(np.unique(lanes["status"]).tolist())
@@ -38,7 +38,7 @@ def test_lanes_path_matches_the_per_point_path():
 
 def test_auto_runs_the_stiff_corner_with_rosenbrock_and_agrees_with_rk4():
     """method="auto" with fixed-step lanes (float32 here; float64 takes the adaptive lanes) sends the stiff points
-    (sweep.plan.stiff_points) to the ros4 lanes: same values as RK4 within both error estimates, far fewer steps
+    (sweep.plan.plan.stiff_points) to the ros4 lanes: same values as RK4 within both error estimates, far fewer steps
     there, and the plan says which points went where."""
     s = scene(step=None, rtol=1e-4, precision="float32")
     plan = make_plan(s)

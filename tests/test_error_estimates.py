@@ -19,7 +19,7 @@ import sweep
 
 RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9)
 METHODS = ("auto", "dp5", "dop853")
-ATOL = sweep.scene.DEFAULT_ATOL["xi_inf"]
+ATOL = sweep.scene.scene.DEFAULT_ATOL["xi_inf"]
 SHARPNESS = 100.0
 REFERENCE_REL = 1e-12
 """Relative accuracy trusted of the reference's xi_inf (DOP853 and Radau agree to 1e-13 on the table, and both are
@@ -127,9 +127,10 @@ def test_rounding_bound_covers_the_amplified_scatter(chi_over_A, mu1_over_A):
     """A weakening stop amplifies rounding made early by mu1/chi (sweep.physics.perturbation_growth): runs at
     steps 1e-7 apart (truncation errors equal to ~1e-7 relative of each other) scatter by the amplified rounding.
     The ladder's rounding term must cover that scatter, and not by more than 100x."""
+    from sweep.plan.plan import ROUNDOFF
+
     from sweep.integrate.ladder import rounding_error
     from sweep.integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
-    from sweep.plan import ROUNDOFF
 
     relax_runs = lane_kernels(np.dtype(np.float64), "rk4")[0]
     k, a, b = np.array([chi_over_A]), np.array([mu1_over_A]), np.zeros(1)

@@ -31,15 +31,15 @@ import pytest
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 from reference import reference_stop
+from sweep.plan.plan import make_plan
 
 import sweep
-from sweep.plan import make_plan
-from sweep.runner import execute
+from sweep.run.runner import execute
 
 G = 9.81  # m s-2 (FrictionParams default)
 V0 = 1e-6  # m s-1 (FrictionParams default)
 D0 = 1e-6  # m
-ATOL = 1e-12  # = sweep.scene.DEFAULT_ATOL["xi_inf"]
+ATOL = 1e-12  # = sweep.scene.scene.DEFAULT_ATOL["xi_inf"]
 RTOLS = (1e-4, 1e-6, 1e-8)
 METHODS = ("rk4", "dp5", "dop853")
 Status = sweep.Status

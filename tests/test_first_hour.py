@@ -57,7 +57,7 @@ def _write_kind(kind: str, folder: Path) -> Path:
 
     p = sweep.presets["sample2"]
     if kind == "figure":
-        from sweep.figures import reproduce
+        from sweep.plot.figures import reproduce
 
         return reproduce("fig4b", folder)[0].data
     if kind == "hopf":
@@ -132,7 +132,7 @@ def test_a_bad_scheduler_address_fails_within_seconds(tmp_path):
 def test_a_journal_without_chunks_does_not_block_a_new_run(tmp_path):
     """What a run stopped before its first chunk leaves (refused scheduler, Ctrl-C while compiling): nothing to
     resume, so a new run starts afresh instead of asking for --resume; a journal with chunks is still kept."""
-    from sweep.journal import Journal, journal_path
+    from sweep.run.journal import Journal, journal_path
 
     one_chunk = [(0, 1)]
     Journal.open(tmp_path / "o.nc", {"scene": "a"}, one_chunk, resume=False)
@@ -198,14 +198,14 @@ def test_v_in_um_per_s_is_warned_before_any_work_and_a_failed_run_exits_1(tmp_pa
                                           ([1e3], [1e-6, 5.0], "V up to 5 m/s: did you give µm/s?"),
                                           ([1e3], [1e-6, 1e5], "V up to 100000 m/s: V is in m/s")])
 def test_implausible_axes_name_the_likely_unit_mistake(km, v, words):
-    from sweep.plausibility import implausible
+    from sweep.scene.plausibility import implausible
 
     assert any(words in m for m in implausible(km, v)), implausible(km, v)
     assert implausible([1e3, 1e6], [1e-7, 1e-4]) == []
 
 
 def test_solve_point_at_1_m_per_s_warns_and_its_status_says_why():
-    from sweep.plausibility import PlausibilityWarning
+    from sweep.scene.plausibility import PlausibilityWarning
 
     with pytest.warns(PlausibilityWarning) as record:
         pt = sweep.solve_point(sweep.presets["sample2"], K_over_M=2.8e5, V=1.0, observables=["xi_inf"])
@@ -245,7 +245,7 @@ def test_verbose_goes_through_the_sweep_logger(tmp_path):
 def test_the_compile_notice_is_logged_from_python(monkeypatch, caplog):
     import logging
 
-    import sweep.compile_notice as notice
+    import sweep.run.compile_notice as notice
 
     monkeypatch.setattr(notice, "_checked", False)
     monkeypatch.setattr(notice, "cache_is_cold", lambda: True)
@@ -275,7 +275,7 @@ def test_the_compile_notice_names_only_the_kernel_families_of_the_scene(monkeypa
     import dataclasses
     import logging
 
-    import sweep.compile_notice as notice
+    import sweep.run.compile_notice as notice
 
     quasistatic = dataclasses.replace(sweep.default_scene(), model="quasistatic")
     monkeypatch.setattr(notice, "cache_is_cold", lambda: True)
@@ -291,7 +291,7 @@ def test_the_compile_notice_names_only_the_kernel_families_of_the_scene(monkeypa
 
 
 def test_cache_is_cold_follows_numba_cache_dir(tmp_path, monkeypatch):
-    from sweep.compile_notice import cache_is_cold
+    from sweep.run.compile_notice import cache_is_cold
 
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     assert cache_is_cold()
@@ -303,9 +303,9 @@ def test_cache_is_cold_follows_numba_cache_dir(tmp_path, monkeypatch):
 def test_locate_hopf_shows_progress_over_the_velocities(monkeypatch, capsys):
     import numpy as np
 
-    import sweep.progress
+    import sweep.run.progress
 
-    monkeypatch.setattr(sweep.progress, "SHOW_AFTER_S", 0.0)
+    monkeypatch.setattr(sweep.run.progress, "SHOW_AFTER_S", 0.0)
     sweep.locate_hopf(sweep.presets["sample2"], np.logspace(-7, -6, 3), bifurcation=False, progress=True)
     err = capsys.readouterr().err
     assert "hopf [" in err and "3/3 velocities" in err and err.endswith("\n")
@@ -322,8 +322,8 @@ def _stop(km, v, **kw):
 
 
 def _map(ds, variable="xi_inf"):
-    from sweep.plot_maps import draw_map
-    from sweep.plot_style import figure_legend, new_figure
+    from sweep.plot.maps import draw_map
+    from sweep.plot.style import figure_legend, new_figure
 
     fig, ax = new_figure("map")
     draw_map(fig, ax, ds, variable)
@@ -337,8 +337,7 @@ def test_two_velocities_hatch_follows_the_line_not_the_cells():
     hatching grid cells put a stable band under the hatch."""
     import matplotlib.pyplot as plt
     import numpy as np
-
-    from sweep.plot_maps import hopf_line_dense
+    from sweep.plot.maps import hopf_line_dense
 
     ds = _stop(np.logspace(4, 6, 40), [1e-7, 1e-6])
     fig, ax = _map(ds)
@@ -377,9 +376,8 @@ def test_the_simulated_line_over_200_velocities_is_thinned():
 def test_hopf_gap_shows_the_bisection_bracket_on_each_point():
     import matplotlib.pyplot as plt
     import numpy as np
-
-    from sweep.plot_curves import draw_hopf_gap
-    from sweep.plot_style import new_figure
+    from sweep.plot.curves import draw_hopf_gap
+    from sweep.plot.style import new_figure
 
     ds = sweep.locate_hopf(sweep.presets["sample2"], np.logspace(-7, -6, 4), bifurcation=False)
     fig, ax = new_figure()
@@ -436,7 +434,7 @@ def test_a_stop_scene_compiles_only_the_kernels_its_model_needs():
         inertial_batches = ("sweep.integrate.batch.relax_batch", "sweep.integrate.batch.relax_points")
         assert not {name for name in names if name in inertial_batches or "stop_inertial" in name
                     or "rosenbrock" in name}, names
-        assert not any(name.startswith(("sweep.integrate.driven", "sweep.models.driven")) or "driven_batch" in name
+        assert not any(name.startswith(("sweep.integrate.driven", "sweep.integrate.models.driven")) or "driven_batch" in name
                        for name in names), names
     lanes = {model: sum(lane_kernel(name) for name in names) for model, names in used.items()}
     assert 1 <= lanes["auto"] <= lanes["quasistatic"] + 1, lanes
@@ -508,7 +506,7 @@ def test_the_inertial_helper_compiles_the_package_this_process_runs(monkeypatch,
     checkout's files, whose cache entries the installed package never found (45 s instead of 18 s)."""
     import subprocess
 
-    import sweep.compile_notice as notice
+    import sweep.run.compile_notice as notice
 
     started = []
 
@@ -535,7 +533,7 @@ def test_a_stuck_compile_helper_is_killed_after_its_wait(monkeypatch):
     ends (stuck for any reason) is killed, and the block's caller goes on (it compiles what it still needs)."""
     import subprocess
 
-    import sweep.compile_notice as notice
+    import sweep.run.compile_notice as notice
 
     killed, waited = [], []
 

@@ -373,7 +373,7 @@ def test_a_first_fit_on_a_cold_cache_says_it_compiles_and_compiles_aside(monkeyp
     import logging
     import subprocess
 
-    import sweep.compile_notice as notice
+    import sweep.run.compile_notice as notice
 
     started = []
 
@@ -402,7 +402,7 @@ def test_a_first_fit_on_a_cold_cache_says_it_compiles_and_compiles_aside(monkeyp
 def test_the_per_point_warm_up_takes_the_per_point_path(monkeypatch):
     """warm_up_per_point (run in the helper process of a cold first fit) must reach the per-point kernels: its point
     has no finite relaxed slip, so the sampled lanes leave it to the per-point path, which returns its sample."""
-    import sweep.engine as engine
+    import sweep.protocols.stop.engine as engine
     from sweep.fit.forward import warm_up_per_point
 
     calls = []

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 import sweep
+from sweep.analysis.hopf import BIFURCATIONS
 from sweep.cli import main
 from sweep.errors import InputError
-from sweep.hopf import BIFURCATIONS
-from sweep.io import open_dataset
+from sweep.write.netcdf import open_dataset
 
 SAMPLE2 = sweep.presets["sample2"]
 V = np.array([1e-7, 1e-6, 3e-6, 5e-6])  # mu1 > 0 below 6.6 um/s for sample2

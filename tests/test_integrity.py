@@ -28,8 +28,8 @@ import xarray as xr
 
 import sweep
 from sweep.errors import InputError, JournalWarning, OutputError
-from sweep.journal import journal_path, rejected_path
-from sweep.lock import lock_path
+from sweep.run.journal import journal_path, rejected_path
+from sweep.run.lock import lock_path
 
 sys.path.insert(0, str(Path(__file__).parent))
 import faults  # noqa: E402
@@ -85,7 +85,7 @@ def assert_same_file(path: Path, reference: xr.Dataset) -> None:
 
 def interrupted(monkeypatch, out: Path, chunks: int = 5, rtol: float = 1e-6) -> Path:
     """A journal of ``out`` holding ``chunks`` chunks of its 15, as a run killed at that moment leaves it."""
-    from sweep.runner import Interrupted
+    from sweep.run.runner import Interrupted
 
     faults.interrupt_after(monkeypatch, chunks)
     with pytest.raises(Interrupted):
@@ -236,7 +236,7 @@ def test_truncated_flipped_and_stray_files_are_moved_aside_before_computing(tmp_
 def test_a_chunk_damaged_during_the_run_is_never_consolidated(tmp_path, monkeypatch, reference):
     """Checked again when read for the file: a chunk that changed on disk after the check at resume is an
     OutputError naming it, moved aside; the next resume computes it again."""
-    import sweep.journal as journal_module
+    import sweep.run.journal as journal_module
 
     out = tmp_path / "s.nc"
     journal = interrupted(monkeypatch, out, chunks=6)
@@ -287,7 +287,7 @@ def test_two_runs_on_one_output(tmp_path, config, monkeypatch, capsys, reference
     """A run going on in this process (held in its first chunk) holds the lock: a second run, with or without
     --resume (the advice of the first refusal), is refused naming it, before doing anything; once the first ends,
     its file is the uninterrupted one. A lock left by a process that is gone is removed with one line."""
-    import sweep.runner as runner
+    import sweep.run.runner as runner
 
     out = tmp_path / "s.nc"
     real, started, release = runner.stop_chunk, threading.Event(), threading.Event()
@@ -416,7 +416,7 @@ def test_a_chunk_write_failing_mid_run_keeps_the_journal_for_resume(tmp_path, co
     proc = cli("run", config, "-o", out, "--chunk-size", CHUNK, "-q", faults_=(fault,), cwd=tmp_path)
     line = refused(proc, code=3)
     journal = journal_path(out)
-    # chunks may finish, and be journaled, in any order (computed side by side: sweep/concurrent_chunks.py)
+    # chunks may finish, and be journaled, in any order (computed side by side: sweep/run/concurrent_chunks.py)
     kept = sorted(p.name for p in journal.iterdir() if p.name != "manifest.json")
     failed = re.fullmatch(rf"sweep: error: could not write {re.escape(str(journal))}/(chunk-\d{{6}}\.npz) \(.*", line)
     assert failed and line == (f"sweep: error: could not write {journal / failed[1]} ({cause}); the 5 finished chunks "
@@ -448,9 +448,9 @@ def test_a_netcdf_write_failing_at_the_end_keeps_the_journal_for_resume(tmp_path
 
 
 def test_too_little_free_space_is_refused_before_any_work(tmp_path, monkeypatch):
-    import sweep.outputs
+    import sweep.write.targets
 
-    monkeypatch.setattr(sweep.outputs, "free_bytes", lambda folder: 1000)
+    monkeypatch.setattr(sweep.write.targets, "free_bytes", lambda folder: 1000)
     with pytest.raises(InputError, match=r"not enough free space for .*s\.nc: the run needs ~[\d.]+ kB .*, 1 kB free"):
         sweep.run_sweep(scene(), progress=False, output=tmp_path / "s.nc")
     assert os.listdir(tmp_path) == []
@@ -485,8 +485,8 @@ def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeyp
     (exit 3), and --resume finishes once the space is freed. Needs a tmpfs to mount (root on Linux); the same faults
     injected are test_a_chunk_write_failing_mid_run_keeps_the_journal_for_resume and
     test_a_netcdf_write_failing_at_the_end_keeps_the_journal_for_resume."""
-    import sweep.api as api
-    import sweep.runner as runner
+    import sweep.run.api as api
+    import sweep.run.runner as runner
     from sweep.cli import main
 
     disk = tmp_path / "disk"
@@ -517,7 +517,7 @@ def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeyp
         assert "free some space on that disk, then run the same command with --resume" in line, line
         monkeypatch.undo()
         kept = len(list(journal_path(out).glob("chunk-*.npz")))
-        # with chunks computed side by side (sweep/concurrent_chunks.py), the other thread's chunk may reach the disk
+        # with chunks computed side by side (sweep/run/concurrent_chunks.py), the other thread's chunk may reach the disk
         # while the 6th fills it
         assert (5 <= kept < 15 if when == "chunks" else kept == 15) and not list(disk.glob("**/*.tmp"))
         assert not list(disk.glob("*.part"))

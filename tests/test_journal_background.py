@@ -1,4 +1,4 @@
-"""Chunks journaled in a helper thread (sweep.journal.Journal.background): every chunk handed over is on disk, whole
+"""Chunks journaled in a helper thread (sweep.run.journal.Journal.background): every chunk handed over is on disk, whole
 and verified, when the block ends (also when it ends by Ctrl-C), in the order handed over; a failed write is raised
 in the caller's thread and leaves no partial file. (A run interrupted, resumed and compared bit for bit with an
 uninterrupted one goes through the same path: tests/test_integrity.py, tests/test_resume.py.)"""
@@ -12,9 +12,9 @@ import time
 import numpy as np
 import pytest
 
-import sweep.journal as journal_module
+import sweep.run.journal as journal_module
 from sweep.errors import OutputError
-from sweep.journal import PENDING_CHUNKS, Journal
+from sweep.run.journal import PENDING_CHUNKS, Journal
 
 RANGES = [(0, 3), (3, 6), (6, 9), (9, 12), (12, 15)]
 

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from cases import STOP_CASES, case_params
 from reference import reference_stop
+from sweep.plan.plan import make_plan
 
 import sweep
-from sweep.engine import _adaptive_runner
 from sweep.integrate.lanes_adaptive import _log2_approx
-from sweep.plan import make_plan
+from sweep.protocols.stop.engine import _adaptive_runner
 from sweep.status import Status
 
 FINITE_CASES = [c for c in STOP_CASES if c.expect_finite]
@@ -46,10 +46,10 @@ def test_the_fine_twin_is_at_least_twice_as_accurate(rtol):
     for case in FINITE_CASES:
         plan = case_plan(case, rtol)
         assert plan.point_methods == ("dop853",), plan.point_methods
-        run = _adaptive_runner(plan, "dop853", sweep.scene.DEFAULT_ATOL["xi_inf"])
+        run = _adaptive_runner(plan, "dop853", sweep.scene.scene.DEFAULT_ATOL["xi_inf"])
         x, fine, _, status, _ = run(np.array([0]), np.array([plan.ctrl_tol]), plan.step[:1])
         exact = reference(case.name)
-        floor = REFERENCE_REL * exact + sweep.scene.DEFAULT_ATOL["xi_inf"]
+        floor = REFERENCE_REL * exact + sweep.scene.scene.DEFAULT_ATOL["xi_inf"]
         assert status[0] == Status.OK, case.name
         assert abs(fine[0] - exact) <= max(0.5 * abs(x[0] - exact), floor), case.name
 
@@ -76,7 +76,7 @@ def test_a_run_past_max_steps_is_flagged_not_silent():
     """A point that needs more attempts than max_steps comes back max_steps, with no value."""
     case = next(c for c in FINITE_CASES if c.name == "s2_KM1e4_V100um_corner")
     s = case_scene(case, 1e-8, max_steps=5)
-    out = sweep.runner.execute(s, make_plan(s), progress=False)
+    out = sweep.run.runner.execute(s, make_plan(s), progress=False)
     assert out.status[0] == Status.MAX_STEPS and np.isnan(out.xi_inf[0])
 
 
@@ -95,7 +95,7 @@ def test_halving_the_mesh_shows_eighth_order():
     orders = []
     for case in FINITE_CASES:
         plan = case_plan(case, 1e-2)
-        run = _adaptive_runner(plan, "dop853", sweep.scene.DEFAULT_ATOL["xi_inf"])
+        run = _adaptive_runner(plan, "dop853", sweep.scene.scene.DEFAULT_ATOL["xi_inf"])
         x, fine, _, status, _ = run(np.array([0]), np.array([1e-2]), plan.step[:1])
         exact = reference(case.name)
         e_run, e_fine = abs(x[0] - exact), abs(fine[0] - exact)
@@ -131,7 +131,7 @@ def test_a_sweep_compiles_each_adaptive_kernel_once():
 
     from sweep.integrate.lanes_adaptive import adaptive_lane_kernels
     from sweep.integrate.tolerance_ladder import _judge
-    from sweep.model_choice import _route
+    from sweep.protocols.stop.model_choice import _route
 
     d = sweep.default_scene()
     scene = dataclasses.replace(d, K_over_M=d.K_over_M[::16], V=d.V[::8], rtol=1e-3)  # 13 x 13
@@ -142,9 +142,9 @@ def test_a_sweep_compiles_each_adaptive_kernel_once():
             sweep.run_sweep(scene, progress=False, chunk_size=8)  # 22 chunks: side by side on 2 threads
     finally:
         numba.set_num_threads(threads)
-    kernels = {"relax_runs (auto)": adaptive_lane_kernels(sweep.plan.LANES_METHOD, True)[0], "_judge": _judge,
+    kernels = {"relax_runs (auto)": adaptive_lane_kernels(sweep.plan.plan.LANES_METHOD, True)[0], "_judge": _judge,
                "_route": _route}
     assert {name: len(k.signatures) for name, k in kernels.items()} == dict.fromkeys(kernels, 1)
-    # the warm-up (sweep.runner.warm_up, the command line's) and the dask workers pass writable arrays
+    # the warm-up (sweep.run.runner.warm_up, the command line's) and the dask workers pass writable arrays
     readonly = {name: str(k.signatures[0]) for name, k in kernels.items() if "readonly" in str(k.signatures[0])}
     assert not readonly, readonly

@@ -10,16 +10,16 @@ import numpy as np
 import pytest
 from cases import STOP_CASES, case_params
 from reference import reference_stop
+from sweep.plan.plan import make_plan
 
 import sweep
-import sweep.engine as engine
+import sweep.protocols.stop.engine as engine
 from sweep.integrate.lanes_sampled import sampled_lane_kernels
-from sweep.plan import make_plan
 from sweep.status import Status
 
 FINITE_CASES = [c for c in STOP_CASES if c.expect_finite]
 RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9)
-ATOL = sweep.scene.DEFAULT_ATOL["trajectory"]
+ATOL = sweep.scene.scene.DEFAULT_ATOL["trajectory"]
 REFERENCE_FLOOR = 1e-9
 """Relative accuracy trusted of the reference's interpolated trajectory (tests/test_error_estimates.py)."""
 TAUS = np.logspace(-2, 6, 17)
@@ -75,7 +75,7 @@ def test_sample_estimates_bound_the_errors(rtol, kind):
                               f"{case.name} rtol {rtol:g} psi[{j}]")
         assert kind == "trajectory" or np.all(np.isnan(u_err)), case.name
         within = (np.all(xi_err <= rtol * np.abs(xi) + ATOL) and (kind == "slip_at" or np.all(u_err <= rtol))
-                  and out.xi_inf_err[0] <= rtol * abs(out.xi_inf[0]) + sweep.scene.DEFAULT_ATOL["xi_inf"])
+                  and out.xi_inf_err[0] <= rtol * abs(out.xi_inf[0]) + sweep.scene.scene.DEFAULT_ATOL["xi_inf"])
         engine.mark_error_above_tol(scene, out)
         assert int(out.status[0]) == (Status.OK if within else Status.ERROR_ABOVE_TOL), case.name
 
@@ -85,7 +85,7 @@ def lane_run(case, tol, twin=True):
     SampledOutputs."""
     scene = case_scene(case, 1e-6)
     plan = make_plan(scene)
-    _, batch = sampled_lane_kernels(sweep.plan.LANES_METHOD)
+    _, batch = sampled_lane_kernels(sweep.plan.plan.LANES_METHOD)
     out = engine.SampledOutputs.empty(1, TAUS.size)
     pts = engine.LanePoints(plan.k, plan.a, plan.b, plan.s_c, plan.G)
     batch(pts, engine.SampledRuns(np.array([0]), np.array([0]), np.array([tol]), np.array([0.1]),

@@ -318,7 +318,7 @@ def test_scaled_erfc_of_the_closed_form_tail_matches_scipy():
     of z^2, up to 5e-14 relative near 23."""
     from scipy.special import erfcx as reference
 
-    from sweep.models.stop import erfcx
+    from sweep.integrate.models.stop import erfcx
 
     for z in np.concatenate((np.linspace(0.0, 30.0, 301), [24.999, 25.0, 25.001, 1e2, 1e4, 1e8])):
         assert erfcx(float(z)) == pytest.approx(reference(z), rel=1e-13, abs=0.0), z

@@ -2,8 +2,8 @@
 
 import io
 
-import sweep.progress as progress_module
-from sweep.progress import Progress
+import sweep.run.progress as progress_module
+from sweep.run.progress import Progress
 
 
 def test_quiet_when_disabled_or_short():
@@ -39,7 +39,7 @@ def test_a_lone_chunks_inertial_points_show_their_progress(monkeypatch, capsys):
     import numpy as np
 
     import sweep
-    import sweep.model_choice as model_choice
+    import sweep.protocols.stop.model_choice as model_choice
 
     scene = sweep.Scene(protocol="stop", params=sweep.presets["sample2"], K_over_M=np.logspace(3, 6, 8),
                         V=np.logspace(-4, -3, 6), rtol=1e-4)  # high V: inertia matters at most points

@@ -1,4 +1,4 @@
-"""Nothing lost: chunked runs journal their chunks (sweep/journal.py), survive SIGKILL and Ctrl-C, and resume to the
+"""Nothing lost: chunked runs journal their chunks (sweep/run/journal.py), survive SIGKILL and Ctrl-C, and resume to the
 same numbers as an uninterrupted run, whatever the chunking."""
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ from faults import interrupt_after
 
 import sweep
 from sweep.errors import InputError
-from sweep.io import open_dataset
-from sweep.journal import journal_path
+from sweep.run.journal import journal_path
+from sweep.write.netcdf import open_dataset
 
 P2 = sweep.presets["sample2"]
 M2ZERO = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0, D0=0.7e-6)
@@ -65,7 +65,7 @@ def test_results_do_not_depend_on_the_chunking(make):
     (141, ("xi_inf",), "inertial", 4096),  # an inertial point costs ~1 ms: the chunks are the progress
 ])
 def test_default_chunks_grow_with_the_grid_and_leave_enough_chunks(side, observables, model, size):
-    from sweep.plan import CHUNKS_AT_LEAST, ONE_CHUNK_POINTS, make_plan
+    from sweep.plan.plan import CHUNKS_AT_LEAST, ONE_CHUNK_POINTS, make_plan
 
     scene = stop_scene(K_over_M=np.logspace(3, 6, side), V=np.logspace(-7, -4, side), observables=observables,
                        model=model)
@@ -115,8 +115,8 @@ def test_trajectories_go_into_the_file_chunk_by_chunk_never_held_whole(tmp_path,
     """With an output the arrays sampled in time stay in the journal and are written block by block (a V row is 17
     points: chunks of whole rows, chunks with partial rows at both ends, chunks inside a row); the file is identical
     to the Dataset of a run held in memory."""
-    import sweep.api as api
-    import sweep.io as io
+    import sweep.run.api as api
+    import sweep.write.netcdf as io
 
     scene = stop_scene(**TIME_RESOLVED)
     in_memory = sweep.run_sweep(scene, progress=False)
@@ -141,7 +141,7 @@ def test_trajectories_go_into_the_file_chunk_by_chunk_never_held_whole(tmp_path,
 def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, monkeypatch, kw):
     """A journal holding some chunks (as a killed run leaves it): resume computes the rest only, and the file
     equals an uninterrupted run; a different scene, or no --resume, is refused before any work."""
-    import sweep.runner as runner
+    import sweep.run.runner as runner
 
     scene, out = stop_scene(**kw), tmp_path / "s.nc"
     real_chunk = runner.stop_chunk
@@ -156,7 +156,7 @@ def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, 
         sweep.run_sweep(stop_scene(rtol=1e-5, **kw), progress=False, output=out, chunk_size=50, resume=True)
     with pytest.raises(InputError, match="differs in chunk_size"):
         sweep.run_sweep(scene, progress=False, output=out, chunk_size=60, resume=True)
-    import sweep.api as api  # another version of sweep (its sources' digest) may give other numbers: refused
+    import sweep.run.api as api  # another version of sweep (its sources' digest) may give other numbers: refused
 
     with monkeypatch.context() as m:
         m.setattr(api, "source_digest", lambda: "0123456789abcdef")
@@ -263,7 +263,7 @@ def test_sweep_run_on_an_existing_cluster_started_elsewhere(tmp_path):
     thread and NUMBA_NUM_THREADS=1, as a user would start them): the same file as the threads backend."""
     from distributed import Client
 
-    from sweep.backends import WORKER_ENV
+    from sweep.run.backends import WORKER_ENV
 
     scheduler_file = tmp_path / "scheduler.json"
     common = ["--scheduler-file", str(scheduler_file), "--no-dashboard"]
@@ -321,7 +321,7 @@ def test_a_worker_killed_mid_sweep_is_retried_and_the_run_completes(tmp_path, dr
 def test_a_local_cluster_leaves_the_drivers_environment_as_it_was():
     """The nannies of a LocalCluster run in this process and set the workers' variables in os.environ; they are put
     back (numba would refuse to compile here with a NUMBA_NUM_THREADS that differs from its thread pool)."""
-    from sweep.backends import WORKER_ENV
+    from sweep.run.backends import WORKER_ENV
 
     before = {key: os.environ.get(key) for key in WORKER_ENV}
     with sweep.local_cluster(1):

@@ -31,7 +31,7 @@ from cases import NO_LIMIT_CASES, STOP_CASES, V0, G, case_params
 import sweep
 from sweep.integrate.driven import Regime
 
-ATOL = sweep.scene.DEFAULT_ATOL["xi_inf"]
+ATOL = sweep.scene.scene.DEFAULT_ATOL["xi_inf"]
 REFERENCE_REL = 1e-12
 """Relative accuracy trusted of the reference's xi_inf (Airy closed form, DOP853/Radau and the tail checks agree to
 < 3e-13 on the table: tests/test_reference_slip.py)."""

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import sweep
+from sweep.integrate.models.stop import StopParams
+from sweep.integrate.solvers import RK4
 from sweep.integrate.stop_point import REPLAY, Mesh, Method, Samples, Tolerances, march
-from sweep.models.stop import StopParams
-from sweep.solvers import RK4
 
 P = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0033, D0=1e-6)
 
@@ -68,7 +68,7 @@ def test_mixed_grid_has_only_ok_or_flagged_points():
 def test_psi_is_judged_only_where_it_is_an_output(observables, flagged):
     """error_above_tol from u = ln psi only at the trajectory's times (the file's psi); at the slip_at times only the
     slip is an output, so a large u estimate there (a point solved one per thread) leaves the point ok."""
-    from sweep.engine import RawResult, mark_error_above_tol
+    from sweep.protocols.stop.engine import RawResult, mark_error_above_tol
 
     scene = sweep.Scene(protocol="stop", params=P, K_over_M=[1e5], V=[1e-6], observables=observables,
                         trajectory_tau=(1e-2, 1e2, 3), t_obs=(1.0, 10.0), rtol=1e-6)

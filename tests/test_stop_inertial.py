@@ -11,7 +11,7 @@ from reference_inertial import reference_inertial_stop
 import sweep
 from sweep import physics
 from sweep.errors import InputError
-from sweep.model_choice import MODEL_FLAG
+from sweep.protocols.stop.model_choice import MODEL_FLAG
 
 G_OVER_A = np.array([1e-3, 1e-2, 0.1, 1.0, 10.0])
 PARAM_SETS = {
@@ -140,10 +140,11 @@ def test_model_tol_is_checked_before_any_work():
 def lane_estimate(k: float, a: float, b: float, G: float) -> tuple[float, float, int]:
     """(xi_inf, first-order correction, status) as model="auto" estimates them for one point where the ladder did not
     carry the correction (time-resolved scenes): the RK4 lane run at ESTIMATE_STEP."""
+    from sweep.plan.plan import time_scale
+
     from sweep.accuracy import ESTIMATE_RTOL, ESTIMATE_STEP
     from sweep.integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
-    from sweep.model_choice import ESTIMATE_MAX_STEPS
-    from sweep.plan import time_scale
+    from sweep.protocols.stop.model_choice import ESTIMATE_MAX_STEPS
 
     relax_runs = lane_kernels(np.dtype(np.float64), "rk4", True)[0]
     one = lambda x: np.array([float(x)])  # noqa: E731
@@ -159,7 +160,7 @@ def test_lane_estimate_of_the_first_order_correction_matches_a_tight_integration
     same equation at rtol 1e-10 to a small fraction of itself (it only routes points, with margins >= 1.5), over
     chi/A 0.1..1e3, mu1/A -4..10, m2/A 0..2 and gamma/A up to the trusted range."""
     from sweep.integrate.stop_inertial import relax
-    from sweep.model_choice import FIRST_ORDER_TRUST
+    from sweep.protocols.stop.model_choice import FIRST_ORDER_TRUST
 
     errors = []
     for k in np.logspace(-1, 3, 5):
@@ -185,7 +186,7 @@ def test_first_order_estimate_where_trusted_is_within_the_routing_margin_of_the_
     range it is not (the expansion fails where the slider rebounds inertially), which is why such points are
     measured instead. The estimate is the one auto computes: the lanes' RK4 run at ESTIMATE_STEP."""
     from sweep.integrate.stop_inertial import relax
-    from sweep.model_choice import CLOSE_TRUST, FIRST_ORDER_TRUST, routing_margin
+    from sweep.protocols.stop.model_choice import CLOSE_TRUST, FIRST_ORDER_TRUST, routing_margin
 
     def ratio(k, a, b, G):
         inertial = relax(k, a, b, G, True, 1e-9, 1e-15, 10**7)

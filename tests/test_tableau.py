@@ -11,9 +11,9 @@ from math import factorial, prod
 import numpy as np
 import pytest
 
-from sweep.solvers import DOP853, DP5, METHODS, RK4, ButcherTableau
-from sweep.solvers.rosenbrock import rosenbrock_conditions
-from sweep.solvers.tableau import rooted_trees, tree_density, tree_name
+from sweep.integrate.solvers import DOP853, DP5, METHODS, RK4, ButcherTableau
+from sweep.integrate.solvers.rosenbrock import rosenbrock_conditions
+from sweep.integrate.solvers.tableau import rooted_trees, tree_density, tree_name
 
 
 def test_rk4_is_a_valid_fourth_order_tableau():
@@ -190,9 +190,9 @@ def test_fsal_stage_is_the_derivative_at_the_step_end():
 
 @pytest.mark.parametrize("name, order, r_inf", [("ROS4", 4, 1.0 / 3.0), ("RODAS3", 3, 0.0)])
 def test_rosenbrock_methods_pass_their_order_conditions_and_are_stable_for_decaying_modes(name, order, r_inf):
-    import sweep.solvers
+    import sweep.integrate.solvers
 
-    tab = getattr(sweep.solvers, name)
+    tab = getattr(sweep.integrate.solvers, name)
     alpha, gam, b = tab.standard_form()
     n_conditions = {3: 4, 4: 8}[order]
     for cond, value, want in rosenbrock_conditions(alpha, gam, b, tab.gamma)[:n_conditions]:
@@ -209,7 +209,7 @@ def test_rosenbrock_methods_pass_their_order_conditions_and_are_stable_for_decay
 
 
 def test_rosenbrock_tableau_catches_a_wrong_coefficient():
-    from sweep.solvers import ROS4, RosenbrockTableau
+    from sweep.integrate.solvers import ROS4, RosenbrockTableau
 
     m = list(ROS4.m)
     m[1] *= 1.0 + 1e-9

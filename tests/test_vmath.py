@@ -1,4 +1,4 @@
-"""The vectorisable exp of sweep/solvers/vmath.py against numpy's exp in extended precision."""
+"""The vectorisable exp of sweep/integrate/solvers/vmath.py against numpy's exp in extended precision."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from sweep.solvers.vmath import exp_f32, exp_f64, exp_f64_coarse
+from sweep.integrate.solvers.vmath import exp_f32, exp_f64, exp_f64_coarse
 
 
 def _mapper(exp):

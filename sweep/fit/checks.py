@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import physics
 from ..errors import InputError
-from ..plausibility import PlausibilityWarning
+from ..scene.plausibility import PlausibilityWarning
 from .data import Curve
 from .problem import Problem
 

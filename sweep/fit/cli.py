@@ -29,7 +29,7 @@ def add_fit_command(add) -> None:
 
 def _cmd_fit(args: argparse.Namespace) -> int:
     from ..errors import InputError
-    from ..outputs import check_targets
+    from ..write.targets import check_targets
     from .config import load_fit_config
     from .core import fit
     from .plot import plot_fit

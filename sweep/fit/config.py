@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InputError
-from ..scene import _params_from, _read_toml
+from ..scene.scene import _params_from, _read_toml
 from .read import read_data
 
 __all__ = ["FIT_KEYS", "load_fit_config"]

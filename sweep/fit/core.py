@@ -24,10 +24,10 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 import xarray as xr
 
-from ..compile_notice import announce_if_cold, compiled_aside
 from ..errors import InputError
-from ..params import FrictionParams
-from ..presets import presets
+from ..run.compile_notice import announce_if_cold, compiled_aside
+from ..scene.params import FrictionParams
+from ..scene.presets import presets
 from .checks import check_problems
 from .data import Data
 from .globalstage import grid_axes, search_all

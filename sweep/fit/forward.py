@@ -9,8 +9,8 @@ flat batch. In reduced variables (docs/physics.md 2; paper section 4) a point is
 and what it returns is the slip x(t) = D0 xi(tau) [m] at the point's own times and the relaxed slip
 Dx_inf = D0 xi_inf [m] (eq. 10 when m2 = 0; the engine's closed-form tail otherwise: the limit, not a horizon).
 
-The plan comes from :func:`sweep.plan.stop_plan_for_points` (the step rule, horizon and error estimates of a
-sweep, per point) and :func:`sweep.engine.run_points` runs it: points with sampled times through the sampled adaptive
+The plan comes from :func:`sweep.plan.plan.stop_plan_for_points` (the step rule, horizon and error estimates of a
+sweep, per point) and :func:`sweep.protocols.stop.engine.run_points` runs it: points with sampled times through the sampled adaptive
 lanes (sweep/integrate/lanes_sampled.py; the per-point kernel for the few they do not cover), each point with its own
 row of reduced times (``obs_tau``), relaxed-slip-only batches through the relaxed-slip lanes.
 """
@@ -24,10 +24,10 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import physics
-from ..engine import mark_error_above_tol, run_points
-from ..params import FrictionParams
-from ..plan import PointParams, stop_plan_for_points
-from ..scene import Scene
+from ..plan.plan import PointParams, stop_plan_for_points
+from ..protocols.stop.engine import mark_error_above_tol, run_points
+from ..scene.params import FrictionParams
+from ..scene.scene import Scene
 from ..status import Status
 
 __all__ = ["ForwardPoints", "ForwardResult", "forward", "stable_sliding", "warm_up_per_point"]

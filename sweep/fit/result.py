@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..dataset import REFERENCES, versions
+from ..assemble.dataset import REFERENCES, versions
 from .data import Curve
 from .globalstage import grid_axes
 from .levenberg import STATUS, STATUS_FLAGS
@@ -182,8 +182,8 @@ def build_fit_dataset(out: FitOutcome, history: str = "sweep.fit") -> xr.Dataset
 
 
 def save_fit(ds: xr.Dataset, path: str | os.PathLike, overwrite: bool = False) -> Path:
-    """Write the fit's Dataset as netCDF4 (through sweep.io.save: written beside, then renamed into place); an
+    """Write the fit's Dataset as netCDF4 (through sweep.write.netcdf.save: written beside, then renamed into place); an
     existing file is replaced only with ``overwrite``."""
-    from ..io import save
+    from ..write.netcdf import save
 
     return save(ds, path, overwrite=overwrite)

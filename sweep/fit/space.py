@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..params import FrictionParams, require_finite
+from ..scene.params import FrictionParams, require_finite
 
 __all__ = ["FREE", "UNITS", "ParamSpace", "default_bounds", "make_space"]
 

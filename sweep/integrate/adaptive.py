@@ -12,10 +12,10 @@ import numpy as np
 from numba import njit
 
 from ..jitcache import pin, pin_module
-from ..solvers.controllers import accepted_factor, rejected_factor
-from ..solvers.explicit import make_erk_step
-from ..solvers.fastmath import FAST
 from ..status import Status
+from .solvers.controllers import accepted_factor, rejected_factor
+from .solvers.explicit import make_erk_step
+from .solvers.fastmath import FAST
 
 __all__ = ["make_march"]
 

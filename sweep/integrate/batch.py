@@ -24,10 +24,10 @@ from numba import njit, prange
 
 from ..accuracy import GENERAL_ESTIMATE_GAIN, TIGHTER
 from ..jitcache import pin, pin_module
-from ..models.stop import StopParams
-from ..solvers.fastmath import FAST
 from ..status import Status
 from .driven import DrivenParams, cached, point_kernel
+from .models.stop import StopParams
+from .solvers.fastmath import FAST
 from .stop_inertial import RELAX_KEYS, relax
 from .stop_point import FractionTimes, StopOutputs, TimeSamples, solve_stop_point
 from .stop_slip import relax_slip

@@ -1,10 +1,10 @@
 """Driven scene driver (docs/physics.md 3b): one point integrated from a perturbed steady sliding until its regime
 is decided; the batch loop over flat points.
 
-Model x stepper x controller x recorder: the right-hand side of :mod:`sweep.models.driven` (with the scene's state
-law), the explicit stage loop of :mod:`sweep.solvers.explicit` with the Dormand-Prince 5(4) tableau and the PI
+Model x stepper x controller x recorder: the right-hand side of :mod:`sweep.integrate.models.driven` (with the scene's state
+law), the explicit stage loop of :mod:`sweep.integrate.solvers.explicit` with the Dormand-Prince 5(4) tableau and the PI
 controller, or, where the inertial mode is stiff (h times its rate A/(gamma xi') > STIFF_SWITCH: stick phases),
-RODAS3 (:mod:`sweep.solvers.rosenbrock_step`) with the analytic Jacobian and the I controller; what is recorded is
+RODAS3 (:mod:`sweep.integrate.solvers.rosenbrock_step`) with the analytic Jacobian and the I controller; what is recorded is
 the cycle history below. Near steady sliding (xi' ~ 1, where the Hopf line is located) the explicit stepper stays
 in use. A slip velocity beyond RUNAWAY_XI_DOT ends the point as ``runaway`` (the quasi-static model breaks down:
 m2 = 0 below the Hopf line overflows in finite time), before any exponent can overflow.
@@ -54,15 +54,15 @@ from ..accuracy import (
     W_RUNAWAY,
 )
 from ..jitcache import pin, pin_module
-from ..models.driven import DrivenParams, inertial_system, log_velocity_rate, make_driven_rhs, stiffness
-from ..models.state_laws import STATE_LAWS
-from ..solvers import DP5, RODAS3
-from ..solvers.controllers import I_CONTROLLER, PI_CONTROLLER, accepted_factor, rejected_factor
-from ..solvers.explicit import make_erk_step
-from ..solvers.fastmath import FAST
-from ..solvers.rosenbrock_step import make_rodas3_step, scratch
-from ..solvers.vmath import EXP_MAX
 from ..status import Status
+from .models.driven import DrivenParams, inertial_system, log_velocity_rate, make_driven_rhs, stiffness
+from .models.state_laws import STATE_LAWS
+from .solvers import DP5, RODAS3
+from .solvers.controllers import I_CONTROLLER, PI_CONTROLLER, accepted_factor, rejected_factor
+from .solvers.explicit import make_erk_step
+from .solvers.fastmath import FAST
+from .solvers.rosenbrock_step import make_rodas3_step, scratch
+from .solvers.vmath import EXP_MAX
 
 __all__ = ["DrivenOutputs", "DrivenParams", "DrivenResult", "DrivenSettings", "Regime", "point_kernel",
            "simulate_driven", "simulate_point"]

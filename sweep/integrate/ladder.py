@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..accuracy import CONSERVATIVE_GAIN, MAX_RATIO, MAX_RUNS, MIN_RATIO, ORDER_WINDOW, SHARP_GAIN, TARGET
-from ..models.stop import MAX_STEPS, NONFINITE, OK
+from .models.stop import MAX_STEPS, NONFINITE, OK
 
 NEWTON_ITERATIONS = 6
 

@@ -2,7 +2,7 @@
 
 Each thread keeps LANES runs (a run = one point at one fixed step in sigma) in flight in a structure of arrays
 and advances all of them by one step of the tableau at a time. Every loop over the lanes is straight-line code
-(the exp of :mod:`sweep.solvers.vmath`, no division checks), so it compiles to SIMD instructions, 8 float64 or
+(the exp of :mod:`sweep.integrate.solvers.vmath`, no division checks), so it compiles to SIMD instructions, 8 float64 or
 16 float32 lanes per AVX-512 instruction; the per-lane bookkeeping (tail test, refilling a finished lane with the
 next run) is a short scalar loop in float64. A finished lane takes the next run at once, so lanes never wait
 for each other; the arithmetic of a run does not depend on which lane or neighbours it had.
@@ -23,11 +23,11 @@ import numpy as np
 from numba import njit
 
 from ..jitcache import pin, pin_module
-from ..models.stop import EXP_MAX, FAST, MAX_STEPS, NONFINITE, OK, TAIL_SAFETY, make_rate, tail_error, tail_slip
-from ..models.stop_inertial import make_correction_rate, tail_correction
-from ..models.stop_stiff import make_stiff_rate
-from ..solvers import METHODS, RosenbrockTableau
 from .batch import lanes_batch
+from .models.stop import EXP_MAX, FAST, MAX_STEPS, NONFINITE, OK, TAIL_SAFETY, make_rate, tail_error, tail_slip
+from .models.stop_inertial import make_correction_rate, tail_correction
+from .models.stop_stiff import make_stiff_rate
+from .solvers import METHODS, RosenbrockTableau
 
 LANES = 16
 """Runs in flight per thread (8 and 32 measured within 10 %: benchmarks/throughput.py)."""
@@ -47,7 +47,7 @@ def _explicit_step(f, tableau, correction: bool = False):
     j != i-1, e.g. classical RK4), with the coefficients as compile-time constants: a loop over stages with
     run-time offsets into the lane arrays defeats LLVM's vectoriser (measured 22 ns per evaluation instead of 4.5).
     Other explicit tableaux run through the per-point kernel (integrate/stop_point.py). With ``correction`` the
-    first-order inertial correction y (:func:`sweep.models.stop_inertial.make_correction_rate`) is a third
+    first-order inertial correction y (:func:`sweep.integrate.models.stop_inertial.make_correction_rate`) is a third
     component of the same step (:func:`_step_source`: the plain kernel is unchanged)."""
     rate = make_rate(f)
     correction_rate = make_correction_rate(f)
@@ -103,7 +103,7 @@ def _step_source(correction: bool) -> str:
 
 def _rosenbrock_step(f, tableau):
     """step_all(st) for a four-stage Rosenbrock tableau whose stage 4 reuses stage 3's f (Shampine's ROS4
-    structure), on the scalar form in s of :mod:`sweep.models.stop_stiff`: three exponentials per step (stages
+    structure), on the scalar form in s of :mod:`sweep.integrate.models.stop_stiff`: three exponentials per step (stages
     2 and 3 and the step's end; E at the start is the previous step's end, kept in the _E field)."""
     rate, step_factor = make_stiff_rate(f)
     W = LANES
@@ -269,7 +269,7 @@ def make_lane_kernels(dtype, tableau, correction: bool = False):
 
 @functools.cache
 def lane_kernels(dtype: np.dtype, method: str, correction: bool = False):
-    """(relax_runs, relax_batch) for a float type and a fixed-step method of :data:`sweep.solvers.METHODS`, with
+    """(relax_runs, relax_batch) for a float type and a fixed-step method of :data:`sweep.integrate.solvers.METHODS`, with
     or without the first-order inertial correction (built once per process; numba compiles on first call and
     caches on disk)."""
     return make_lane_kernels(np.dtype(dtype), METHODS[method], correction)

@@ -2,7 +2,7 @@
 
 The adaptive lanes of :mod:`sweep.integrate.lanes_adaptive` return the relaxed slip; here every run also records
 xi and u = ln psi at its point's own increasing reduced times tau (a row of ``targets``). The state carries tau = int
-e^u ds as a third component (docs/physics.md 3a, :mod:`sweep.models.stop`), tau is a component of the error norm,
+e^u ds as a third component (docs/physics.md 3a, :mod:`sweep.integrate.models.stop`), tau is a component of the error norm,
 relative, as on the per-point path (:func:`sweep.integrate.stop_point.error_norm`), where psi is wanted (the
 trajectory; :class:`SampledRuns` for slip_at alone), and the steps are the controller's alone: samples never
 shorten a step. Each accepted step carries DOP853's continuous extension of order 7
@@ -18,8 +18,8 @@ twice as accurate): the interpolant's error, O(h^8) like the step's own, is 2^8 
 200-sample curve at rtol 1e-6, where the estimate was 1e-11 relative, 5x below the per-point path's cost.)
 
 Samples past the transient (E < TAIL_SAFETY TAIL_TIGHTENING rtol, relaxed slip known) come from the closed-form
-continuation (:func:`sweep.models.stop.continue_in_closed_form`) of the run and of its twin, each from its own
-state, with the continuation's bound in u (:func:`sweep.models.stop.continuation_error`) reported per sample.
+continuation (:func:`sweep.integrate.models.stop.continue_in_closed_form`) of the run and of its twin, each from its own
+state, with the continuation's bound in u (:func:`sweep.integrate.models.stop.continuation_error`) reported per sample.
 """
 
 from __future__ import annotations
@@ -33,7 +33,10 @@ from numba import njit
 
 from ..accuracy import SAMPLES_PER_EFOLD, TAIL_RTOL, TAIL_TIGHTENING, TAU_INTEGRATED, THETA_MISS
 from ..jitcache import pin, pin_module
-from ..models.stop import (
+from .batch import lanes_batch
+from .dense_dop853 import EXTRA_A, INTERPOLATOR_POWER, D
+from .lanes_adaptive import _LN2, LANE_TWINS, _combination, _log2_approx, _step_lines, controller_lines
+from .models.stop import (
     EXP_MAX,
     FAST,
     MAX_STEPS,
@@ -46,12 +49,9 @@ from ..models.stop import (
     tail_error,
     tail_slip,
 )
-from ..solvers import EXPLICIT_METHODS
-from ..solvers.controllers import ERR_FLOOR, MAX_FACTOR, MIN_FACTOR, NONFINITE_FACTOR, PI_CONTROLLER, SAFETY
-from ..solvers.vmath import exp_f64
-from .batch import lanes_batch
-from .dense_dop853 import EXTRA_A, INTERPOLATOR_POWER, D
-from .lanes_adaptive import _LN2, LANE_TWINS, _combination, _log2_approx, _step_lines, controller_lines
+from .solvers import EXPLICIT_METHODS
+from .solvers.controllers import ERR_FLOOR, MAX_FACTOR, MIN_FACTOR, NONFINITE_FACTOR, PI_CONTROLLER, SAFETY
+from .solvers.vmath import exp_f64
 from .stop_point import U_ROUNDING
 
 LANES = 16
@@ -453,7 +453,7 @@ def make_sampled_lane_kernels(tableau, fine, split: int):
 
 @functools.cache
 def sampled_lane_kernels(method: str):
-    """(sample_runs, sample_batch) of an embedded pair of :data:`sweep.solvers.EXPLICIT_METHODS` with its fine twin
+    """(sample_runs, sample_batch) of an embedded pair of :data:`sweep.integrate.solvers.EXPLICIT_METHODS` with its fine twin
     (:data:`sweep.integrate.lanes_adaptive.LANE_TWINS`), built once per process (numba compiles on first call and
     caches on disk): only scenes with sampled times in the adaptive lanes build it."""
     fine, split = LANE_TWINS[method]

@@ -1,8 +1,8 @@
 """Stop scene with inertia, and the first-order inertial correction of the quasi-static model: the driver.
 
-Model x stepper x controller: the systems of :mod:`sweep.models.stop_inertial` (docs/physics.md 3a) with their
-analytic Jacobians, the RODAS3 step of :mod:`sweep.solvers.rosenbrock_step`, the elementary controller of
-:mod:`sweep.solvers.controllers`; inertia is handed over to the quasi-static form once negligible
+Model x stepper x controller: the systems of :mod:`sweep.integrate.models.stop_inertial` (docs/physics.md 3a) with their
+analytic Jacobians, the RODAS3 step of :mod:`sweep.integrate.solvers.rosenbrock_step`, the elementary controller of
+:mod:`sweep.integrate.solvers.controllers`; inertia is handed over to the quasi-static form once negligible
 (HANDOVER_FRACTION rtol, sweep/accuracy.py), and the quasi-static phase ends in the closed-form tail.
 """
 
@@ -15,13 +15,13 @@ from numba import njit
 
 from ..accuracy import HANDOVER_FRACTION
 from ..jitcache import pin_module
-from ..models.stop import tail_is_accurate, tail_slip
-from ..models.stop_inertial import inertia_negligible, inertial_system, quasistatic_system, tail_correction
-from ..solvers import RODAS3
-from ..solvers.controllers import I_CONTROLLER, MIN_FACTOR, accepted_factor, rejected_factor
-from ..solvers.fastmath import FAST
-from ..solvers.rosenbrock_step import make_rodas3_step, scratch
 from ..status import Status
+from .models.stop import tail_is_accurate, tail_slip
+from .models.stop_inertial import inertia_negligible, inertial_system, quasistatic_system, tail_correction
+from .solvers import RODAS3
+from .solvers.controllers import I_CONTROLLER, MIN_FACTOR, accepted_factor, rejected_factor
+from .solvers.fastmath import FAST
+from .solvers.rosenbrock_step import make_rodas3_step, scratch
 
 __all__ = ["relax", "RELAX_KEYS"]
 
@@ -37,7 +37,7 @@ H_FLOOR = 8.0 * 2.220446049250313e-16
 stops moving). Relative, not absolute: where a fast rebound (k/G large) drops xi' towards 0, ln(xi' psi) has a
 log singularity that the steps resolve down to ~1e-16 near s ~ 0.05, and then grow again."""
 CONTROLLER = I_CONTROLLER._replace(nonfinite_factor=MIN_FACTOR)
-"""The elementary controller of sweep/solvers/controllers.py (a stage that overflowed: the step is divided by 5)."""
+"""The elementary controller of sweep/integrate/solvers/controllers.py (a stage that overflowed: the step is divided by 5)."""
 ORDER = RODAS3.order_hat
 """Order of RODAS3's embedded error estimate (the controller's exponent is 1/(ORDER + 1))."""
 

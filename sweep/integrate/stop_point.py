@@ -1,12 +1,12 @@
 """One stop point with any explicit Runge-Kutta tableau, fixed or adaptive steps, and its error estimate.
 
-The equations and the time map are those of :mod:`sweep.models.stop`; the method is data: the arrays
-(c, a, b, e) of a :class:`sweep.solvers.tableau.ButcherTableau` (e = b - b_hat, the embedded error weights)
+The equations and the time map are those of :mod:`sweep.integrate.models.stop`; the method is data: the arrays
+(c, a, b, e) of a :class:`sweep.integrate.solvers.tableau.ButcherTableau` (e = b - b_hat, the embedded error weights)
 with its FSAL flag and error order q. One step fills the stage derivatives K[i] = f(y + h sum_j a_ij K[j]).
 
 Step sequences (a *mesh* of step sizes in sigma):
 
-* ``ADAPTIVE``: the PI controller of :mod:`sweep.solvers.controllers` (Gustafsson) keeps the embedded local error
+* ``ADAPTIVE``: the PI controller of :mod:`sweep.integrate.solvers.controllers` (Gustafsson) keeps the embedded local error
   estimate below ``ctrl_tol`` (:func:`error_norm`: xi relative with the atol floor, u = ln psi, and tau when
   time-resolved observables are asked for), and records the accepted steps;
 * ``REPLAY``: steps mesh[i]/split, each mesh step taken as ``split`` equal substeps (the last size repeated if the
@@ -26,10 +26,10 @@ instead, its error need not exceed the fine run's; a bound on the fine run's err
 |contributions| is added (:func:`cancelled`, and :func:`crossing_error` for t50/t90). Each run's closed-form tail
 error bound is added (negligible: the per-point path integrates until it is below TAIL_SAFETY (atol + TAIL_RTOL
 |xi|)), and for samples taken from the closed-form continuation its bound
-(:func:`sweep.models.stop.continuation_error`). On tests/test_error_estimates.py's table the estimate is
+(:func:`sweep.integrate.models.stop.continuation_error`). On tests/test_error_estimates.py's table the estimate is
 1.2x..50x the true error for every method at rtol 1e-3..1e-9 (t50/t90 up to 130x where the two shares of their
 error cancel). The price is accuracy: the returned solution is the less accurate of the two, so the step rules must
-make the coarse run meet rtol (``CTRL_TOL_FACTOR`` of :mod:`sweep.plan` for the adaptive methods; rk4 per point,
+make the coarse run meet rtol (``CTRL_TOL_FACTOR`` of :mod:`sweep.plan.plan` for the adaptive methods; rk4 per point,
 used for time-resolved observables, has its rule's TIME_RESOLVED_FACTOR).
 """
 
@@ -43,7 +43,8 @@ from numba import njit
 
 from ..accuracy import COARSE_GAIN, TAIL_RTOL, TAIL_TIGHTENING
 from ..jitcache import pin_module
-from ..models.stop import (
+from ..status import Status
+from .models.stop import (
     FAST,
     MAX_STEPS,
     NO_FINITE_LIMIT,
@@ -57,8 +58,7 @@ from ..models.stop import (
     tail_error,
     tail_slip,
 )
-from ..solvers.controllers import PI_CONTROLLER, accepted_factor, rejected_factor
-from ..status import Status
+from .solvers.controllers import PI_CONTROLLER, accepted_factor, rejected_factor
 
 STEP_UNDERFLOW = int(Status.STEP_UNDERFLOW)
 ADAPTIVE, REPLAY = 0, 1
@@ -168,7 +168,7 @@ def erk_step(method, K, xi, s, tau, h, p):
     tau1, err_xi, err_s, err_tau): the new state and the embedded error estimate h sum_j e_j K[j] (zero for a method
     without one). For an FSAL method K[-1] is the derivative at the new state.
 
-    The stage loop of sweep/solvers/explicit.py written out in scalars for this three-component state: through the
+    The stage loop of sweep/integrate/solvers/explicit.py written out in scalars for this three-component state: through the
     shared loop (state in arrays, the right-hand side writing into them) a dp5 run took 16.2 us instead of 12.3 us
     and time-resolved, dp5 and dop853 sweeps ran 1.2-1.25x slower (benchmarks/compare_commits.py), so this path keeps
     its own until the shared loop holds small states in registers."""
@@ -288,7 +288,7 @@ def error_norm(ex, es, et, xi, xi1, s1, tau1, ctrl_tol, atol, with_tau):
 def march(method, plan_mesh, p, tol, max_steps, samples):
     """Integrate one stop point along a mesh (module docstring).
 
-    ``method``: :class:`Method`; ``plan_mesh``: :class:`Mesh`; ``p``: :class:`sweep.models.stop.StopParams` (its
+    ``method``: :class:`Method`; ``plan_mesh``: :class:`Mesh`; ``p``: :class:`sweep.integrate.models.stop.StopParams` (its
     with_tau is set here from the samples); ``tol``: :class:`Tolerances`. Records into ``samples``
     (:class:`Samples`) xi and u = ln psi where tau crosses each of its increasing times and tau and the slip rate
     dxi/dtau where xi crosses each of its increasing slips; tau targets
@@ -300,7 +300,7 @@ def march(method, plan_mesh, p, tol, max_steps, samples):
     at_mesh):
     xi_inf is NaN unless the tail was reached; in ADAPTIVE mode the returned mesh holds the n_mesh accepted steps;
     continuation = (first continued target, E, g = (mu1 + 2 m2 u)/A, u where it starts): targets from the first
-    continued one on carry the closed form's own error in u = ln psi (:func:`sweep.models.stop.continuation_error`);
+    continued one on carry the closed form's own error in u = ln psi (:func:`sweep.integrate.models.stop.continuation_error`);
     track[:n_track] is (xi, s, E) at the end of each mesh step, at_mesh the mesh step in which each tau target was
     located (-1: continued).
     """
@@ -543,7 +543,7 @@ def solve_stop_point(method, h, p, tol, max_steps, finite, samples, times):
     are located on its meshes. Each run crosses the fraction of its own xi_inf (:func:`crossing_error`).
 
     ``method``: :class:`Method` (adaptive where it has an error estimate); ``h``: the fine step (fixed-step methods)
-    or the first trial step of the coarse run (adaptive); ``p``: :class:`sweep.models.stop.StopParams`; ``tol``:
+    or the first trial step of the coarse run (adaptive); ``p``: :class:`sweep.integrate.models.stop.StopParams`; ``tol``:
     :class:`Tolerances` (rtol of the scene, atol, the controller's local tolerance); ``samples``:
     :class:`TimeSamples`, ``times``: :class:`FractionTimes` (filled here). Returns a :class:`PointResult`.
     """

@@ -43,9 +43,9 @@ from numba import njit
 
 from ..accuracy import COARSE_GAIN, LANE_TOL_FLOOR, MAX_RUNS, TOL_RATIO
 from ..jitcache import pin_module
-from ..models.stop import MAX_STEPS, NONFINITE, OK
-from ..solvers.fastmath import FAST
 from .ladder import LadderResult
+from .models.stop import MAX_STEPS, NONFINITE, OK
+from .solvers.fastmath import FAST
 
 AdaptiveRunner = Callable[[np.ndarray, np.ndarray, np.ndarray],
                           tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]

@@ -1,0 +1,225 @@
+"""The Hopf line located by simulation (docs/physics.md 3b): where the measured growth rate of small oscillations of the
+driven scene changes sign, and the type of the bifurcation decided from simulations around it.
+
+For each V: the line is bracketed around the linear prediction chi_c = mu1(V) (1 + gamma/A) (gamma = 0 for the
+quasi-static model), the sign of the growth rate measured from the simulated envelope (sweep/integrate/models/driven.py, a
+perturbation of SIGN_PERTURBATION, SIGN_CYCLES cycles) is checked at both ends, and the bracket is bisected until
+its relative width is below ``rtol`` (default 0.1 %); K_over_M_c is its midpoint. The linear value is stored
+beside it. Where mu1(V) <= 0 there is no line (steady sliding is stable at every stiffness): NaN and bifurcation
+"none".
+
+The bifurcation type is decided from simulations, never assumed:
+
+* supercritical: just below the line a small perturbation grows into stationary limit cycles (regime
+  stick_slip) whose amplitudes follow the square root law: of the runs at distances d, 2d and 4d (d =
+  TYPE_DISTANCE), the closest and farthest decided ones in the ratio sqrt(d2/d1) within SQRT_LAW_SPREAD;
+* subcritical: above the line (at d, then at d/4, still outside the located bracket) a large start
+  (LARGE_PERTURBATION, or 1.2x the largest stick-slip cycle found below) keeps a stick-slip attractor while a
+  small one decays (hysteresis; the window can be narrow: m2 = 0 at gamma/A = 0.1 keeps cycles at 0.1 % above the
+  line, not at 0.4 %);
+* degenerate: no limit cycle on either side: just below the line a small start runs away, just above it a large
+  start decays (quasi-static m2 = 0, whose orbits at the line are neutral; the located line is a bracket, so the
+  neutral orbits themselves are tested at the exact line in tests/test_driven.py);
+* undetermined: none of these (e.g. a slow transient left undecided); the type is not guessed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import xarray as xr
+
+from .. import physics
+from ..accuracy import (
+    BRACKET,
+    INERTIA_NEGLIGIBLE,
+    LARGE_PERTURBATION,
+    SIGN_CYCLES,
+    SIGN_PERTURBATION,
+    SQRT_LAW_SPREAD,
+    STEPPER_RTOL,
+    TYPE_CYCLES,
+    TYPE_DISTANCE,
+)
+from ..assemble.dataset import REFERENCES, versions
+from ..errors import InputError
+from ..integrate.driven import DrivenParams, DrivenSettings, Regime, simulate_point
+from ..plan.plan import line_uses_inertia
+from ..protocols.stop.model_choice import MODEL_FLAG
+from ..run.compile_notice import announce_if_cold, driven_families
+from ..run.progress import Progress
+from ..scene.params import FrictionParams
+from ..scene.plausibility import warn_implausible
+from ..scene.scene import MODEL_TOL_RANGE, MODELS, STATE_LAWS
+
+__all__ = ["locate_hopf", "with_simulated_line"]
+
+MAX_STEPS = 20_000_000
+BIFURCATIONS = ("none", "supercritical", "subcritical", "degenerate", "undetermined")
+
+
+def _growth(k: float, a: float, b: float, g: float, law: str = "aging") -> float:
+    """Measured growth rate of a small perturbation at reduced stiffness k = chi/A (a = mu1/A, b = m2/A,
+    g = gamma/A)."""
+    return simulate_point(DrivenParams(k, a, b, g), DrivenSettings(SIGN_PERTURBATION, STEPPER_RTOL, SIGN_CYCLES,
+                                                                   MAX_STEPS), law).growth_rate
+
+
+def _run(k: float, a: float, b: float, g: float, perturbation: float, law: str = "aging"):
+    """(regime, amplitude) of a point run to a decision."""
+    r = simulate_point(DrivenParams(k, a, b, g), DrivenSettings(perturbation, STEPPER_RTOL, TYPE_CYCLES, MAX_STEPS),
+                       law)
+    return int(r.regime), r.amplitude
+
+
+def _locate(a: float, b: float, g: float, rtol: float, law: str = "aging") -> tuple[float, int]:
+    """Reduced critical stiffness k_c = chi_c/A where the measured growth rate changes sign, bracketed around
+    the linear value a (1 + g); (value, evaluations).
+
+    Inertia moves the line by g = gamma/A relative; below INERTIA_NEGLIGIBLE x rtol that shift is far inside the
+    bracket, and the explicit driven stepper, whose steps follow the inertial time gamma/A, would take ~1/g steps
+    per cycle for nothing: the line is then located with g = 0 (the bifurcation type still uses the true g)."""
+    if g < INERTIA_NEGLIGIBLE * rtol:
+        g = 0.0
+    lo, hi = a * (1.0 + g) * (1.0 - BRACKET), a * (1.0 + g) * (1.0 + BRACKET)
+    evaluations = 2
+    g_lo, g_hi = _growth(lo, a, b, g, law), _growth(hi, a, b, g, law)
+    while not (g_lo > 0.0 > g_hi) and evaluations < 40:
+        lo, hi = lo * (1.0 - BRACKET), hi * (1.0 + BRACKET)
+        g_lo, g_hi = _growth(lo, a, b, g, law), _growth(hi, a, b, g, law)
+        evaluations += 2
+    if not (g_lo > 0.0 > g_hi):
+        return math.nan, evaluations
+    while (hi - lo) > rtol * 0.5 * (hi + lo):
+        mid = 0.5 * (lo + hi)
+        rate = _growth(mid, a, b, g, law)
+        evaluations += 1
+        if rate > 0.0:
+            lo = mid
+        elif rate < 0.0:
+            hi = mid
+        else:
+            return mid, evaluations
+    return 0.5 * (lo + hi), evaluations
+
+
+def _bifurcation(k_c: float, a: float, b: float, g: float, rtol: float, law: str = "aging") -> tuple[str, float]:
+    """Type of the bifurcation at k_c (module docstring) and the limit-cycle amplitude at distance TYPE_DISTANCE
+    below the line (NaN if none was decided there)."""
+    distances = TYPE_DISTANCE * np.array([1.0, 2.0, 4.0])
+    below = [_run(k_c * (1.0 - d), a, b, g, 1e-4, law) for d in distances]
+    cycles = [(d, amp) for d, (regime, amp) in zip(distances, below) if regime == Regime.STICK_SLIP]
+    amp_near = below[0][1] if below[0][0] == Regime.STICK_SLIP else math.nan
+    if len(cycles) >= 2:
+        (d1, a1), (d2, a2) = cycles[0], cycles[-1]
+        if abs(a2 / a1 / math.sqrt(d2 / d1) - 1.0) <= SQRT_LAW_SPREAD:
+            return "supercritical", amp_near
+    # a large start: at least the size of the stick-slip cycles found below, which a subcritical (inverted) line
+    # keeps on its stable side too, within a window that can be narrow (two distances above the line, the closer
+    # one still outside the located bracket)
+    large = max([LARGE_PERTURBATION] + [1.2 * amp for _, amp in cycles])
+    first_large = None
+    for d in (TYPE_DISTANCE, max(0.25 * TYPE_DISTANCE, rtol)):  # the bracket reaches rtol/2 above k_c
+        above_large = _run(k_c * (1.0 + d), a, b, g, large, law)[0]
+        first_large = above_large if first_large is None else first_large
+        if above_large == Regime.STICK_SLIP and _run(k_c * (1.0 + d), a, b, g, 1e-4, law)[0] == Regime.STEADY:
+            return "subcritical", amp_near
+    if below[0][0] == Regime.RUNAWAY and first_large == Regime.STEADY:
+        return "degenerate", math.nan
+    return "undetermined", amp_near
+
+
+def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto", rtol: float = 1e-3,
+                bifurcation: bool = True, model_tol: float = 1e-2, state_law: str = "aging",
+                progress: bool | None = False) -> xr.Dataset:
+    """The Hopf line over the velocities ``V`` [m s-1] (Dataset over V).
+
+    Variables: ``K_over_M_c`` [s-2] located by simulation (bisection on the sign of the measured growth rate to a
+    relative width ``rtol``), ``K_over_M_c_linear`` [s-2] (eq. 3), ``chi_c`` [1], ``Omega_c`` [s-1] (eq. 4),
+    ``bifurcation`` (flag: none / supercritical / subcritical / degenerate / undetermined; decided from
+    simulations, module docstring) and ``limit_cycle_amplitude`` [1] just below a supercritical line. NaN and
+    "none" where mu1(V) <= 0: steady sliding is then stable at every stiffness. ``model``: "quasistatic",
+    "inertial" (the full Newton equation with gamma = V^2/(g D0); linear line chi_c = mu1 (1 + gamma/A)) or "auto"
+    (default): per V, inertial where gamma/A > ``model_tol``, the relative shift of the line by inertia (flag
+    variable ``model``). ``state_law``: "aging" (the paper's) or "slip" (quasi-static only; docs/physics.md 7).
+    ``progress``: a bar over the velocities on stderr (None: on an interactive terminal once the run takes more
+    than ~2 s; sweep/run/progress.py).
+    """
+    if model not in MODELS:
+        raise InputError(f"model must be one of {list(MODELS)}, got {model!r}")
+    if not (math.isfinite(model_tol) and MODEL_TOL_RANGE[0] <= model_tol <= MODEL_TOL_RANGE[1]):
+        raise InputError(f"model_tol must be in [{MODEL_TOL_RANGE[0]:g}, {MODEL_TOL_RANGE[1]:g}], got "
+                         f"{float(model_tol)!r}")
+    if not isinstance(params, FrictionParams):
+        raise InputError(f"params must be a sweep.FrictionParams, got {type(params).__name__}")
+    if state_law not in STATE_LAWS or (state_law != "aging" and model != "quasistatic"):
+        raise InputError(f"state_law must be one of {list(STATE_LAWS)} (other than 'aging' with model 'quasistatic' "
+                         f"only), got state_law={state_law!r}, model={model!r}")
+    v = np.asarray(V, dtype=float).reshape(-1)
+    if v.size == 0 or not np.all(np.isfinite(v)) or np.any(v <= 0):
+        raise InputError(f"V must be a non-empty sequence of finite velocities > 0 [m s-1], got {V!r}")
+    if not (math.isfinite(rtol) and 1e-8 <= rtol <= 0.1):
+        raise InputError(f"rtol must be in [1e-8, 0.1] (relative width of the located bracket), got {rtol!r}")
+    warn_implausible(V=v)
+    announce_if_cold(families=driven_families(model))
+    p = params
+    mu1 = np.asarray(physics.mu1(v, p.m1, p.m2, p.V0), dtype=float)
+    inertial = line_uses_inertia(np.asarray(physics.inertia_number(v, p.D0, p.g)) / p.A, model, model_tol)
+    gamma = np.asarray(physics.inertia_number(v, p.D0, p.g), dtype=float) * inertial
+    chi_c, kinds, amps, evals = (np.full(v.size, np.nan), np.zeros(v.size, np.int8), np.full(v.size, np.nan),
+                                 np.zeros(v.size, np.int64))
+    for i, m in enumerate(Progress(v.size, progress, label="hopf", unit="velocities").iterate(mu1)):
+        if m <= 0.0:
+            continue
+        k_c, evals[i] = _locate(m / p.A, p.m2 / p.A, gamma[i] / p.A, rtol, state_law)
+        chi_c[i] = k_c * p.A
+        if bifurcation and math.isfinite(k_c):
+            kind, amps[i] = _bifurcation(k_c, m / p.A, p.m2 / p.A, gamma[i] / p.A, rtol, state_law)
+            kinds[i] = BIFURCATIONS.index(kind)
+        elif math.isfinite(k_c):
+            kinds[i] = BIFURCATIONS.index("undetermined")
+    to_km = p.g / p.D0
+    var = lambda data, units, name, **attrs: xr.Variable("V", data, {"units": units, "long_name": name, **attrs})  # noqa: E731
+    ds = xr.Dataset(
+        {
+            "K_over_M_c": var(chi_c * to_km, "s-2", "K/M on the Hopf line, located by simulation"),
+            "K_over_M_c_linear": var(np.asarray(physics.chi_c_inertial(mu1, p.A, gamma)) * to_km, "s-2",
+                                     "K/M on the Hopf line, linear theory (eq. 3; times 1 + gamma/A with inertia)"),
+            "model": var(inertial.astype(np.int8), "1", "model used at this V", **MODEL_FLAG),
+            "gamma": var(np.asarray(physics.inertia_number(v, p.D0, p.g)), "1", "inertia number V^2/(g D0)"),
+            "chi_c": var(chi_c, "1", "reduced critical stiffness located by simulation"),
+            "Omega_c": var(np.asarray(physics.Omega_c(v, mu1, p.A, p.D0)), "s-1",
+                           "critical pulsation (V/D0) sqrt(mu1/A) (eq. 4)"),
+            "bifurcation": var(kinds, "1", "type of the Hopf bifurcation, decided from simulations",
+                               flag_values=np.arange(len(BIFURCATIONS), dtype=np.int8),
+                               flag_meanings=" ".join(BIFURCATIONS)),
+            "limit_cycle_amplitude": var(amps, "1", f"stick-slip amplitude (tau - xi) at {TYPE_DISTANCE:g} below "
+                                         "the line (NaN: none decided there)"),
+            "simulations": var(evals, "1", "driven simulations spent on locating the line"),
+            "mu1": var(mu1, "1", "velocity-weakening slope mu1(V)"),
+        },
+        coords={"V": var(v, "m s-1", "driving velocity")},
+        attrs={"Conventions": "CF-1.11", "title": "Hopf line of the Baumberger-Gauthier spring-block model",
+               "source": versions(), "references": REFERENCES, "rtol": rtol,
+               "state_law": state_law,
+               "model": model + (f" (model_tol {model_tol:g}: inertial where gamma/A > model_tol)"
+                                 if model == "auto" else ""),
+               "method": (f"bisection on the sign of the growth rate measured over {SIGN_CYCLES} cycles of a "
+                          f"{SIGN_PERTURBATION:g} perturbation (dp5, local rtol {STEPPER_RTOL:g}); type from runs "
+                          f"at {TYPE_DISTANCE:g} and {4 * TYPE_DISTANCE:g} below and above the line"),
+               "params": str(p.as_dict())},
+    )
+    return ds
+
+
+def with_simulated_line(ds: xr.Dataset, params: FrictionParams, model: str = "auto",
+                        model_tol: float = 1e-2, state_law: str = "aging") -> xr.Dataset:
+    """``ds`` (a sweep over V) with the coordinate ``K_over_M_c_simulated`` [s-2]: the Hopf line of ``model``
+    located by simulation at each V (:func:`locate_hopf` without the type; ~2 ms per velocity), next to the
+    analytic chi_c."""
+    line = locate_hopf(params, ds["V"].values, model=model, bifurcation=False, model_tol=model_tol,
+                       state_law=state_law)
+    attrs = {**line["K_over_M_c"].attrs, "comment": line.attrs["method"]}
+    return ds.assign_coords(K_over_M_c_simulated=("V", line["K_over_M_c"].values, attrs))

@@ -1,0 +1,558 @@
+"""Plan: what to model and how to step, decided once per scene ("model only what the scene requires").
+
+For the stop scene the model is the quasi-static one (the paper's), the state is xi alone (plus the
+quadrature tau only when a time-resolved observable is asked for), the stepper is fixed-step RK4 in the
+scaled log time sigma of :mod:`sweep.integrate.models.stop`, and the step count is chosen per point:
+
+* the time map is scaled to the point: s_c = 1/(1 + (chi + |mu1|)/A) (stiff start) and the late step follows
+  the local rate (mu1 + 2 m2 u)/A (:mod:`sweep.integrate.models.stop`), so that the RK4 error constant is nearly the
+  same at every point;
+* relaxed-slip sweeps (lanes) choose each point's step at run time, down a step ladder (sweep/integrate/ladder.py)
+  from the pilot step h0 = min(H_PILOT, PILOT_FACTOR (TARGET rtol / (SHARP_GAIN C))^(1/4)) given here;
+* otherwise (per-point path) the step h in sigma meets ``rtol`` at each point:
+  h = min(H_MAX, (rtol / (SAFETY * C))^(1/4)); in both rules C is the largest error constant err/h^4 measured
+  on a calibration set spanning chi/A 1e-2..1e3, mu1/A -3..3,
+  m2/A 0..3 (benchmarks/calibrate_rk4.py): C_STABLE where steady sliding is stable (chi > mu1; measured
+  max 4.4e-4 as h -> 0, 7.4e-4 at h = 0.7) and C_UNSTABLE on the stick-slip side, where the stop starts on an
+  unstable fixed point and the error constant is ~3x larger (measured max 1.7e-3); C is multiplied by
+  TIME_RESOLVED_FACTOR when values inside the transient are asked for; tests/test_accuracy.py checks the
+  rule against an independent scipy reference;
+* each point stops when its closed-form tail is accurate to 0.1 * (rtol xi + atol), so its number of steps
+  (sigma_end / h) follows from its own dynamics: a few tens on most of the grid, thousands in the costly
+  corner (small chi/A with mu1 < 0 and small m2, where the slider creeps along a slow manifold).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import zlib
+from dataclasses import dataclass, replace
+from typing import NamedTuple
+
+import numpy as np
+
+from .. import physics
+from ..accuracy import (
+    AUTO_METHOD,
+    C_STABLE,
+    C_STIFF,
+    C_UNSTABLE,
+    COARSE_GAIN,
+    CONSERVATIVE_GAIN,
+    CTRL_TOL_FACTOR,
+    DECAYED,
+    ERROR_GAIN,
+    GROWTH_RTOL,
+    H_MAX,
+    H_PILOT,
+    LANE_H0_FACTOR,
+    LANE_H0_MAX,
+    MAX_RATIO,
+    MAX_RUNS,
+    MIN_RATIO,
+    NEUTRAL_SPREAD,
+    ORDER_WINDOW,
+    PILOT_FACTOR,
+    RATE_FLOOR,
+    RUNAWAY_XI_DOT,
+    SHARP_GAIN,
+    STATIONARY_TOL,
+    STEP_SAFETY,
+    STIFF_H_PILOT,
+    STIFF_K_MAX,
+    STIFF_PILOT_FACTOR,
+    STIFF_RATE_FLOOR,
+    STIFF_WORK_MIN,
+    TAIL_SAFETY,
+    TAIL_SHARE,
+    TARGET,
+    TIME_RESOLVED_FACTOR,
+    TOL_RATIO,
+    driven_stepper_rtol,
+    lane_control_tolerance,
+)
+from ..integrate.solvers import METHODS
+from ..scene.scene import Scene
+
+__all__ = ["CHUNK_POINTS", "Plan", "PointParams", "chunk_size_for", "make_plan", "choose_method", "line_uses_inertia",
+           "samples_in_lanes", "stop_plan_for_points"]
+
+LANES_METHOD = "dop853"
+"""The embedded pair of the adaptive lanes (model "auto", relaxed slip): fewer attempts than dp5 at every rtol of
+1e-4..1e-10 and as cheap at 1e-3 for the same achieved error (measured on the default scene)."""
+
+CHUNK_POINTS = {"stop": 4096, "driven": 1024}
+"""Points per chunk by protocol (one compiled batch call, one progress update, one journal entry): a driven point
+costs ~10-100x a stop point. The smallest chunk of a large grid: :func:`chunk_size_for`."""
+LARGE_CHUNK_POINTS = 16384
+"""The largest default chunk of a stop scene that samples nothing in time (:func:`chunk_size_for`)."""
+ONE_CHUNK_POINTS = 32768
+"""A stop grid that samples nothing in time, of model "quasistatic" or "auto", is one chunk up to this many points
+(:func:`chunk_size_for`): a quasi-static point costs ~1-10 us on one core (the default grid at rtol 1e-3, its costly
+corner at rtol 1e-10), and the chunk's fixed cost is paid once: the tolerance ladder's numpy between its kernel
+calls, the choice of model, the kernel calls' hand-over to the threads and each call's last runs, on which the other
+threads wait. Measured (default scene, 20,000 points, rtol 1e-6, ``run_sweep``, best of 20 twice; 5 chunks of 4096
+points -> one): model "quasistatic" 27.9 -> 26.6 ms on 1 thread, 16.8 -> 15.8 ms on 2; model "auto" 31.8 -> 30.9 ms,
+19.2 -> 18.0 ms. The points that "auto" solves with inertia (~1 ms each) are solved in batches with a bar of their
+own (model_choice.RELAX_BATCH, runner.in_process), which the run's bar, counting chunks, would not show until the
+end. Not with model "inertial", whose chunks are its progress."""
+CHUNKS_AT_LEAST = 60
+"""A grid keeps at least this many chunks when its chunks grow (:func:`chunk_size_for`): ~8 a thread on 8 threads to
+share out side by side (sweep/run/concurrent_chunks.py), the last chunks' idle share small."""
+
+
+def chunk_size_for(scene: Scene) -> int:
+    """The default chunk size of ``scene``: CHUNK_POINTS of its protocol, doubled up to LARGE_CHUNK_POINTS while the
+    grid still has CHUNKS_AT_LEAST chunks, for a stop scene that samples nothing in time (a chunk's trajectories
+    are held whole until it is journaled). A chunk has a fixed cost besides its points (~1 ms of numpy between its
+    kernel calls and in the choice of model, ~2.4 ms writing it to the journal: numpy's .npz and a checksum of
+    ~150 kB): at 4096 points it was ~25 % of the compute of a 1e6-point run (2 cores), at 16384 (61 chunks) ~7 %:
+    `sweep run` of 1e6 points 2.6-3.2 s against 3.0-3.9 s (benchmarks/end_to_end.py, docs/design.md). The layout
+    depends on the grid only, never on the machine: a journal resumes anywhere."""
+    size = CHUNK_POINTS[scene.protocol]
+    if scene.protocol != "stop" or {"trajectory", "slip_at"} & set(scene.observables):
+        return size
+    if scene.model != "inertial" and scene.n_points <= ONE_CHUNK_POINTS:
+        return max(1, scene.n_points)
+    while 2 * size <= LARGE_CHUNK_POINTS and scene.n_points >= CHUNKS_AT_LEAST * 2 * size:
+        size *= 2
+    return size
+
+ROUNDOFF = {np.dtype(np.float64): 2.0 * np.finfo(np.float64).eps, np.dtype(np.float32): 2.0 * np.finfo(np.float32).eps}
+"""Rounding error per step, relative (added to the estimate as steps * ROUNDOFF * |xi_inf|)."""
+
+
+def _step_rule(method: str, lanes: bool) -> str:
+    tab = METHODS[method]
+    time_map = (f"time map ds/dsigma = 1/(1/(s + s_c) + r), s = int dtau/psi, u = ln psi = s - xi, "
+                f"r = sqrt(((mu1 + 2 m2 u)/A)^2 + |m2|/(4 A)) + {RATE_FLOOR}, s_c = 1/(1 + (chi + |mu1|)/A)")
+    common = f"{time_map}; stop when the closed-form tail is accurate to {TAIL_SAFETY}*(rtol*xi + atol)"
+    if tab.adaptive and lanes:
+        return (f"{method} in lanes: adaptive steps in sigma per lane, PI controller on the embedded "
+                f"order-{tab.order_hat} estimate, local tolerance tol = rtol min(20, sqrt(1e-3/rtol)), first trial "
+                f"step min({LANE_H0_MAX:g}, {LANE_H0_FACTOR:g} tol^(1/{tab.error_order + 1})), each step also taken "
+                f"as two half steps for the estimate; {TOL_RATIO:g}x tighter where the estimate exceeds the "
+                f"tolerance, at most {MAX_RUNS} runs (sweep/integrate/tolerance_ladder.py); {time_map}; stop when the "
+                f"closed-form tail's bound is below {TAIL_SHARE:g} |fine - run| or {TAIL_SAFETY}*(atol + 2^-52 xi)")
+    if tab.adaptive:
+        return (f"{method}: adaptive steps in sigma, PI controller on the embedded order-{tab.order_hat} estimate, "
+                f"local tolerance {CTRL_TOL_FACTOR[method]:g} rtol; " + common)
+    if lanes:
+        rule = f"({TARGET:g} rtol/({SHARP_GAIN:g} C))**0.25"
+        h0 = f"min({H_PILOT:g}, {PILOT_FACTOR:g} {rule})"
+        if tab.implicit:
+            h0 = f"max({h0}, min({STIFF_H_PILOT:g}, {STIFF_PILOT_FACTOR:g} {rule}))"
+        step = (f"step ladder per point (sweep/integrate/ladder.py): pilot pair 2 h0, h0, h0 = {h0}, then rungs "
+                f"{MIN_RATIO:g}..{MAX_RATIO:g}x finer aimed at {TARGET:g} x tolerance from the "
+                f"point's measured error, at most {MAX_RUNS} runs")
+    else:
+        step = (f"fixed step h = min({H_MAX / 2}, (rtol/({STEP_SAFETY * ERROR_GAIN:g} C))**0.25), coarse step 2h, "
+                f"C times {TIME_RESOLVED_FACTOR:g} when trajectory, slip_at, t50 or t90 are asked for")
+    if tab.implicit:
+        return (f"{method}: Rosenbrock steps H = h w in contact-age time s, w = 1/(1/(s + s_c) + (g + sqrt(g^2 + "
+                f"|m2|/(4A)))/2 + {STIFF_RATE_FLOOR}), g = (mu1 + 2 m2 u)/A; {step}, C = {C_STIFF}; " + common)
+    return (f"{method}: steps h in sigma; {step}, C = {C_STABLE} where chi > mu1 (stable sliding) else "
+            f"{C_UNSTABLE}; " + common)
+
+
+def time_scale(k, a):
+    """Per-point scale s_c of the early log time, from k = chi/A and a = mu1/A (see module doc)."""
+    return 1.0 / (1.0 + k + np.abs(a))
+
+
+def stiff_points(k, a, b) -> np.ndarray:
+    """Points where the Rosenbrock lanes are cheaper than RK4 (:data:`STIFF_K_MAX`), from k = chi/A, a = mu1/A,
+    b = m2/A."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        work = np.where((a < 0) & (b > 0), np.abs(a) ** 3 / (4.0 * b * k), 0.0)
+    return (k <= STIFF_K_MAX) & (work >= STIFF_WORK_MIN)
+
+
+def pilot_step_for(rtol: float, error_constant, factor: float = PILOT_FACTOR, cap: float = H_PILOT):
+    """Fine step h0 of the pilot pair (2 h0, h0) of the lanes' step ladder (sweep/integrate/ladder.py): PILOT_FACTOR
+    times the step whose checked estimate (SHARP_GAIN x the error) meets TARGET x rtol at the error constant
+    ``error_constant`` (the largest measured), so that the point's own next rung is 2..8x finer."""
+    sharp = (TARGET * rtol / (SHARP_GAIN * np.asarray(error_constant))) ** 0.25
+    return np.minimum(cap, factor * sharp)
+
+
+def stiff_pilot_step_for(rtol: float) -> float:
+    """Pilot step h0 of the ros4 lanes: the general rule at the bound C_STIFF, or, where that is finer than
+    STIFF_H_PILOT, the rule with STIFF_PILOT_FACTOR capped at STIFF_H_PILOT (the coarser of the two). At loose rtol
+    the general rule's coarse pilot meets the tolerance at once (rtol 1e-3: 96 steps in all on the costly corner,
+    against 164 from h0 = 0.6)."""
+    return float(max(pilot_step_for(rtol, C_STIFF), pilot_step_for(rtol, C_STIFF, STIFF_PILOT_FACTOR, STIFF_H_PILOT)))
+
+
+def rk4_step_for(rtol: float, stable_sliding, time_resolved: bool = False):
+    """Fine step in sigma whose error estimate meets ``rtol`` at each point (:func:`_step_rule`), on xi_inf
+    alone or, if ``time_resolved``, also on the trajectory, slip_at, t50 and t90."""
+    error_constant = np.where(stable_sliding, C_STABLE, C_UNSTABLE) * (TIME_RESOLVED_FACTOR if time_resolved else 1.0)
+    return np.minimum(H_MAX / 2, (rtol / (STEP_SAFETY * ERROR_GAIN * error_constant)) ** 0.25)
+
+
+def samples_in_lanes(scene: Scene) -> bool:
+    """Whether the time-resolved points of ``scene`` go through the sampled adaptive lanes
+    (sweep/integrate/lanes_sampled.py: LANES_METHOD with its fine twin, samples from its dense output): method "auto"
+    in float64 with no step given, aging law, samples only (t50/t90 and explicitly named methods keep the per-point
+    path, which also takes the points the lanes fail on and those without a finite relaxed slip)."""
+    return (scene.time_resolved and scene.method == "auto" and scene.step is None and scene.precision == "float64"
+            and scene.state_law == "aging" and not {"t50", "t90"} & set(scene.observables))
+
+
+def choose_method(scene: Scene) -> tuple[str, str]:
+    """(method, why): the scene's own choice, or the cheapest measured method for its rtol."""
+    if scene.method != "auto":
+        return scene.method, "chosen by the scene"
+    if scene.step is not None or scene.precision == "float32":
+        return "rk4", "auto: fixed step asked for (step or float32)"
+    if not scene.time_resolved:
+        return LANES_METHOD, ("auto: relaxed slip only, an embedded pair in adaptive lanes "
+                              "(benchmarks/peers.py: 2-10x fewer evaluations than the rk4 step ladder)")
+    for method, rtol_min in AUTO_METHOD:
+        if scene.rtol >= rtol_min:
+            return method, f"auto: cheapest measured method of the time-resolved path for rtol >= {rtol_min:g}"
+    raise AssertionError("AUTO_METHOD covers every rtol")
+
+
+PER_POINT = ("point_method", "step", "chi", "mu1", "k", "a", "b", "s_c", "finite", "G", "inertial")
+"""The per-point arrays of a Plan (flat over its points)."""
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """The resolved plan of a scene, for every protocol; per-point arrays are flat in C order over the scene's grid
+    (K_over_M, V and its extra axes, Scene.dims).
+
+    ``model`` is the scene's model policy and ``inertial`` its per-point part known before any run (driven scene: per
+    V, inertial where gamma/A > model_tol with "auto"; stop scene: "inertial" forced); with "auto" a stop point's
+    model is decided from its measured error estimate (sweep/protocols/stop/model_choice.py), within the policy ``model_tol``.
+    """
+
+    protocol: str
+    model: str
+    model_tol: float
+    method: str
+    method_reason: str
+    point_methods: tuple[str, ...]
+    point_method: np.ndarray
+    adaptive: bool
+    lanes: bool
+    dtype: np.dtype
+    step: np.ndarray
+    step_source: str
+    ctrl_tol: float
+    rule: str
+    max_steps: int
+    chi: np.ndarray
+    mu1: np.ndarray
+    k: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    s_c: np.ndarray
+    finite: np.ndarray
+    tau_samples: np.ndarray
+    needs_tau: bool
+    G: np.ndarray
+    """gamma/A per point (the inertia number over A)."""
+    inertial: np.ndarray
+    """Per point: the inertial model decided by the policy before any run."""
+    chunk_size: int
+    state_law: str = "aging"
+    sampled_lanes: bool = False
+    """Time-resolved points in the sampled adaptive lanes (:func:`samples_in_lanes`); ``method`` is then the per-point
+    path's, for the points the lanes leave to it."""
+    notes: tuple[tuple[str, str], ...] = ()
+    """The description of a protocol other than the stop scene's (:meth:`describe`)."""
+    index: np.ndarray | None = None
+    """Flat indices in the scene's grid (C order over Scene.dims: i_K n_V + i_V in 2-D) of the points of a plan
+    restricted by :meth:`take`; None:
+    every point of the scene, in order."""
+
+    @property
+    def n_points(self) -> int:
+        return self.k.size
+
+    def take(self, points: np.ndarray) -> Plan:
+        """The plan of ``points`` only (indices into this plan): what one chunk needs, ~60 bytes a point, so that a
+        chunk shipped to a dask worker carries its share of the plan instead of every worker holding all of it."""
+        points = np.asarray(points)
+        return replace(self, **{name: getattr(self, name)[points] for name in PER_POINT},
+                       index=self.flat_index(points))
+
+    def flat_index(self, points: np.ndarray) -> np.ndarray:
+        """Flat indices in the scene's grid of this plan's ``points`` (for lookups along the scene's axes)."""
+        points = np.asarray(points)
+        return points if self.index is None else self.index[points]
+
+    @property
+    def tableau(self):
+        return METHODS[self.method]
+
+    @property
+    def order(self) -> int:
+        return self.tableau.order
+
+    @property
+    def roundoff(self) -> float:
+        return float(ROUNDOFF[np.dtype(self.dtype)])
+
+    def describe(self) -> dict[str, str]:
+        """Human-readable summary, also stored in the Dataset attrs."""
+        if self.notes:
+            return dict(self.notes)
+        step = (f"{self.step.min():.6g}..{self.step.max():.6g}" if self.step.min() < self.step.max()
+                else f"{self.step[0]:.6g}")
+        text = {
+            "model": _model_policy(self.protocol, self.model, self.model_tol),
+            "state_law": self.state_law,
+            "state": ("xi (u = s - xi)" + (" + tau quadrature" if self.needs_tau else "") if self.state_law == "aging"
+                      else "(xi, u) in the phase plane, then xi in t = 1/u (docs/physics.md 7.3)"),
+            "method": f"{self.method} ({self.method_reason})" + "".join(
+                f"; {m} at {self.points_of(m).size} stiff points (chi/A <= {STIFF_K_MAX:g}, mu1 < 0, m2 > 0, "
+                f"|mu1/A|^3/(4 m2 chi/A^2) >= {STIFF_WORK_MIN:g})" for m in self.point_methods[1:]),
+            "stepper": (("adaptive" if self.adaptive else "fixed-step")
+                        + (f", {self.dtype.name} lanes" if self.lanes else ", one point per thread")),
+            **({"sampled_lanes": f"{LANES_METHOD} in adaptive lanes with its fine twin, each sample read off the dense "
+                                 "output of the step that holds it (sweep/integrate/lanes_sampled.py), 2 |fine - run| "
+                                 f"+ roundoff a sample; {self.method} one point per thread only where the lanes fail "
+                                 "or no finite relaxed slip exists"} if self.sampled_lanes else {}),
+            "step": (f"first trial {step} in sigma, local tolerance {self.ctrl_tol:.3g}" if self.adaptive
+                     else f"{step} in sigma ({self.step_source})"),
+            "error_estimate": ((f"each run with a fine twin on its mesh halved, in the same lanes "
+                                f"(sweep/integrate/tolerance_ladder.py): the run returned, {COARSE_GAIN:g} "
+                                "|fine - run| + 2 x both tail bounds + roundoff"
+                                if self.lanes and self.adaptive else
+                                "step ladder per point (sweep/integrate/ladder.py): finest run returned, "
+                                f"{SHARP_GAIN:g} x Richardson at the order q observed on the last three "
+                                f"runs where |q - p| <= {ORDER_WINDOW:g}, else {CONSERVATIVE_GAIN:g} "
+                                "max(|x_b - x_a|, |x_c - x_b|); + 2 x tail bound + roundoff" if self.lanes else
+                                "Richardson pair per point (coarse mesh, same mesh halved): coarse run returned, "
+                                "2 |coarse - fine| + bound on cancelled contributions (integrate/stop_point.py)")
+                               + ": <name>_error variables"),
+            "step_rule": self.rule,
+            "max_steps": str(self.max_steps),
+            "horizon": "per point: until the closed-form tail is accurate (and all requested times are passed)",
+            "points": str(self.n_points),
+            "points_without_finite_limit": str(int(np.count_nonzero(~self.finite))),
+        }
+        if self.state_law != "aging":  # the general path (its rule says the rest)
+            text.update(step=f"adaptive, local tolerance {self.ctrl_tol:.3g}",
+                        error_estimate="from the solutions at three local tolerances (step_rule): <name>_error "
+                                       "variables",
+                        horizon="exact: xi at t = 1/u = 0")
+        return text
+
+    def points_of(self, method: str) -> np.ndarray:
+        """Flat indices of the points integrated with ``method``."""
+        return np.flatnonzero(self.point_method == self.point_methods.index(method))
+
+    def text(self) -> str:
+        return "\n".join(f"{k:>28}: {v}" for k, v in self.describe().items())
+
+    def hash(self) -> str:
+        """Digest of everything that determines the numbers (compared on resume): the plan's choices, the per-point
+        arrays and the values of the calibrated constants (sweep/accuracy.py), not the prose of :meth:`describe`.
+        Computed once per plan (its arrays are not changed after make_plan): a run with an output needs it for the
+        journal and for the file. The per-point arrays enter by their CRC-32 (zlib, ~4 GB/s against SHA-256's
+        ~1.7 GB/s: 0.25 instead of 0.6 ms at 20,000 points, 3 % of a default-scene run at rtol 1e-3; it guards
+        against accidental change, not against forgery)."""
+        cached = self.__dict__.get("_hash")
+        if cached is not None:
+            return cached
+        from .. import accuracy
+
+        h = hashlib.sha256()
+        choices = (self.protocol, self.model, self.model_tol, self.method, self.point_methods, self.dtype.name,
+                   self.lanes, self.adaptive, self.step_source, self.ctrl_tol, self.max_steps, self.state_law,
+                   self.needs_tau, self.chunk_size, self.sampled_lanes)
+        constants = sorted((k, v) for k, v in vars(accuracy).items() if k.isupper())
+        h.update(repr((choices, constants)).encode())
+        for arr in (self.k, self.a, self.b, self.s_c, self.step, self.finite, self.tau_samples, self.point_method,
+                    self.G, self.inertial):
+            arr = np.ascontiguousarray(arr)  # the buffer itself: the same bytes as tobytes(), without a copy
+            h.update(f"{arr.dtype.str}{arr.shape}{zlib.crc32(arr):08x}".encode())
+        self.__dict__["_hash"] = h.hexdigest()[:16]  # a frozen dataclass: its __setattr__ refuses
+        return self.__dict__["_hash"]
+
+
+def line_uses_inertia(gamma_over_A: np.ndarray, model: str, model_tol: float) -> np.ndarray:
+    """Per V: whether the Hopf line / driven points use the inertial model. Inertia shifts the line
+    chi_c = mu1 (1 + gamma/A) by exactly gamma/A relative (linear theory), so with "auto" the inertial model is used
+    where gamma/A > model_tol."""
+    g = np.asarray(gamma_over_A, dtype=float)
+    if model == "auto":
+        return g > model_tol
+    return np.full(g.shape, model == "inertial")
+
+
+def _model_policy(protocol: str, model: str, model_tol: float) -> str:
+    """What the plan says of the model (the same words as the Dataset's plan_model)."""
+    if model != "auto":
+        return model
+    if protocol == "driven":
+        return (f"auto (model_tol {model_tol:g}): inertial where gamma/A > model_tol and where the quasi-static run "
+                f"broke down (regime runaway), quasi-static elsewhere (variable model)")
+    return (f"auto (model_tol {model_tol:g}): per point, inertial where the estimated error of the quasi-static model "
+            f"is larger (variable model)")
+
+
+class PointParams(NamedTuple):
+    """Per-point physical inputs of a stop or driven plan, flat arrays of one length (reduced where marked)."""
+
+    chi: np.ndarray
+    """Reduced stiffness chi = K D0/(M g) [1]."""
+    mu1: np.ndarray
+    """mu1(V) = m1 - 2 m2 ln(V/V0) [1]."""
+    A: np.ndarray
+    """Direct-effect coefficient [1]."""
+    m2: np.ndarray
+    """Curvature of mu_d [1]."""
+    G: np.ndarray
+    """gamma/A = V^2/(g D0 A) [1]."""
+
+    @property
+    def reduced(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(k, a, b) = (chi, mu1, m2)/A (docs/physics.md 2)."""
+        return self.chi / self.A, self.mu1 / self.A, self.m2 / self.A
+
+
+def _axes(scene: Scene) -> PointParams:
+    """The per-point inputs, flat in C order over the scene's grid (K_over_M, V and its extra axes: each point
+    with its own A, m1, m2, D0 where the scene sweeps them). Each formula is evaluated per point, so a point's
+    inputs are the same numbers whatever the other axes."""
+    at = {name: scene.broadcast(name) for name in ("K_over_M", "V", "A", "m1", "m2", "D0", "V0", "g")}
+    flat = lambda x: np.broadcast_to(x, scene.shape).ravel().copy()  # noqa: E731
+    chi = flat(physics.reduced_stiffness(at["K_over_M"], at["D0"], at["g"]))
+    mu1 = flat(physics.mu1(at["V"], at["m1"], at["m2"], at["V0"]))
+    G = flat(physics.inertia_number(at["V"], at["D0"], at["g"]) / at["A"])
+    return PointParams(chi, mu1, flat(at["A"]).astype(float), flat(at["m2"]).astype(float), G)
+
+
+def _common(scene: Scene, chi, mu1, k, a, b, G, finite, inertial) -> dict:
+    """The fields of a Plan that every protocol fills the same way."""
+    return dict(protocol=scene.protocol, model=scene.model, model_tol=scene.model_tol, max_steps=int(scene.max_steps),
+                chi=chi, mu1=mu1, k=k, a=a, b=b, s_c=time_scale(k, a), finite=finite, G=G, inertial=inertial,
+                chunk_size=chunk_size_for(scene), state_law=scene.state_law)
+
+
+def _driven_plan(scene: Scene) -> Plan:
+    """The plan of a driven scene: one simulation per point (sweep/integrate/driven.py)."""
+    pts = _axes(scene)
+    chi, mu1, G = pts.chi, pts.mu1, pts.G
+    k, a, b = pts.reduced
+    inertial = line_uses_inertia(G, scene.model, scene.model_tol)
+    n = k.size
+    return Plan(method="dp5", method_reason="adaptive, PI control; rodas3 where the inertial mode is stiff",
+                point_methods=("dp5",), point_method=np.zeros(n, np.int8), adaptive=True, lanes=False,
+                dtype=np.dtype(np.float64), step=np.full(n, np.nan), step_source="controller",
+                ctrl_tol=driven_stepper_rtol(scene.rtol), rule="", tau_samples=np.empty(0), needs_tau=False,
+                notes=tuple(_driven_notes(scene).items()),
+                **_common(scene, chi, mu1, k, a, b, G, np.ones(n, bool), inertial))
+
+
+W_TEXT = ", w = ln xi' with inertia"
+
+
+def _driven_notes(scene: Scene) -> dict[str, str]:
+    """What the driven run chose, for the Dataset attrs."""
+    return {
+        "model": _model_policy("driven", scene.model, scene.model_tol),
+        "state_law": scene.state_law,
+        "method": f"dp5 (adaptive, PI control) in tau on (z = tau - xi, u = ln psi"
+                  f"{W_TEXT if scene.model != 'quasistatic' else ''}), local rtol "
+                  f"{driven_stepper_rtol(scene.rtol):g} x max(perturbation, |z|)",
+        "regime_rule": (f"runaway: slip velocity > {RUNAWAY_XI_DOT:g} V; steady: state below {DECAYED:g} x "
+                        f"perturbation or 3 per-cycle growth rates < 0 agreeing to {GROWTH_RTOL:g}; stationary: "
+                        f"|a_k/a_k-1 - 1| <= {STATIONARY_TOL:g} over 3 cycles, neutral within {NEUTRAL_SPREAD:g} "
+                        f"of the first cycle's amplitude, else stick_slip; undecided after {scene.max_cycles} "
+                        f"cycles or {scene.max_steps} steps"),
+        "perturbation": f"z(0) = {scene.perturbation:g}, u(0) = 0",
+    }
+
+
+def finite_relaxed_slip(a: np.ndarray, b: np.ndarray, state_law: str = "aging") -> np.ndarray:
+    """Where the relaxed slip is finite, from a = mu1/A and b = m2/A: aging, iff m2 > 0, or m2 = 0 and mu1 > 0
+    (docs/physics.md 6); slip, iff m2 > 0 (docs/physics.md 7.3)."""
+    if state_law == "aging":
+        return (b > 0) | ((b == 0) & (a > 0))
+    return b > 0
+
+
+def _general_plan(scene: Scene, chi, mu1, k, a, b, G, finite) -> Plan:
+    """The plan of a state law without the aging identity: the general two-state path of sweep/integrate/stop_slip.py
+    (dp5, PI controller, a pair of tolerances per point)."""
+    from ..accuracy import GENERAL_ESTIMATE_GAIN, TIGHTER
+
+    return Plan(method="dp5", method_reason=f"general two-state path of the {scene.state_law} law",
+                point_methods=("dp5",), point_method=np.zeros(k.size, np.int8), adaptive=True, lanes=False,
+                dtype=np.dtype(np.float64), step=np.full(k.size, np.nan), step_source="controller",
+                ctrl_tol=scene.rtol / TIGHTER**2,
+                rule=(f"dp5 (adaptive, PI controller) on du/dxi = (chi xi + mu1 u + m2 u^2)/A from (0, 0), then on "
+                      f"dxi/dt = -1/(b + a t + k xi t^2) in t = 1/u to t = 0; local tolerances rtol/{TIGHTER:g}, "
+                      f"rtol/{TIGHTER**2:g}, rtol/{TIGHTER**3:g}, the middle one returned, {GENERAL_ESTIMATE_GAIN:g} x "
+                      f"the larger difference to its neighbours its error estimate"),
+                tau_samples=scene.tau_samples, needs_tau=False,
+                **_common(scene, chi, mu1, k, a, b, G, finite, np.zeros(k.size, bool)))
+
+
+def make_plan(scene: Scene) -> Plan:
+    """Decide model policy, state, method, float type and per-point step parameters for ``scene`` (any protocol)."""
+    if scene.protocol == "driven":
+        return _driven_plan(scene)
+    return stop_plan_for_points(scene, _axes(scene))
+
+
+def stop_plan_for_points(scene: Scene, points: PointParams) -> Plan:
+    """The stop plan of ``scene``'s settings (rtol, method, observables, model, state law) for the flat per-point
+    inputs ``points`` instead of the scene's (K/M, V) grid: every point may have its own A, m2, chi and mu1 (the
+    forward model of sweep.fit). Only the per-point arrays come from ``points``; ``index`` is left None."""
+    chi, mu1, G = points.chi, points.mu1, points.G
+    k, a, b = points.reduced
+    finite = finite_relaxed_slip(a, b, scene.state_law)
+    if scene.state_law != "aging":
+        return _general_plan(scene, chi, mu1, k, a, b, G, finite)
+    method, reason = choose_method(scene)
+    tab = METHODS[method]
+    # relaxed slip alone runs in lanes: fixed-step methods, and the embedded pair that "auto" picks (an explicitly
+    # named dp5 or dop853 keeps the per-point path and its Richardson pair)
+    lanes = not scene.time_resolved and (not tab.adaptive or scene.method == "auto")
+    ctrl_tol = (lane_control_tolerance(scene.rtol) if lanes and tab.adaptive
+                else scene.rtol * CTRL_TOL_FACTOR.get(method, 1.0))
+    stable = physics.stable_sliding(chi, mu1, points.A)
+    if tab.adaptive:
+        scale = ctrl_tol ** (1.0 / (tab.error_order + 1))  # the step whose local error is ~ctrl_tol
+        h0 = min(LANE_H0_MAX, LANE_H0_FACTOR * scale) if lanes else min(0.5, scale)
+        step, source = np.full(k.size, h0), "controller"
+    elif scene.step is not None:
+        step, source = np.full(k.size, scene.step), "override"
+    elif lanes:
+        step = (stiff_pilot_step_for(scene.rtol) * np.ones(k.size) if tab.implicit
+                else pilot_step_for(scene.rtol, np.where(stable, C_STABLE, C_UNSTABLE)))
+        source = "rule"
+    else:
+        step, source = rk4_step_for(scene.rtol, stable, scene.time_resolved), "rule"
+    point_methods, point_method = (method,), np.zeros(k.size, np.int8)
+    if scene.method == "auto" and lanes and method == "rk4":
+        stiff = stiff_points(k, a, b) & finite
+        if stiff.any():
+            point_methods, point_method = ("rk4", "ros4"), stiff.astype(np.int8)
+            if scene.step is None:
+                step = np.where(stiff, stiff_pilot_step_for(scene.rtol), step)
+    return Plan(
+        method=method,
+        method_reason=reason,
+        point_methods=point_methods,
+        point_method=point_method,
+        adaptive=tab.adaptive,
+        lanes=lanes,
+        dtype=np.dtype(scene.precision),
+        step=step,
+        step_source=source,
+        ctrl_tol=ctrl_tol,
+        rule="; ".join(_step_rule(m, lanes) for m in point_methods),
+        tau_samples=scene.tau_samples,
+        needs_tau=scene.time_resolved,
+        sampled_lanes=samples_in_lanes(scene),
+        **_common(scene, chi, mu1, k, a, b, G, finite, finite & (scene.model == "inertial")),
+    )

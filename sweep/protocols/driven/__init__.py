@@ -1,0 +1,1 @@
+"""The driven protocol: the drive keeps moving at V; steady sliding or stick-slip (docs/physics.md 3b)."""

@@ -1,0 +1,46 @@
+"""The driven protocol over a (K/M, V) grid: one simulation per point (sweep/integrate/driven.py), quasi-static or
+with inertia (the plan's per-point model policy)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from ...accuracy import driven_stepper_rtol
+from ...integrate.batch import driven_batch
+from ...integrate.driven import DrivenOutputs, DrivenSettings, Regime
+from ...plan.plan import Plan
+from ...scene.scene import Scene
+
+__all__ = ["driven_chunk"]
+
+
+def driven_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.ndarray]]:
+    """compute(points) -> per-point arrays of a driven ``scene`` (points: indices into ``plan``, a chunk's share or
+    the whole plan): one simulation per point with the plan's model, and with model="auto" a second one with inertia
+    where the quasi-static run broke down (regime runaway)."""
+    settings = DrivenSettings(scene.perturbation, driven_stepper_rtol(scene.rtol), scene.max_cycles, scene.max_steps)
+
+    def simulate(points: np.ndarray, inertial: np.ndarray) -> dict[str, np.ndarray]:
+        out = DrivenOutputs.empty(points.size)
+        k, a, b, g = plan.k[points], plan.a[points], plan.b[points], plan.G[points] * inertial
+        for with_inertia in (False, True):  # each kernel variant compiled only where a point needs it
+            where = np.flatnonzero((g > 0.0) == with_inertia)
+            if where.size:
+                driven_batch(scene.state_law, with_inertia)(where, k, a, b, g, settings, out)
+        return out._asdict()
+
+    def compute(points: np.ndarray) -> dict[str, np.ndarray]:
+        inertial = plan.inertial[points].copy()
+        out = simulate(points, inertial)
+        if scene.model == "auto":  # the quasi-static model broke down: inertia is needed there
+            again = np.flatnonzero((out["regime"] == Regime.RUNAWAY) & ~inertial & (plan.G[points] > 0.0))
+            if again.size:
+                inertial[again] = True
+                for name, value in simulate(points[again], inertial[again]).items():
+                    out[name][again] = value
+        out["inertial"] = inertial
+        return out
+
+    return compute

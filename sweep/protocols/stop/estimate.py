@@ -1,0 +1,79 @@
+"""The dry run's estimate of a stop sweep's wall time, from timed pilot subsamples."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from ...plan.plan import Plan, make_plan
+from ...run.runner import execute, warm_up
+from ...scene.scene import Scene
+from .engine import RawResult
+from .model_choice import choose_stop_models, warm_up_models
+
+__all__ = ["PLANNED_POINTS", "estimate_seconds", "plan_sample"]
+
+
+PLANNED_POINTS = 250_000
+"""The dry run plans grids of at most this many points whole (~0.2 s); a larger grid through a subsample of its axes
+(:func:`plan_sample`), so that its answer never waits on, or runs out of memory for, the plan of the whole grid."""
+
+
+def plan_sample(scene: Scene, max_points: int = PLANNED_POINTS) -> tuple[Scene, str | None]:
+    """(scene, None) for a grid of at most ``max_points`` points; else the scene on every n-th value of each axis
+    (both ends kept, at most ``max_points`` points), with a line that says so."""
+    if scene.n_points <= max_points:
+        return scene, None
+    n_k, n_v = scene.shape
+    per_axis = max(2, int(math.isqrt(max_points)))
+    k = np.unique(np.linspace(0, n_k - 1, min(n_k, per_axis)).round().astype(int))
+    v = np.unique(np.linspace(0, n_v - 1, min(n_v, max_points // k.size)).round().astype(int))
+    sample = replace(scene, K_over_M=scene.K_over_M[k], V=scene.V[v])
+    return sample, (f"a subsample of {k.size} K/M x {v.size} V spread over the grid (its {scene.n_points:,} points "
+                    f"are too many to plan for a dry run): the counts below are the subsample's")
+
+
+def estimate_seconds(scene: Scene, plan: Plan | None = None, sample: int = 256,
+                     n_points: int | None = None) -> tuple[float, float]:
+    """Estimate the wall time of the whole sweep (with the choice of model and its inertial points) from strided
+    pilot subsamples of ``sample`` and 4 x ``sample`` points.
+
+    Returns (estimated seconds, mean steps per point of the pilot). A call has a fixed cost (~0.4 ms: chunking,
+    the ladder's array work, thread start) besides its cost per point, so the estimate is fixed + marginal x N
+    from the two pilots (one pilot scaled by N / sample overstated the default scene 3x). The kernel is warmed up
+    first and each pilot is timed three times, keeping the fastest, so that a passing hiccup of the machine does
+    not inflate the estimate. Sweeps of at most 4 x ``sample`` points are timed whole. ``n_points``: the points
+    of the grid that ``scene`` samples (:func:`plan_sample`), default its own.
+    """
+    plan = plan or make_plan(scene)
+
+    warm_up(scene, plan)
+    if scene.model != "quasistatic":
+        warm_up_models()
+
+    def run(pilot: np.ndarray) -> RawResult:
+        t0 = time.perf_counter()
+        if scene.model == "inertial":
+            raw = RawResult.empty(pilot.size, 0, 0)
+        else:
+            raw = execute(scene, plan, pilot, progress=False)
+        choose_stop_models(scene, plan, raw, pilot)
+        raw.seconds = time.perf_counter() - t0
+        return raw
+
+    def timed_pilot(n: int) -> tuple[float, RawResult, int]:
+        pilot = np.arange(0, plan.n_points, max(1, plan.n_points // n))
+        runs = [run(pilot) for _ in range(3)]
+        return min(r.seconds for r in runs), runs[0], pilot.size
+
+    t_big, res, n_big = timed_pilot(4 * sample)
+    total = n_points or plan.n_points
+    if n_big >= plan.n_points and total == plan.n_points:
+        return t_big, float(res.steps.mean())
+    t_small, _, n_small = timed_pilot(sample)
+    marginal = max((t_big - t_small) / (n_big - n_small), 0.0) if n_big > n_small else t_big / n_big
+    fixed = max(t_small - marginal * n_small, 0.0)
+    return fixed + marginal * total, float(res.steps.mean())

@@ -1,0 +1,230 @@
+"""Which model each point uses: quasi-static or inertial (Scene.model, Scene.model_tol; docs/physics.md 3a-3b).
+
+The model error (of neglecting inertia) is kept apart from the numerical error (rtol). With model="auto":
+
+* stop scene, per point: the quasi-static model's relative error on xi_inf is estimated by its first-order
+  inertial correction, integrated along the point's own quasi-static solution (sweep/integrate/models/stop_inertial.py; in
+  the RK4 lanes beside the quasi-static state, the per-point RODAS3 module only where a lane run fails): a
+  measurement per point, not a coefficient (the gap per unit gamma/A ranges from ~1e-3 where mu1 < 0 to several
+  where mu1/A is large). Where the expansion is trusted (tau = gamma/A (1 + (chi + |mu1|)/A) <= FIRST_ORDER_TRUST)
+  the true gap is within a factor of the estimate that grows with tau (sweep/accuracy.py); a
+  point keeps the quasi-static result where that factor (:func:`routing_margin`) x estimate <= model_tol.
+  Every other point (estimate above the tolerance, not trusted, or failed) is solved with inertia, and its
+  ``model_error`` is then the gap measured between the two models. With time-resolved observables (which the
+  inertial stop does not compute) such a point keeps its quasi-static values, with status model_error_above_tol
+  where the measured gap exceeds model_tol.
+* Hopf line and driven scene, per V: inertia shifts the line chi_c = mu1 (1 + gamma/A) by exactly gamma/A
+  relative (linear theory), so the inertial model is used where gamma/A > model_tol; a driven point whose
+  quasi-static run breaks down (regime runaway) is run again with inertia.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ...accuracy import (
+    CLOSE_TRUST,
+    ESTIMATE_MARGIN,
+    ESTIMATE_RTOL,
+    ESTIMATE_STEP,
+    FIRST_ORDER_TRUST,
+    TIGHTER,
+    WIDE_MARGIN,
+)
+from ...integrate.batch import relax_points
+from ...integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
+from ...integrate.stop_inertial import RELAX_KEYS
+from ...jitcache import pin_module
+from ...plan.plan import Plan
+from ...run.progress import Progress
+from ...scene.scene import Scene
+from ...status import Status
+from .engine import ORDER_SEED, RawResult, lane_runs
+
+OK = int(Status.OK)
+
+__all__ = ["ModelChoice", "MODEL_FLAG", "choose_stop_models", "routing_margin", "solve_inertial", "warm_up_models"]
+
+ESTIMATE_MAX_STEPS = 20_000
+"""Steps of the lane run that carries the correction (:func:`_estimate`) beyond which a point goes to the per-point
+Rosenbrock module instead: explicit steps are limited by stability where the quasi-static stop is stiff (the default
+scene's 209 ros4 points: 509 steps on average, 3.3x faster than RODAS3 at ESTIMATE_RTOL, and within 0.25 % of a
+tight integration against its 1.9 %), the Rosenbrock steps are not."""
+RELAX_BATCH = 256
+"""Points per call of the per-point module (:func:`_relax`): an inertial point takes ~1 ms, so a batch ends every
+~0.1 s on two threads and the progress bar moves (a grid of up to plan.ONE_CHUNK_POINTS is one chunk, whose
+inertial points could otherwise take half a minute in one silent call)."""
+MODEL_FLAG = {"flag_values": np.array([0, 1], np.int8), "flag_meanings": "quasistatic inertial"}
+QUASISTATIC, INERTIAL = 0, 1
+
+
+@dataclass
+class ModelChoice:
+    """Per flat point: ``inertial`` (bool: model used), ``model_error`` (estimated relative error of xi_inf with
+    the quasi-static model; None when the scene forced a model and nothing was estimated)."""
+
+    inertial: np.ndarray
+    model_error: np.ndarray | None
+
+
+def _relax(scene: Scene, plan: Plan, pts: np.ndarray, inertial: bool, rtols: tuple[float, ...],
+           progress: bool | None, label: str) -> list[dict[str, np.ndarray]]:
+    """:func:`relax_points` of the plan's points ``pts`` at each local tolerance of ``rtols`` (atol scaled alike),
+    the points in a fixed shuffled order (the costly ones cluster on the grid and prange gives each thread a
+    contiguous share; results do not depend on the order). ``pts`` is at most a chunk (the runner's chunk loop)."""
+    order = np.random.default_rng(ORDER_SEED).permutation(pts.size)
+    p = pts[order]
+    outs = []
+    with Progress(pts.size * len(rtols), enabled=progress, label=label) as bar:
+        for rtol in rtols:
+            parts = []
+            # batches of at most RELAX_BATCH points (one, empty, for none): a point's numbers do not depend on its batch
+            for q in np.array_split(p, max(1, -(-p.size // RELAX_BATCH))):
+                parts.append(relax_points(plan.k[q], plan.a[q], plan.b[q], plan.G[q], inertial, rtol,
+                                          scene.atol["xi_inf"] * rtol / scene.rtol, scene.max_steps))
+                bar.update(q.size)
+            outs.append({key: np.concatenate([part[key] for part in parts]) for key in RELAX_KEYS})
+    back = np.argsort(order)
+    return [{key: out[key][back] for key in RELAX_KEYS} for out in outs]
+
+
+def _estimate(scene: Scene, plan: Plan, pts: np.ndarray, carried: np.ndarray, progress: bool | None
+              ) -> dict[str, np.ndarray]:
+    """Relaxed slip and its first-order inertial correction for the plan's points ``pts``. Where the relaxed-slip
+    lanes carried the correction in the ladder's first run (``carried`` finite) it is used as it is; else one RK4
+    run per point at ESTIMATE_STEP in the lanes carries it (float64 whatever the scene's type), and the per-point
+    Rosenbrock module (:func:`_relax`) takes the points where that run failed or needed more than
+    ESTIMATE_MAX_STEPS. ``xi_inf`` is NaN where the caller's own relaxed slip stands (the carried rows)."""
+    lanes = ~np.isfinite(carried)
+    if not lanes.any():  # the relaxed-slip lanes carried every point's correction (the usual chunk)
+        return {"xi_inf": np.full(pts.size, np.nan), "correction": carried, "status": np.full(pts.size, OK, np.int8)}
+    out = {"xi_inf": np.full(pts.size, np.nan), "correction": carried.astype(float),
+           "status": np.where(lanes, Status.NONFINITE, Status.OK).astype(np.int8)}
+    p = pts[lanes]
+    with Progress(p.size, enabled=progress, label="model error") as bar:
+        run = lane_runs(plan, "rk4", p, np.full(p.size, ESTIMATE_STEP), ESTIMATE_RTOL,
+                        scene.atol["xi_inf"] * ESTIMATE_RTOL / scene.rtol, correction=True,
+                        dtype=np.dtype(np.float64), max_steps=ESTIMATE_MAX_STEPS)
+        bar.update(p.size)
+    out["xi_inf"][lanes], out["correction"][lanes], out["status"][lanes] = run.xi_inf, run.correction, run.status
+    rest = np.flatnonzero((out["status"] != Status.OK) | ~np.isfinite(out["correction"]))
+    if rest.size:
+        per_point = _relax(scene, plan, pts[rest], False, (ESTIMATE_RTOL,), progress, "model error")[0]
+        for key in out:
+            out[key][rest] = per_point[key]
+    return out
+
+
+def solve_inertial(scene: Scene, plan: Plan, raw: RawResult, rows: np.ndarray, idx: np.ndarray,
+                   progress: bool | None = False) -> None:
+    """Replace the relaxed slip of the rows ``rows`` of ``raw`` (whose rows are the plan's points ``idx``; points
+    with a finite limit) by the inertial model's, with the error estimate of :data:`TIGHTER`."""
+    if rows.size == 0:
+        return
+    fine, coarse = _relax(scene, plan, idx[rows], True, (scene.rtol / TIGHTER**2, scene.rtol / TIGHTER), progress,
+                          "inertia")
+    raw.xi_inf[rows] = fine["xi_inf"]
+    raw.xi_inf_err[rows] = np.abs(fine["xi_inf"] - coarse["xi_inf"])
+    raw.status[rows] = np.where(fine["status"] != Status.OK, fine["status"], coarse["status"])
+    raw.steps[rows] = fine["steps"]
+    raw.work[rows] = fine["steps"] + coarse["steps"]
+
+
+def choose_stop_models(scene: Scene, plan: Plan, raw: RawResult, idx: np.ndarray | None = None,
+                       progress: bool | None = False, correction: np.ndarray | None = None) -> ModelChoice:
+    """Decide the model of the points ``idx`` (default: all; the rows of ``raw``) of a stop scene, solve the
+    inertial ones, and update ``raw`` in place (module docstring). ``progress`` as in :func:`sweep.run_sweep`;
+    ``correction`` (rows of ``raw``): the first-order correction where the kernels already carried it, NaN
+    elsewhere."""
+    idx = np.arange(plan.n_points) if idx is None else np.asarray(idx)
+    n = idx.size
+    finite = np.flatnonzero(plan.finite[idx])  # rows
+    if scene.model != "auto":
+        if scene.model == "inertial":
+            solve_inertial(scene, plan, raw, finite, idx, progress)
+        return ModelChoice(np.full(n, scene.model == "inertial") & plan.finite[idx], None)
+    pts = idx[finite]
+    carried = np.full(n, np.nan) if correction is None else correction
+    estimate = _estimate(scene, plan, pts, carried[finite], progress)
+    model_error = np.full(n, np.nan)
+    measure = np.zeros(n, bool)
+    _route(finite, pts, estimate["xi_inf"], raw.xi_inf, estimate["correction"], estimate["status"], plan.G, plan.k,
+           plan.a, scene.model_tol, model_error, measure)
+    rows = np.flatnonzero(measure)
+    if rows.size == 0:  # every point keeps the quasi-static model (the default scene's chunks)
+        return ModelChoice(measure, model_error)
+    quasistatic = raw.xi_inf[rows].copy()
+    if scene.time_resolved:  # keep the quasi-static values; the inertial xi_inf only measures the gap
+        probe = RawResult.empty(n, 0, 0)
+        solve_inertial(scene, plan, probe, rows, idx, progress)
+        inertial_xi = probe.xi_inf[rows]
+    else:
+        solve_inertial(scene, plan, raw, rows, idx, progress)
+        inertial_xi = raw.xi_inf[rows]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        measured = np.abs(inertial_xi / quasistatic - 1.0)
+    model_error[rows] = np.where(np.isfinite(measured), measured, model_error[rows])
+    if scene.time_resolved:
+        over = rows[~(measured <= scene.model_tol)]
+        raw.status[over[raw.status[over] == Status.OK]] = Status.MODEL_ERROR_ABOVE_TOL
+        return ModelChoice(np.zeros(n, bool), model_error)
+    return ModelChoice(measure, model_error)
+
+
+def routing_margin(tau: np.ndarray) -> np.ndarray:
+    """Factor on the first-order estimate that bounds the true model gap, by tau = gamma/A (1 + (chi + |mu1|)/A):
+    ESTIMATE_MARGIN up to CLOSE_TRUST, WIDE_MARGIN up to FIRST_ORDER_TRUST, inf beyond (not trusted: the point is
+    solved with inertia)."""
+    tau = np.asarray(tau, dtype=float)
+    return _margins(tau.ravel()).reshape(tau.shape)
+
+
+@njit(cache=True)
+def _margin(tau: float) -> float:
+    """:func:`routing_margin` of one tau."""
+    return ESTIMATE_MARGIN if tau <= CLOSE_TRUST else (WIDE_MARGIN if tau <= FIRST_ORDER_TRUST else np.inf)
+
+
+@njit(cache=True)
+def _margins(tau):
+    """:func:`_margin` of every element of the flat array ``tau``."""
+    out = np.empty(tau.size)
+    for i in range(tau.size):
+        out[i] = _margin(tau[i])
+    return out
+
+
+@njit(cache=True)
+def _route(rows, pts, estimated_xi, xi_inf, correction, status, G, k, a, model_tol, model_error, measure):
+    """The model of the points ``pts`` (plan points, at the rows ``rows`` of a chunk): model_error = |correction /
+    xi| where the estimate is ok and xi finite (xi: the estimate's own run where it made one, else the chunk's
+    ``xi_inf``, whose run carried the correction), and ``measure`` (solve with inertia) where it is not, or where
+    routing_margin(tau) x model_error > model_tol. One pass (as numpy expressions over a chunk's points: ~0.1 ms of
+    a default-scene chunk's ~7 ms), the same arithmetic (tau = G (1 + k + |a|), as the numpy expression orders it)."""
+    for r in range(rows.size):
+        i, p = rows[r], pts[r]
+        xi = xi_inf[i] if math.isnan(estimated_xi[r]) else estimated_xi[r]
+        ok = status[r] == OK and math.isfinite(xi)
+        if ok:
+            model_error[i] = abs(correction[r] / xi)
+        margin = _margin(G[p] * ((1.0 + k[p]) + abs(a[p])))
+        measure[i] = not ok or not (margin * model_error[i] <= model_tol)
+
+
+def warm_up_models() -> None:
+    """Compile (or load from numba's cache) the kernels of both models of the stop scene on one point, and the RK4
+    lanes that carry the first-order correction (:func:`_estimate`)."""
+    one = np.ones(1)
+    for inertial in (False, True):
+        relax_points(2.0 * one, one, 0.0 * one, 0.1 * one, inertial, 1e-3, 1e-12, 10_000)
+    lanes = lane_kernels(np.dtype(np.float64), "rk4", correction=True)[1]
+    lanes(LanePoints(2.0 * one, one, 0.0 * one, 0.3 * one, 0.1 * one),
+          LaneRuns(np.zeros(1, np.int64), ESTIMATE_STEP * one, ESTIMATE_RTOL, 1e-12, 10_000), 1,
+          LaneOutputs(np.empty(1), np.empty(1), np.empty(1), np.zeros(1, np.int8), np.zeros(1, np.int32)))
+
+
+pin_module(__name__)

@@ -1,0 +1,525 @@
+"""Scene: a frozen, validated description of one study (docs/design.md), built from Python or from TOML.
+
+Everything is checked here, before any compilation or computation, and every error names its field and
+the allowed range. SI units throughout: K_over_M [s-2], V [m s-1], times [s].
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..integrate.models import REGISTRY, available
+from ..integrate.solvers import METHODS
+from .params import FrictionParams, require_finite, require_positive
+from .presets import presets
+
+__all__ = ["Scene", "OBSERVABLES", "DRIVEN_OBSERVABLES", "PROTOCOLS", "DEFAULT_ATOL", "EXTRA_AXES", "AXIS_UNITS",
+           "default_scene", "load_scene"]
+
+PROTOCOLS = ("stop", "driven")
+OBSERVABLES = ("xi_inf", "trajectory", "slip_at", "t50", "t90")
+"""Observables of the stop protocol."""
+DRIVEN_OBSERVABLES = ("regime", "growth_rate", "period", "amplitude")
+"""Observables of the driven protocol (regime, with status, is always stored)."""
+DRIVEN_METHODS = ("auto", "dp5")
+MODELS = ("auto", "quasistatic", "inertial")
+STATE_LAWS = tuple(sorted({law for (_, _, law) in REGISTRY}))
+"""The state laws (sweep/integrate/models/state_laws.py; docs/physics.md 7), as the model registry has them."""
+MODEL_TOL_RANGE = (1e-6, 0.5)
+"""Allowed bound on the relative error of the model choice (Scene.model_tol)."""
+PERTURBATION_RANGE = (1e-8, 1.0)
+"""Allowed initial spring stretch of the driven scene (reduced, z = tau - xi)."""
+DEFAULT_ATOL = {"xi_inf": 1e-12, "trajectory": 1e-12, "slip_at": 1e-12, "t50": 0.0, "t90": 0.0}
+"""Absolute floors per observable, in the observable's reduced unit (xi for slips, tau for times)."""
+RTOL_RANGE = (1e-10, 1e-2)
+PRECISIONS = ("float64", "float32")
+FLOAT32_RTOL_MIN = 1e-5
+TAU_MAX = 1e250
+"""Largest reduced time that can be asked for (float64 carries tau up to ~1e308)."""
+EXTRA_AXES = ("A", "m1", "m2", "D0")
+"""Friction parameters a stop scene may sweep beside (K/M, V) (Scene.axes), in the order of the Dataset's dims."""
+AXIS_UNITS = {"K_over_M": "s-2", "V": "m s-1", "A": "1", "m1": "1", "m2": "1", "D0": "m"}
+POSITIVE_AXES = ("K_over_M", "V", "A", "D0")
+"""Axes whose values must be > 0 (the others, m1 and m2, only finite)."""
+
+
+def _plain(value: Any) -> Any:
+    """A numpy scalar as the Python number it holds, so that messages print ``-1000.0``, not ``np.float64(...)``."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def _axis(name: str, values: Any) -> np.ndarray:
+    """Validate one grid axis: 1-D, non-empty, finite, strictly increasing, > 0 (except m1 and m2: any finite)."""
+    try:
+        arr = np.array(values, dtype=float).reshape(-1) if np.ndim(values) <= 1 else None
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a 1-D sequence of numbers, got {values!r}") from None
+    if arr is None:
+        raise InputError(f"{name} must be 1-D, got an array of shape {np.shape(values)}")
+    if arr.size == 0:
+        raise InputError(f"{name} is empty: give at least one value")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{name} contains NaN or inf: all values must be finite")
+    if name in POSITIVE_AXES and np.any(arr <= 0):
+        raise InputError(f"{name} must be > 0 (allowed range: 0 < {name} < inf), got min {_plain(arr.min())!r}")
+    if np.any(np.diff(arr) <= 0):
+        raise InputError(f"{name} must be strictly increasing (sorted, no duplicates)")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """What to study: protocol, friction parameters, the (K/M, V) grid, observables and accuracy.
+
+    Parameters
+    ----------
+    protocol : "stop" | "driven"
+        "stop": the paper's experiment, steady sliding at V, drive frozen at t = 0 (docs/physics.md 3a). "driven": the
+        drive keeps moving at V; steady sliding perturbed by ``perturbation`` is followed until its regime is
+        decided (docs/physics.md 3b; quasi-static model, sweep/integrate/models/driven.py).
+    params : FrictionParams
+        Friction law; see :data:`sweep.presets`.
+    K_over_M : array [s-2]
+        Spring stiffness over slider mass; strictly increasing, > 0.
+    V : array [m s-1]
+        Driving velocity before the stop; strictly increasing, > 0.
+    rtol : float
+        Relative accuracy of every observable w.r.t. the exact solution of the model, 1e-10 <= rtol <= 1e-2.
+    atol : mapping, optional
+        Absolute floors per observable (reduced units), overriding :data:`DEFAULT_ATOL`.
+    observables : tuple of str, optional
+        stop: subset of ``OBSERVABLES`` (default ("xi_inf",)); driven: subset of ``DRIVEN_OBSERVABLES`` (default
+        all). Stop: xi_inf (with slip_inf, stress_relaxation, stable, status) is always computed; "trajectory"
+        adds xi(tau), psi(tau); "slip_at" the slip at ``t_obs``; "t50"/"t90" the times to 50 %/90 % of the
+        relaxed slip. Driven: regime (with status) is always stored.
+    trajectory_tau : (min, max, num)
+        Log-spaced reduced times of the trajectory samples, 0 < min < max <= 1e250, num >= 2.
+    t_obs : sequence of float [s]
+        Times after the stop for "slip_at" (>= 0, strictly increasing).
+    method : "auto" | "rk4" | "dp5" | "dop853" | "ros4"
+        Integration method (:data:`sweep.integrate.solvers.METHODS`); "auto" lets the plan pick, per point, the cheapest
+        that meets rtol (sweep.plan.plan: rk4, and the Rosenbrock ros4 at the stiff points of relaxed-slip sweeps).
+        rk4 and ros4 run with fixed steps, dp5 and dop853 with adaptive steps; ros4 computes the relaxed slip
+        only (observables = ("xi_inf",)).
+    step : float, optional
+        Override of the planned fixed step h (0 < step <= 2; fixed-step methods only): in the scaled log time
+        sigma for rk4, in the step rule of ros4 (models/stop_stiff.py); default from rtol. The number of steps
+        of each point then follows from its own horizon.
+    precision : "float64" | "float32"
+        Arithmetic of the relaxed-slip lanes. float32 is about twice as fast there and keeps ~7 digits: allowed
+        only for rtol >= 1e-5, a fixed-step method and observables = ("xi_inf",).
+    max_steps : int
+        Step budget per point; a point that needs more gets status max_steps.
+    perturbation : float
+        driven only: initial spring stretch z(0) = tau - xi away from steady sliding (reduced, 1e-8..1).
+    max_cycles : int
+        driven only: oscillation cycles per point before it is left ``undecided`` (>= 4).
+    model : "auto" | "quasistatic" | "inertial"
+        The paper's quasi-static model, the full Newton equation with the inertia number gamma = V^2/(g D0)
+        (docs/physics.md 3a/3b), or (default) per point the quasi-static model where its estimated error is at most
+        ``model_tol`` and the inertial one elsewhere (sweep/protocols/stop/model_choice.py; the file records the choice per point
+        in ``model`` and the estimate in ``model_error``). Stop scenes with the inertial model compute the relaxed
+        slip only (observables = ("xi_inf",)); with "auto", a point that needs inertia while time-resolved
+        observables are asked for keeps its quasi-static values with status model_error_above_tol.
+    model_tol : float
+        Bound on the relative error of the model choice, 1e-6 <= model_tol <= 0.5 (default 1e-2); ``rtol`` bounds
+        the numerical error of the model used.
+    state_law : "aging" | "slip"
+        How the contact age evolves (docs/physics.md 7): the paper's aging law (default), or Ruina's slip law
+        psi' = -xi' psi ln(xi' psi). The slip law runs with model="quasistatic"; its stop scene computes the
+        relaxed slip only (observables = ("xi_inf",), finite only for m2 > 0), through the general two-state
+        formulation (the fast paths of the aging law rest on its identity xi + ln psi = s).
+    axes : mapping, optional
+        Further axes of the grid, stop protocol only: {name: values} for any of A, m1, m2 [1] and D0 [m]
+        (:data:`EXTRA_AXES`; strictly increasing, A and D0 > 0). Each replaces that parameter of ``params``: the
+        Dataset's dims are then K_over_M, V and those names in the order of EXTRA_AXES, every point with its own
+        parameters (e.g. a grid over (A, m1) at one (K/M, V)). TOML: tables [A], [m1], ... like [K_over_M].
+    simulated_hopf_line : bool
+        Also locate the Hopf line of the scene's model by simulation at each V (coordinate
+        ``K_over_M_c_simulated``, drawn on the maps next to the analytic line; sweep.analysis.hopf.with_simulated_line).
+        Default False: the analytic line ``chi_c`` answers where the line is, and the simulation compiles and runs
+        the driven kernel (~7 s to compile on first use, ~2 ms per velocity); True checks the analytic line.
+    """
+
+    protocol: str
+    params: FrictionParams
+    K_over_M: np.ndarray
+    V: np.ndarray
+    rtol: float = 1e-6
+    atol: Mapping[str, float] = field(default_factory=dict)
+    observables: tuple[str, ...] | None = None
+    trajectory_tau: tuple[float, float, int] = (1e-3, 1e6, 61)
+    t_obs: tuple[float, ...] = ()
+    method: str = "auto"
+    step: float | None = None
+    precision: str = "float64"
+    max_steps: int = 1_000_000
+    perturbation: float = 1e-3
+    max_cycles: int = 2000
+    model: str = "auto"
+    model_tol: float = 1e-2
+    state_law: str = "aging"
+    simulated_hopf_line: bool = False
+    axes: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen dataclass)
+        if self.protocol not in PROTOCOLS:
+            raise InputError(f"protocol must be one of {PROTOCOLS}, got {self.protocol!r}")
+        if not isinstance(self.params, FrictionParams):
+            raise InputError(f"params must be a sweep.FrictionParams, got {type(self.params).__name__}")
+        set_("K_over_M", _axis("K_over_M", self.K_over_M))
+        set_("V", _axis("V", self.V))
+        rtol = require_positive("rtol", self.rtol)
+        if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
+            raise InputError(f"rtol must be in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}], got {rtol!r}")
+        set_("rtol", rtol)
+        allowed, always = (DRIVEN_OBSERVABLES, "regime") if self.protocol == "driven" else (OBSERVABLES, "xi_inf")
+        if self.observables is None:
+            obs = allowed if self.protocol == "driven" else (always,)
+        else:
+            obs = (self.observables,) if isinstance(self.observables, str) else tuple(self.observables)
+        unknown = [o for o in obs if o not in allowed]
+        if unknown:
+            raise InputError(f"unknown observable(s) {unknown} in observables of protocol {self.protocol!r}; "
+                             f"allowed: {list(allowed)}")
+        set_("observables", tuple(o for o in allowed if o in obs or o == always))
+        atol = dict(self.atol)
+        for name, value in atol.items():
+            if name not in OBSERVABLES:
+                raise InputError(f"atol has unknown observable {name!r}; allowed: {list(OBSERVABLES)}")
+            if require_finite(f"atol[{name!r}]", value) < 0:
+                raise InputError(f"atol[{name!r}] must be >= 0 (allowed range: 0 <= atol < inf), got {value!r}")
+        set_("atol", {**DEFAULT_ATOL, **{k: float(v) for k, v in atol.items()}})
+        self._check_trajectory_tau()
+        t_obs = _times("t_obs", self.t_obs)
+        if "slip_at" in self.observables and t_obs.size == 0:
+            raise InputError("observable 'slip_at' needs t_obs: the times after the stop [s], e.g. [0.1, 1, 10]")
+        set_("t_obs", tuple(t_obs.tolist()))
+        self._check_method()
+        self._check_driven()
+        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, (int, np.integer)) or self.max_steps < 1:
+            raise InputError(f"max_steps must be an integer >= 1, got {_plain(self.max_steps)!r}")
+        if not isinstance(self.simulated_hopf_line, (bool, np.bool_)):
+            raise InputError(f"simulated_hopf_line must be true or false, got {self.simulated_hopf_line!r}")
+        set_("simulated_hopf_line", bool(self.simulated_hopf_line))
+        self._check_axes()
+
+    def _check_axes(self) -> None:
+        if not isinstance(self.axes, Mapping):
+            raise InputError(f"axes must be a mapping {{name: values}} with names from {list(EXTRA_AXES)}, got "
+                             f"{type(self.axes).__name__}")
+        unknown = [n for n in self.axes if n not in EXTRA_AXES]
+        if unknown:
+            raise InputError(f"axes has unknown name(s) {unknown}; allowed: {list(EXTRA_AXES)} (K_over_M and V are "
+                             f"the scene's own axes)")
+        axes = {n: _axis(n, self.axes[n]) for n in EXTRA_AXES if n in self.axes}
+        if axes and self.protocol != "stop":
+            raise InputError(f"axes {list(axes)}: extra axes are offered for protocol 'stop' only, got protocol "
+                             f"{self.protocol!r}")
+        if axes and self.simulated_hopf_line:
+            raise InputError(f"simulated_hopf_line needs one parameter set (it is located per V); leave it false "
+                             f"with axes {list(axes)}")
+        object.__setattr__(self, "axes", axes)
+
+    def _check_method(self) -> None:
+        if self.method != "auto" and self.method not in METHODS:
+            raise InputError(f"method must be 'auto' or one of {sorted(METHODS)}, got {self.method!r}")
+        if self.step is not None:
+            step = require_positive("step", self.step)
+            if step > 2.0:
+                raise InputError(f"step must be in (0, 2] (explicit RK stability in sigma), got {step!r}")
+            if self.method != "auto" and METHODS[self.method].adaptive:
+                raise InputError(f"step is for fixed-step methods; method {self.method!r} chooses its own steps "
+                                 "(leave step unset, or use method='rk4')")
+            object.__setattr__(self, "step", step)
+        if self.method != "auto" and METHODS[self.method].implicit and self.time_resolved:
+            raise InputError(f"method {self.method!r} computes the relaxed slip only (observables = ['xi_inf']), "
+                             f"got observables={list(self.observables)}; use rk4, dp5 or dop853")
+        if self.precision not in PRECISIONS:
+            raise InputError(f"precision must be one of {PRECISIONS}, got {self.precision!r}")
+        if self.precision == "float32":
+            if self.rtol < FLOAT32_RTOL_MIN:
+                raise InputError(f"precision 'float32' needs rtol >= {FLOAT32_RTOL_MIN:g} (float32 keeps ~7 "
+                                 f"digits and rounding accumulates over the steps), got rtol={self.rtol!r}")
+            if self.time_resolved:
+                raise InputError("precision 'float32' is offered for relaxed-slip sweeps only (observables = "
+                                 f"['xi_inf']), got observables={list(self.observables)}")
+            if self.method != "auto" and METHODS[self.method].adaptive:
+                raise InputError(f"precision 'float32' runs fixed-step methods only (rk4), got method "
+                                 f"{self.method!r}")
+
+    def _check_driven(self) -> None:
+        pert = require_positive("perturbation", self.perturbation)
+        if not PERTURBATION_RANGE[0] <= pert <= PERTURBATION_RANGE[1]:
+            raise InputError(f"perturbation must be in [{PERTURBATION_RANGE[0]:g}, {PERTURBATION_RANGE[1]:g}] "
+                             f"(reduced spring stretch), got {pert!r}")
+        object.__setattr__(self, "perturbation", pert)
+        if isinstance(self.max_cycles, bool) or not isinstance(self.max_cycles, (int, np.integer)) \
+                or self.max_cycles < 4:
+            raise InputError(f"max_cycles must be an integer >= 4, got {_plain(self.max_cycles)!r}")
+        self._check_model()
+        if self.protocol != "driven":
+            return
+        if self.method not in DRIVEN_METHODS:
+            raise InputError(f"protocol 'driven' runs the adaptive dp5 stepper: method must be one of "
+                             f"{list(DRIVEN_METHODS)}, got {self.method!r}")
+        for name, value, default in (("step", self.step, None), ("precision", self.precision, "float64"),
+                                     ("t_obs", self.t_obs, ())):
+            if value != default:
+                raise InputError(f"{name} is not used by protocol 'driven' (leave it at {default!r}), got {value!r}")
+
+    def _check_model(self) -> None:
+        if self.model not in MODELS:
+            raise InputError(f"model must be one of {list(MODELS)}, got {self.model!r}")
+        tol = require_positive("model_tol", self.model_tol)
+        if not MODEL_TOL_RANGE[0] <= tol <= MODEL_TOL_RANGE[1]:
+            raise InputError(f"model_tol must be in [{MODEL_TOL_RANGE[0]:g}, {MODEL_TOL_RANGE[1]:g}] (relative "
+                             f"error of the model choice), got {tol!r}")
+        object.__setattr__(self, "model_tol", tol)
+        self._check_state_law()
+        if self.protocol == "stop" and self.model == "inertial":
+            self._require_relaxed_slip_only("model 'inertial'", "the adaptive Rosenbrock rodas3")
+
+    def _check_state_law(self) -> None:
+        if self.state_law not in STATE_LAWS:
+            raise InputError(f"state_law must be one of {list(STATE_LAWS)}, got {self.state_law!r}")
+        if not available(self.protocol, self.model, self.state_law):
+            have = sorted(m for (proto, m, law) in REGISTRY if proto == self.protocol and law == self.state_law)
+            raise InputError(f"state_law {self.state_law!r} runs with model {' or '.join(map(repr, have))} only "
+                             f"(sweep.integrate.models.REGISTRY), got model={self.model!r}")
+        if self.state_law == "aging":
+            return
+        if self.protocol == "stop":
+            self._require_relaxed_slip_only(f"state_law {self.state_law!r}",
+                                            "the adaptive dp5 of the general two-state path")
+
+    def _require_relaxed_slip_only(self, what: str, stepper: str) -> None:
+        """InputError unless the stop scene asks for the relaxed slip alone, with the default method, step and
+        precision (``what`` computes xi_inf only, with its own ``stepper``)."""
+        if self.observables != ("xi_inf",):
+            raise InputError(f"{what} computes the relaxed slip only (observables = ['xi_inf']), got "
+                             f"observables={list(self.observables)}")
+        for name, value, default in (("method", self.method, "auto"), ("step", self.step, None),
+                                     ("precision", self.precision, "float64")):
+            if value != default:
+                raise InputError(f"{name} is not used by {what} (its stepper is {stepper}; leave {name} at "
+                                 f"{default!r}), got {value!r}")
+
+    def _check_trajectory_tau(self) -> None:
+        try:
+            lo, hi, num = self.trajectory_tau
+        except (TypeError, ValueError):
+            raise InputError("trajectory_tau must be (min, max, num)") from None
+        lo, hi = require_positive("trajectory_tau min", lo), require_positive("trajectory_tau max", hi)
+        if not lo < hi <= TAU_MAX:
+            raise InputError(f"trajectory_tau needs 0 < min < max <= {TAU_MAX:g}, got ({lo!r}, {hi!r})")
+        if isinstance(num, bool) or int(num) != num or num < 2:
+            raise InputError(f"trajectory_tau num must be an integer >= 2, got {_plain(num)!r}")
+        object.__setattr__(self, "trajectory_tau", (lo, hi, int(num)))
+
+    @property
+    def dims(self) -> tuple[str, ...]:
+        """Names of the grid's axes: (K_over_M, V) and the extra axes, in the order of the Dataset's dims."""
+        return ("K_over_M", "V") + tuple(self.axes)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(self.axis(d).size for d in self.dims)
+
+    def axis(self, name: str) -> np.ndarray:
+        """The values of grid axis ``name`` (one of :attr:`dims`)."""
+        return self.K_over_M if name == "K_over_M" else self.V if name == "V" else self.axes[name]
+
+    def broadcast(self, name: str, dims: tuple[str, ...] | None = None) -> np.ndarray | float:
+        """K_over_M, V or a friction parameter (A, m1, m2, D0, V0, g) shaped to broadcast over ``dims`` (default
+        :attr:`dims`; axes of the grid only): an axis among ``dims`` as an array with ones on the other dims, any
+        other parameter as the number of ``params``."""
+        dims = self.dims if dims is None else dims
+        if name in dims:
+            shape = [1] * len(dims)
+            shape[dims.index(name)] = -1
+            return self.axis(name).reshape(shape)
+        return float(getattr(self.params, name))
+
+    def on_dims(self, names: Sequence[str]) -> tuple[str, ...]:
+        """The grid dims among ``names`` (what a quantity of those parameters varies along), in grid order."""
+        return tuple(d for d in self.dims if d in names)
+
+    def at_points(self, name: str, points: np.ndarray) -> np.ndarray | float:
+        """K_over_M, V or a friction parameter at the flat grid indices ``points`` (C order over :attr:`dims`): an
+        array where ``name`` is an axis, else the number of ``params``."""
+        if name not in self.dims:
+            return float(getattr(self.params, name))
+        return self.axis(name)[np.unravel_index(np.asarray(points), self.shape)[self.dims.index(name)]]
+
+    @property
+    def time_resolved(self) -> bool:
+        """True when values inside the transient are asked for (not only its limit xi_inf)."""
+        return self.protocol == "stop" and any(o != "xi_inf" for o in self.observables)
+
+    @property
+    def n_points(self) -> int:
+        return math.prod(self.shape)
+
+    @property
+    def tau_samples(self) -> np.ndarray:
+        """Reduced times of the trajectory samples (empty unless "trajectory" is observed)."""
+        if "trajectory" not in self.observables:
+            return np.empty(0)
+        lo, hi, num = self.trajectory_tau
+        return np.logspace(math.log10(lo), math.log10(hi), num)
+
+    def to_toml(self) -> str:
+        """Canonical TOML: resolved parameters and explicit axis values (round-trips through load_scene)."""
+        lines = [f'protocol = "{self.protocol}"', f"rtol = {self.rtol!r}"]
+        lines.append("observables = [" + ", ".join(f'"{o}"' for o in self.observables) + "]")
+        lines.append(f"trajectory_tau = [{self.trajectory_tau[0]!r}, {self.trajectory_tau[1]!r}, "
+                     f"{self.trajectory_tau[2]}]")
+        lines.append("t_obs = [" + ", ".join(repr(t) for t in self.t_obs) + "]")
+        lines.append(f'method = "{self.method}"')
+        if self.step is not None:
+            lines.append(f"step = {self.step!r}")
+        lines.append(f'precision = "{self.precision}"')
+        lines.append(f"max_steps = {int(self.max_steps)}")
+        if self.protocol == "driven":
+            lines.append(f"perturbation = {self.perturbation!r}")
+            lines.append(f"max_cycles = {int(self.max_cycles)}")
+        lines.append(f'model = "{self.model}"')
+        lines.append(f"model_tol = {self.model_tol!r}")
+        lines.append(f'state_law = "{self.state_law}"')
+        lines.append(f"simulated_hopf_line = {str(self.simulated_hopf_line).lower()}")
+        lines.append("[atol]")
+        lines += [f"{k} = {v!r}" for k, v in sorted(self.atol.items())]
+        lines.append("[params]")
+        lines += [f"{k} = {v!r}" for k, v in self.params.as_dict().items()]
+        for name in self.dims:
+            lines.append(f"[{name}]")
+            lines.append("values = [" + ", ".join(repr(float(x)) for x in self.axis(name)) + "]")
+        return "\n".join(lines) + "\n"
+
+
+def _times(name: str, values: Sequence[float]) -> np.ndarray:
+    arr = np.array(values, dtype=float).reshape(-1)
+    if arr.size and (not np.all(np.isfinite(arr)) or np.any(arr < 0) or np.any(np.diff(arr) <= 0)):
+        raise InputError(f"{name} must be finite, >= 0 and strictly increasing [s], got {list(values)!r}")
+    return arr
+
+
+def _axis_from_toml(name: str, spec: Any) -> np.ndarray:
+    if not isinstance(spec, Mapping):
+        raise InputError(f"[{name}] must be a table with start/stop/num[/spacing] or values")
+    extra = set(spec) - {"start", "stop", "num", "spacing", "values"}
+    if extra:
+        raise InputError(f"[{name}] has unknown key(s) {sorted(extra)}; allowed: start, stop, num, spacing, values")
+    if "values" in spec:
+        if set(spec) - {"values"}:
+            raise InputError(f"[{name}]: give either values or start/stop/num, not both")
+        return _axis(name, spec["values"])
+    missing = {"start", "stop", "num"} - set(spec)
+    if missing:
+        raise InputError(f"[{name}] is missing {sorted(missing)}")
+    spacing = spec.get("spacing", "log" if name in POSITIVE_AXES else "linear")
+    start, stop = require_finite(f"{name}.start", spec["start"]), require_finite(f"{name}.stop", spec["stop"])
+    if spacing == "log" and min(start, stop) <= 0:
+        raise InputError(f"{name}.start and {name}.stop must be > 0 for spacing \"log\", got {start!r}, {stop!r}"
+                         + ("" if name in POSITIVE_AXES else '; use spacing = "linear"'))
+    num = spec["num"]
+    if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+        raise InputError(f"{name}.num must be an integer >= 1, got {num!r}")
+    if spacing == "log":
+        return _axis(name, np.logspace(math.log10(start), math.log10(stop), num))
+    if spacing == "linear":
+        return _axis(name, np.linspace(start, stop, num))
+    raise InputError(f'{name}.spacing must be "log" or "linear", got {spacing!r}')
+
+
+SCENE_KEYS = ({f.name for f in fields(Scene)} - {"axes"}) | {"preset"} | set(EXTRA_AXES)
+"""Keys of a scene TOML: the Scene's fields (its extra axes as tables [A], [m1], [m2], [D0]) and ``preset``."""
+
+
+def _check_keys(cfg: Mapping[str, Any]) -> None:
+    """InputError naming the keys of a scene file that no command knows (a misspelt ``rtoll`` is never ignored)."""
+    unknown = set(cfg) - SCENE_KEYS
+    if unknown:
+        raise InputError(f"unknown key(s) {sorted(unknown)} in scene; allowed: {sorted(SCENE_KEYS)}")
+
+
+def scene_from_mapping(cfg: Mapping[str, Any]) -> Scene:
+    """Build a Scene from a parsed TOML mapping (same fields as :class:`Scene`, plus ``preset``)."""
+    _check_keys(cfg)
+    for required in ("K_over_M", "V"):
+        if required not in cfg:
+            raise InputError(f"scene is missing the [{required}] axis table")
+    params = _params_from(cfg)
+    kwargs = {k: v for k, v in cfg.items() if k not in ("preset", "params", "K_over_M", "V", *EXTRA_AXES)}
+    axes = {n: _axis_from_toml(n, cfg[n]) for n in EXTRA_AXES if n in cfg}
+    if axes:
+        kwargs["axes"] = axes
+    if "trajectory_tau" in kwargs and isinstance(kwargs["trajectory_tau"], Mapping):
+        t = kwargs["trajectory_tau"]
+        kwargs["trajectory_tau"] = (t.get("min"), t.get("max"), t.get("num"))
+    return Scene(params=params, K_over_M=_axis_from_toml("K_over_M", cfg["K_over_M"]),
+                 V=_axis_from_toml("V", cfg["V"]), **{"protocol": "stop", **kwargs})  # protocol may be in kwargs
+
+
+def _params_from(cfg: Mapping[str, Any]) -> FrictionParams:
+    """FrictionParams from ``preset`` and/or a ``[params]`` table of a parsed TOML mapping."""
+    if "preset" in cfg:
+        if cfg["preset"] not in presets:
+            raise InputError(f"preset must be one of {sorted(presets)}, got {cfg['preset']!r}")
+        return presets[cfg["preset"]].replace(**cfg.get("params", {}))
+    if "params" in cfg:
+        try:
+            return FrictionParams(**cfg["params"])
+        except TypeError as exc:
+            raise InputError(f"[params]: {exc} (fields: A, m1, m2, D0, V0, m0, g)") from None
+    raise InputError("scene needs preset = \"sample1\"|\"sample2\" and/or a [params] table")
+
+
+def _read_toml(source: str | Path) -> dict[str, Any]:
+    text = str(source)
+    if "\n" not in text:
+        path = Path(text)
+        if not path.is_file():
+            raise InputError(f"scene file {text!r} does not exist")
+        try:
+            text = path.read_text()
+        except UnicodeDecodeError:
+            raise InputError(f"scene file {text!r} is not a TOML text file") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"malformed TOML in scene: {exc}") from None
+
+
+def hopf_config(source: str | Path) -> tuple[FrictionParams, np.ndarray, dict[str, Any]]:
+    """(params, V axis, keyword arguments of sweep.locate_hopf) from a TOML file with preset and/or [params], a
+    [V] axis table and optionally rtol, model, model_tol and state_law. The other keys of a scene (e.g. [K_over_M])
+    are allowed, so that a scene file serves both commands, and unused; any other key is refused, as in a scene."""
+    cfg = _read_toml(source)
+    _check_keys(cfg)
+    if "V" not in cfg:
+        raise InputError("hopf needs the [V] axis table of velocities [m s-1]")
+    kwargs = {k: cfg[k] for k in ("rtol", "model", "model_tol", "state_law") if k in cfg}
+    return _params_from(cfg), _axis_from_toml("V", cfg["V"]), kwargs
+
+
+def load_scene(source: str | Path) -> Scene:
+    """Read a Scene from a TOML file path (or a TOML string if it contains a newline)."""
+    return scene_from_mapping(_read_toml(source))
+
+
+def default_scene() -> Scene:
+    """The built-in scene of ``sweep run``: preset sample2, K/M 1e3..1e6 s^-2 (200), V 0.1..100 um/s (100)."""
+    return Scene(protocol="stop", params=presets["sample2"], K_over_M=np.logspace(3, 6, 200),
+                 V=np.logspace(-7, -4, 100), rtol=1e-6)
