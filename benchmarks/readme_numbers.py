@@ -188,7 +188,7 @@ def _throughput() -> list[str]:
     one, two = d["engine"]["threads_1"], d["engine"]["threads_2"]
     cold = d["cold_start"]
     lines = [
-        "## Throughput, a new process and the dry run's estimate", "",
+        "## Throughput, cold start and the dry-run estimate", "",
         f"`python benchmarks/throughput.py` on the default scene at rtol {_sci(d['scene']['rtol'])}, "
         f"method `{d['engine']['method']}` as planned at the recorded commit:", "",
         f"- trajectories per second: {_int(one['traj_per_s'])} on 1 thread, {_int(two['traj_per_s'])} on 2 "
