@@ -59,3 +59,15 @@ def test_sample1_eq10_domain_ends_near_35p7_um_s():
     assert V_hopf == pytest.approx(2.4e-6, rel=0.05)
     assert not ph.stable_sliding(chi, ph.mu1(0.9 * V_hopf, p.m1, p.m2, p.V0), p.A)
     assert ph.stable_sliding(chi, ph.mu1(1.1 * V_hopf, p.m1, p.m2, p.V0), p.A)
+
+
+def test_a_misspelt_preset_raises_a_KeyError_listing_the_presets_and_the_closest_name():
+    with pytest.raises(KeyError) as info:
+        presets["sampel2"]
+    text = str(info.value)
+    assert "'sample1'" in text and "'sample2'" in text and "did you mean 'sample2'" in text
+    with pytest.raises(KeyError) as info:
+        presets["granite"]
+    assert "did you mean" not in str(info.value) and "'sample1'" in str(info.value)
+    assert presets.get("sampel2") is None and "sampel2" not in presets and [] not in presets
+    assert dict(presets) == {name: presets[name] for name in ("sample1", "sample2")}

@@ -20,7 +20,14 @@ __all__ = ["Curve", "RelaxedSlips", "fit", "read_data", "save_fit"]
 _WHERE = {"fit": "core", "Curve": "data", "RelaxedSlips": "data", "read_data": "read", "save_fit": "result"}
 
 
+_SUBMODULES = ("checks", "cli", "config", "core", "data", "forward", "globalstage", "levenberg", "local", "outcome",
+               "plot", "problem", "profiles", "read", "result", "space", "stack", "uncertainty", "units", "verdict")
+"""The parts of the package, importable as attributes (``sweep.fit.core``) without an explicit import first."""
+
+
 def __getattr__(name: str):
+    if name in _SUBMODULES:  # the import binds the submodule as an attribute of this package
+        return importlib.import_module(f".{name}", __name__)
     if name not in _WHERE:
         raise AttributeError(f"module 'sweep.fit' has no attribute {name!r}")
     value = getattr(importlib.import_module(f".{_WHERE[name]}", __name__), name)

@@ -1,16 +1,51 @@
 """Friction-parameter presets from Baumberger & Gauthier (1996), Table I (docs/physics.md section 5).
 
 ``presets`` is a read-only mapping name -> :class:`FrictionParams`; ``provenance`` says, per preset, where
-the numbers come from, which figures of the paper use them and how uncertain they are.
+the numbers come from, which figures of the paper use them and how uncertain they are. A name that is not a preset
+raises a KeyError that lists the presets and the closest name (``presets["sampel2"]``: did you mean 'sample2'?).
 """
 
 from __future__ import annotations
 
-from types import MappingProxyType
+import difflib
+from collections.abc import Iterator, Mapping
 
 from .params import FrictionParams
 
-__all__ = ["presets", "provenance"]
+__all__ = ["Presets", "presets", "provenance"]
+
+
+class Presets(Mapping):
+    """A read-only mapping name -> value (item assignment and deletion raise TypeError) whose KeyError for a missing
+    name lists the names and suggests the closest (difflib)."""
+
+    def __init__(self, items: Mapping, what: str = "preset"):
+        self._items = dict(items)  # never handed out: read only through the Mapping methods
+        self._what = what
+
+    def __getitem__(self, name):
+        try:
+            return self._items[name]
+        except (KeyError, TypeError):
+            names = sorted(self._items)
+            close = difflib.get_close_matches(str(name), names, n=1, cutoff=0.6)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise KeyError(f"no {self._what} {name!r}: the {self._what}s are {names}{hint}") from None
+
+    def __iter__(self) -> Iterator:
+        return iter(self._items)
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __contains__(self, name) -> bool:
+        try:
+            return name in self._items
+        except TypeError:
+            return False
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({dict(self._items)!r})"
 
 _SOURCE = ("T. Baumberger & L. Gauthier, J. Phys. I France 6 (1996) 1021, doi:10.1051/jp1:1996113, Table I. "
            "V0 = 1 um/s and g = 9.81 m/s^2 are our conventions.")
@@ -18,12 +53,12 @@ _CAVEAT = ("CAVEAT: the OCR of Table I is partly illegible. Trial values that al
            "A = 0.013, sample2 m1 = 0.013. Which m2 (0.0014 or 0.0033) belongs to which sample is our reading, "
            "not certain. The paper quotes ~20 % uncertainty on all values.")
 
-presets: MappingProxyType[str, FrictionParams] = MappingProxyType({
+presets: Presets = Presets({
     "sample1": FrictionParams(A=0.012, m1=0.010, m2=0.0014, D0=1.0e-6, V0=1e-6, m0=0.2, g=9.81),
     "sample2": FrictionParams(A=0.007, m1=0.0125, m2=0.0033, D0=0.7e-6, V0=1e-6, m0=0.3, g=9.81),
 })
 
-provenance: MappingProxyType[str, str] = MappingProxyType({
+provenance: Presets = Presets({
     "sample1": (
         f"{_SOURCE} Used in the paper for Fig. 3 (xi_inf vs K/M at V = 10 um/s; xi_inf vs V at "
         f"K/M = 7.4e4 s^-2, chi = 7.5e-3). {_CAVEAT} m2 = 0.0014 was chosen for sample1 because Fig. 3a draws "
