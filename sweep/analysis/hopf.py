@@ -2,11 +2,11 @@
 driven scene changes sign, and the type of the bifurcation decided from simulations around it.
 
 For each V: the line is bracketed around the linear prediction chi_c = mu1(V) (1 + gamma/A) (gamma = 0 for the
-quasi-static model), the sign of the growth rate measured from the simulated envelope (sweep/integrate/models/driven.py, a
-perturbation of SIGN_PERTURBATION, SIGN_CYCLES cycles) is checked at both ends, and the bracket is bisected until
-its relative width is below ``rtol`` (default 0.1 %); K_over_M_c is its midpoint. The linear value is stored
-beside it. Where mu1(V) <= 0 there is no line (steady sliding is stable at every stiffness): NaN and bifurcation
-"none".
+quasi-static model), the sign of the growth rate measured from the simulated envelope
+(sweep/integrate/models/driven.py, a perturbation of SIGN_PERTURBATION, SIGN_CYCLES cycles) is checked at both ends,
+and the bracket is bisected until its relative width is below ``rtol`` (default 0.1 %); K_over_M_c is its midpoint.
+The linear value is stored beside it. Where mu1(V) <= 0 there is no line (steady sliding is stable at every
+stiffness): NaN and bifurcation "none".
 
 The bifurcation type is decided from simulations, never assumed:
 
@@ -21,6 +21,14 @@ The bifurcation type is decided from simulations, never assumed:
   start decays (quasi-static m2 = 0, whose orbits at the line are neutral; the located line is a bracket, so the
   neutral orbits themselves are tested at the exact line in tests/test_driven.py);
 * undetermined: none of these (e.g. a slow transient left undecided); the type is not guessed.
+
+Next to it, the type from the normal form (sweep/analysis/lyapunov.py, docs/hopf-type.md): the first Lyapunov
+coefficient ``l1`` with its error ``l1_error`` at every V (the model of that V), the type it gives
+(``bifurcation_l1``) and whether the two types agree where both exist (``types_agree``); the Bautin points where l1
+changes sign between the smallest and largest V (inertial model along the whole line unless ``model`` is
+"quasistatic": "auto" switches model at gamma/A = model_tol, a false type change) as attributes; with
+``bistable_band``, the upper edge of the bistable band above the line where l1 > 0, measured by simulation
+(sweep/analysis/bistable.py). :func:`hopf_summary` gives the lines ``sweep hopf`` prints.
 """
 
 from __future__ import annotations
@@ -53,11 +61,19 @@ from ..run.progress import Progress
 from ..scene.params import FrictionParams
 from ..scene.plausibility import warn_implausible
 from ..scene.scene import MODEL_TOL_RANGE, MODELS, STATE_LAWS
+from . import bistable
+from .lyapunov import TYPES, bautin_points, lyapunov_line
 
-__all__ = ["locate_hopf", "with_simulated_line"]
+__all__ = ["hopf_summary", "locate_hopf", "with_simulated_line"]
 
 MAX_STEPS = 20_000_000
 BIFURCATIONS = ("none", "supercritical", "subcritical", "degenerate", "undetermined")
+AGREEMENT = ("not_compared", "agree", "disagree")
+"""types_agree: simulation and l1 both decided a type (none / undetermined are not compared)."""
+BAUTIN_RTOL = 1e-4
+"""Relative width in gamma/A of the bracket left around each Bautin point (issue target 1e-3)."""
+BAND_RTOL = 1e-2
+"""Relative precision of the bistable band's upper edge."""
 
 
 def _growth(k: float, a: float, b: float, g: float, law: str = "aging") -> float:
@@ -133,7 +149,7 @@ def _bifurcation(k_c: float, a: float, b: float, g: float, rtol: float, law: str
 
 def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto", rtol: float = 1e-3,
                 bifurcation: bool = True, model_tol: float = 1e-2, state_law: str = "aging",
-                progress: bool | None = False) -> xr.Dataset:
+                progress: bool | None = False, lyapunov: bool = True, bistable_band: bool = False) -> xr.Dataset:
     """The Hopf line over the velocities ``V`` [m s-1] (Dataset over V).
 
     Variables: ``K_over_M_c`` [s-2] located by simulation (bisection on the sign of the measured growth rate to a
@@ -146,6 +162,14 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
     variable ``model``). ``state_law``: "aging" (the paper's) or "slip" (quasi-static only; docs/physics.md 7).
     ``progress``: a bar over the velocities on stderr (None: on an interactive terminal once the run takes more
     than ~2 s; sweep/run/progress.py).
+
+    ``lyapunov`` (default True; analytic, ~1 ms): the variables ``l1`` [1], ``l1_error`` [1], ``bifurcation_l1``
+    (flag: none / supercritical / subcritical / degenerate from the sign of l1 against its error) and
+    ``types_agree`` (not_compared / agree / disagree with ``bifurcation``), and the attributes ``bautin_*`` (the
+    Bautin points between min(V) and max(V), module docstring; ``bautin`` says "none" otherwise).
+    ``bistable_band`` (default False; ~1 s a velocity): ``bistable_K_over_M_upper`` [s-2], the upper edge of the
+    band above the line where l1 > 0 in which a large start ends in stick-slip while steady sliding is stable
+    (NaN where not measured), and ``bistable_width`` [1] = upper edge / K_over_M_c_linear - 1.
     """
     if model not in MODELS:
         raise InputError(f"model must be one of {list(MODELS)}, got {model!r}")
@@ -181,6 +205,8 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
         elif math.isfinite(k_c):
             kinds[i] = BIFURCATIONS.index("undetermined")
     to_km = p.g / p.D0
+    extra, attrs = (_normal_form(p, v, mu1, gamma, inertial, kinds, model, model_tol, state_law, bistable_band, to_km,
+                                 bifurcation) if lyapunov else ({}, {}))
     var = lambda data, units, name, **attrs: xr.Variable("V", data, {"units": units, "long_name": name, **attrs})  # noqa: E731
     ds = xr.Dataset(
         {
@@ -199,6 +225,7 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
                                          "the line (NaN: none decided there)"),
             "simulations": var(evals, "1", "driven simulations spent on locating the line"),
             "mu1": var(mu1, "1", "velocity-weakening slope mu1(V)"),
+            **{name: var(data, units, long, **more) for name, (data, units, long, more) in extra.items()},
         },
         coords={"V": var(v, "m s-1", "driving velocity")},
         attrs={"Conventions": "CF-1.11", "title": "Hopf line of the Baumberger-Gauthier spring-block model",
@@ -209,9 +236,96 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
                "method": (f"bisection on the sign of the growth rate measured over {SIGN_CYCLES} cycles of a "
                           f"{SIGN_PERTURBATION:g} perturbation (dp5, local rtol {STEPPER_RTOL:g}); type from runs "
                           f"at {TYPE_DISTANCE:g} and {4 * TYPE_DISTANCE:g} below and above the line"),
-               "params": str(p.as_dict())},
+               "params": str(p.as_dict()), **attrs},
     )
     return ds
+
+
+def _normal_form(p: FrictionParams, v: np.ndarray, mu1: np.ndarray, gamma: np.ndarray, inertial: np.ndarray,
+                 kinds: np.ndarray, model: str, model_tol: float, state_law: str, band: bool, to_km: float,
+                 simulated: bool) -> tuple[dict, dict]:
+    """The Hopf file's variables and attributes from l1 (module docstring): {name: (data, units, long_name,
+    attrs)}, {attribute: value}."""
+    line = lyapunov_line(p, v, model=model, state_law=state_law, model_tol=model_tol)
+    agree = np.zeros(v.size, np.int8)
+    if simulated:
+        sim = np.array([BIFURCATIONS[c] for c in kinds])
+        by_l1 = np.array([TYPES[c] for c in line.kind])
+        compared = np.isin(sim, ("supercritical", "subcritical", "degenerate")) & (by_l1 != "none")
+        agree[compared] = np.where(sim[compared] == by_l1[compared], 1, 2)
+    upper = np.full(v.size, np.nan)
+    if band:
+        for i in np.flatnonzero(line.kind == TYPES.index("subcritical")):
+            found = bistable.bistable_band(mu1[i] / p.A, p.m2 / p.A, gamma[i] / p.A, BAND_RTOL, state_law)
+            if found.bistable and math.isfinite(found.d_hi):
+                upper[i] = mu1[i] * (1.0 + gamma[i] / p.A) * (1.0 + found.d_hi) * to_km
+    flags = lambda names: {"flag_values": np.arange(len(names), dtype=np.int8), "flag_meanings": " ".join(names)}  # noqa: E731
+    extra = {
+        "l1": (line.l1, "1", "first Lyapunov coefficient (normal form; stretch normalisation, tau time)",
+               {"comment": "l1 < 0: direct (supercritical); > 0: inverted (subcritical); docs/hopf-type.md"}),
+        "l1_error": (line.l1_error, "1", "error estimate of l1 (exact vs finite-difference derivatives at two steps, "
+                     "plus rounding)", {}),
+        "bifurcation_l1": (line.kind, "1", "type of the Hopf bifurcation from the sign of l1 against its error",
+                           flags(TYPES)),
+        "types_agree": (agree, "1", "type from l1 against the type from simulations", flags(AGREEMENT)),
+    }
+    if band:
+        with np.errstate(invalid="ignore"):
+            width = upper / (np.asarray(physics.chi_c_inertial(mu1, p.A, gamma)) * to_km) - 1.0
+        extra["bistable_K_over_M_upper"] = (upper, "s-2", "upper edge of the bistable band above an inverted line "
+                                            "(large start: stick-slip; small start: steady), by simulation", {})
+        extra["bistable_width"] = (width, "1", "relative width of the bistable band above the line", {})
+    return extra, _bautin_attrs(p, v, model, state_law)
+
+
+def _bautin_attrs(p: FrictionParams, v: np.ndarray, model: str, state_law: str) -> dict:
+    """Attributes of the Bautin points between min(V) and max(V) on the inertial line (the quasi-static one for
+    model "quasistatic")."""
+    line_model = "quasistatic" if model == "quasistatic" else "inertial"
+    where = f"on the {line_model} line between V = {v.min():.4g} and {v.max():.4g} m s-1"
+    if not v.max() > v.min():
+        return {"bautin": "not searched (a single V)"}
+    points = bautin_points(p, (float(v.min()), float(v.max())), model=line_model, state_law=state_law,
+                           rtol=BAUTIN_RTOL)
+    if not points:
+        return {"bautin": f"none {where} (l1 keeps its sign, or stays within its error)"}
+    return {"bautin": f"{len(points)} Bautin point(s) {where}, bracket {BAUTIN_RTOL:g} relative in gamma/A",
+            "bautin_V": np.array([b.V for b in points]),
+            "bautin_gamma_over_A": np.array([b.gamma_over_A for b in points]),
+            "bautin_K_over_M": np.array([b.K_over_M for b in points]),
+            "bautin_direct_above": np.array([int(b.direct_above) for b in points], dtype=np.int8)}
+
+
+def hopf_summary(ds: xr.Dataset) -> str:
+    """The lines ``sweep hopf`` prints about the type of the line (a Hopf file of :func:`locate_hopf`): counts of the
+    type from l1 and of its agreement with the simulated type, the Bautin points, the bistable band where measured."""
+    if "l1" not in ds:
+        return "type from l1: not computed (locate_hopf(..., lyapunov=False))"
+    names = ds["bifurcation_l1"].attrs["flag_meanings"].split()
+    codes = ds["bifurcation_l1"].values
+    counts = ", ".join(f"{names[c]} {int(n)}" for c, n in zip(*np.unique(codes, return_counts=True)))
+    lines = [f"type from l1 (normal form): {counts}"]
+    has = np.isfinite(ds["l1"].values)
+    if has.any():
+        lines.append(f"  l1 {np.nanmin(ds['l1'].values):.4g} .. {np.nanmax(ds['l1'].values):.4g}, error at most "
+                     f"{np.nanmax(ds['l1_error'].values):.2g}")
+    agree = ds["types_agree"].values
+    if (agree > 0).any():
+        lines.append(f"  agrees with the simulated type at {int((agree == 1).sum())} of {int((agree > 0).sum())} "
+                     "velocities" + ("" if (agree != 2).all() else " (DISAGREES at V = " + ", ".join(
+                         f"{x * 1e6:.4g}" for x in ds["V"].values[agree == 2]) + " um/s)"))
+    lines.append(f"Bautin: {ds.attrs.get('bautin', 'not searched')}")
+    if "bautin_V" in ds.attrs:
+        for v_b, g_b, km, up in zip(*(np.atleast_1d(ds.attrs[k]) for k in ("bautin_V", "bautin_gamma_over_A",
+                                                                          "bautin_K_over_M", "bautin_direct_above"))):
+            lines.append(f"  V = {v_b * 1e6:.6g} um/s, gamma/A = {g_b:.6g}, K/M = {km:.6g} s-2: "
+                         f"{'direct' if up else 'inverted'} at larger V")
+    if "bistable_K_over_M_upper" in ds:
+        width = ds["bistable_width"].values
+        sel = np.isfinite(width)
+        lines.append(f"bistable band above the line measured at {int(sel.sum())} V" + (": relative width " + ", ".join(
+            f"{w:.3g} at {x * 1e6:.4g} um/s" for w, x in zip(width[sel], ds["V"].values[sel])) if sel.any() else ""))
+    return "\n".join(lines)
 
 
 def with_simulated_line(ds: xr.Dataset, params: FrictionParams, model: str = "auto",
