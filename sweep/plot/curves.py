@@ -156,9 +156,15 @@ def draw_psi(ax, ds: xr.Dataset, points: list[dict[str, int]]) -> None:
 
 def draw_hopf(ax, ds: xr.Dataset) -> None:
     """A Hopf file (sweep.locate_hopf): V against K/M_c from the linear theory (eq. 3) and located by simulation
-    (markers coloured by the bifurcation type found), the V range without a line marked."""
+    (markers coloured by the bifurcation type found), the V range without a line marked. Where the file has l1
+    (docs/hopf-type.md) the theory line is solid where the bifurcation is direct (l1 < 0), dashed where inverted
+    (l1 > 0), dotted where |l1| is within its error, with the Bautin points (diamonds) and the upper edge of the
+    bistable band where it was measured."""
     v_um = um_per_s(ds)
-    ax.plot(ds["K_over_M_c_linear"].values, v_um, "k-", lw=1.2, label="linear theory (eq. 3)")
+    if "bifurcation_l1" in ds:
+        _draw_hopf_by_type(ax, ds, v_um)
+    else:
+        ax.plot(ds["K_over_M_c_linear"].values, v_um, "k-", lw=1.2, label="linear theory (eq. 3)")
     shown = np.zeros(v_um.size, bool)
     shown[thinned(v_um.size)] = True  # at most ~25 markers: more would hide the theory line
     note = "" if shown.all() else f" (markers at {shown.sum()} of {v_um.size} V)"
@@ -172,6 +178,46 @@ def draw_hopf(ax, ds: xr.Dataset) -> None:
            ylim=(v_um.min(), v_um.max()))
     ax.text(0.03, 0.03, "stick-slip at smaller K/M,\nsteady sliding at larger", transform=ax.transAxes, fontsize=8)
     ax.legend(fontsize=7, loc="upper right")
+
+
+HOPF_TYPE_STYLES = {"supercritical": ("-", "linear theory, direct (l1 < 0)"),
+                    "subcritical": ("--", "linear theory, inverted (l1 > 0)"),
+                    "degenerate": (":", "linear theory, degenerate (|l1| within its error)")}
+"""Line style and legend of the theory line by the type from l1 (draw_hopf)."""
+
+
+def _draw_hopf_by_type(ax, ds: xr.Dataset, v_um: np.ndarray) -> None:
+    """The theory line in runs of one type from l1, switching type at the Bautin points (between samples, a switch
+    without one at the later sample), the Bautin points and the bistable band's upper edge."""
+    names = flag_names(ds, "bifurcation_l1")
+    kinds = [names[c] for c in ds["bifurcation_l1"].values]
+    km, vs = list(ds["K_over_M_c_linear"].values), list(v_um)
+    if "bautin_V" in ds.attrs:  # the line's vertices include the Bautin points, where the type changes
+        km += list(np.atleast_1d(ds.attrs["bautin_K_over_M"]))
+        vs += list(np.atleast_1d(ds.attrs["bautin_V"]) * 1e6)
+        kinds += ["bautin"] * (len(vs) - len(kinds))
+    order = np.argsort(vs)
+    km, vs, kinds = np.array(km)[order], np.array(vs)[order], np.array(kinds)[order]
+    # segment i joins vertices i and i + 1; it takes the type of its left vertex, or of its right one after a Bautin
+    seg = np.where(kinds[:-1] == "bautin", kinds[1:], kinds[:-1])
+    labelled = set()
+    for i, name in enumerate(seg):
+        if name in HOPF_TYPE_STYLES:  # no segment drawn from a V without a line ("none")
+            style, text = HOPF_TYPE_STYLES[name]
+            ax.plot(km[i:i + 2], vs[i:i + 2], color="k", ls=style, lw=1.3,
+                    label=None if name in labelled else text)
+            labelled.add(name)
+    if vs.size == 1 and kinds[0] in HOPF_TYPE_STYLES:
+        ax.plot(km, vs, "k_", ms=8, label=HOPF_TYPE_STYLES[kinds[0]][1])
+    if "bautin_V" in ds.attrs:
+        v_b = np.atleast_1d(ds.attrs["bautin_V"]) * 1e6
+        ax.plot(np.atleast_1d(ds.attrs["bautin_K_over_M"]), v_b, "D", ms=7, color="C3", zorder=4,
+                label="Bautin point (l1 = 0): " + ", ".join(
+                    f"V = {x:.4g} µm/s, γ/A = {g:.3g}" for x, g in zip(v_b, np.atleast_1d(
+                        ds.attrs["bautin_gamma_over_A"]))))
+    if "bistable_K_over_M_upper" in ds and np.isfinite(ds["bistable_K_over_M_upper"].values).any():
+        ax.plot(ds["bistable_K_over_M_upper"].values, v_um, "^", ms=5, color="C1", zorder=4,
+                label="bistable band's upper edge (simulation)")
 
 
 def draw_hopf_gap(ax, ds: xr.Dataset) -> None:
