@@ -33,11 +33,11 @@ from pathlib import Path
 
 import numpy as np
 from _common import cpu_model, git_commit, sweep_tree_dirty, versions
-from sweep.plan.plan import C_STABLE, C_UNSTABLE, H_MAX, STEP_SAFETY
-from sweep.plan.plan import ERROR_GAIN as PLAN_ERROR_GAIN
 
 import sweep
-from sweep.run.runner import execute
+from sweep.plan.plan import C_STABLE, C_UNSTABLE, H_MAX, STEP_SAFETY
+from sweep.plan.plan import ERROR_GAIN as PLAN_ERROR_GAIN
+from sweep.protocols.stop.chunk import execute
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_OUT = HERE / "results" / "calibrate_rk4.json"

@@ -21,9 +21,9 @@ import json
 from pathlib import Path
 
 import numpy as np
-from sweep.plan.plan import time_scale
 
 from sweep.integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
+from sweep.plan.plan import time_scale
 
 HERE = Path(__file__).resolve().parent
 EVALS_PER_STEP = {"rk4": 4, "ros4": 3}

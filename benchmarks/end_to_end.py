@@ -59,14 +59,14 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-import sweep.plot.files  # noqa: E402
 from _common import loadavg, machine_info, sweep_digest, write_result  # noqa: E402
 
 import sweep  # noqa: E402
+import sweep.api  # noqa: E402
 import sweep.cli  # noqa: E402
+import sweep.plot.files  # noqa: E402
 import sweep.protocols.stop.engine  # noqa: E402
 import sweep.protocols.stop.model_choice  # noqa: E402
-import sweep.run.api  # noqa: E402
 import sweep.run.journal  # noqa: E402
 import sweep.run.runner  # noqa: E402
 
@@ -138,12 +138,12 @@ def instrumented(watch: Stopwatch):
         (sweep.run.runner, "choose_stop_models", "model_choice"),
         (sweep.run.runner, "run_points", "chunk_other"),
         (sweep.run.journal.Journal, "write", "journal"),
-        (sweep.run.api, "run_chunks", "consolidate"),
-        (sweep.run.api, "make_plan", "planning"),
-        (sweep.run.api, "prepare_run", "prepare_other"),
-        (sweep.run.api, "warm_up_kernels", "warm_up"),
-        (sweep.run.api, "build_dataset", "dataset"),
-        (sweep.run.api, "write", "netcdf"),
+        (sweep.api, "run_chunks", "consolidate"),
+        (sweep.api, "make_plan", "planning"),
+        (sweep.api, "prepare_run", "prepare_other"),
+        (sweep.api, "warm_up_kernels", "warm_up"),
+        (sweep.api, "build_dataset", "dataset"),
+        (sweep.api, "write", "netcdf"),
         (sweep.plot.files, "plot_file", "png"),
     ]
     lane_kernels, adaptive_kernels = sweep.protocols.stop.engine.lane_kernels, sweep.protocols.stop.engine.adaptive_lane_kernels

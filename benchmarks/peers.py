@@ -9,7 +9,7 @@ rectangular sub-grid of it), at rtol 1e-3 .. 1e-10, in one process, one after th
 
 * engine, run_sweep   sweep.run_sweep (plan + kernels + Dataset: what a user calls), wall time, with
                       numba.set_num_threads(1) and with all threads; the whole grid.
-* engine, execute     the kernel path (sweep.make_plan + sweep.run.runner.execute, as benchmarks/throughput.py uses
+* engine, execute     the kernel path (sweep.make_plan + sweep.protocols.stop.chunk.execute, as benchmarks/throughput.py uses
                       it), 1 thread and all threads, the whole grid; 1 thread on the subsample as well.
 * numbalsoda          LSODA (numbalsoda.lsoda) called from an @njit(parallel=True) prange loop over points, 1
                       thread and all threads; the whole grid and the subsample.
@@ -67,7 +67,7 @@ from numba import njit, prange
 
 import sweep
 from sweep.integrate.models.stop import EXP_MAX, tail_is_accurate, tail_slip
-from sweep.run.runner import execute
+from sweep.protocols.stop.chunk import execute
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_OUT = HERE / "results" / "peers.json"

@@ -66,9 +66,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import loadavg, machine_info, sweep_digest  # noqa: E402
-from sweep.plan.plan import CHUNK_POINTS, CHUNKS_AT_LEAST, LARGE_CHUNK_POINTS  # noqa: E402
 
 import sweep  # noqa: E402
+from sweep.protocols.stop.protocol import CHUNKS_AT_LEAST, LARGE_CHUNK_POINTS, PROTOCOL  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "results"
@@ -521,7 +521,7 @@ def main() -> None:
         "loadavg_start_end": [load0, loadavg()], "waits_for_quiet_machine": waits,
         "settings": {"scene": f"stop, preset {PRESET}, observables xi_inf, rtol {RTOL}, model auto, K/M logspace(3, 6, "
                               "n_k) x V logspace(-7, -4, n_v), n_k the smallest divisor of N >= sqrt(N)",
-                     "chunk_size": f"plan.chunk_size_for: {CHUNK_POINTS['stop']}, doubled up to {LARGE_CHUNK_POINTS} "
+                     "chunk_size": f"plan.chunk_size_for: {PROTOCOL.default_chunk}, doubled up to {LARGE_CHUNK_POINTS} "
                                    f"while >= {CHUNKS_AT_LEAST} chunks",
                      "timing": "time.perf_counter around run_sweep; best of 3 "
                      "(N <= 1e5) or 2 (1e6), one call with --quick; elapsed = ds.attrs['elapsed_seconds'] (the "

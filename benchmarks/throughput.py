@@ -3,7 +3,7 @@
 
     python benchmarks/throughput.py [--quick] [--out benchmarks/results/throughput.json] [--no-png]
 
-Every engine number goes through the public path (sweep.make_plan + sweep.run.runner.execute, what run_sweep runs,
+Every engine number goes through the public path (sweep.make_plan + sweep.protocols.stop.chunk.execute, what run_sweep runs,
 or run_sweep itself), so the script does not depend on the kernels' internals. Every point is solved as the
 engine always solves it: down its step ladder (sweep/integrate/ladder.py: a pilot pair at 2 h0, h0, then up to three
 finer runs at steps chosen from the point's own error; with a step given by the user, Scene(step=h), the fixed
@@ -65,8 +65,8 @@ import sweep
 from sweep import physics
 from sweep.integrate.models.stop import E_TAIL_MAX, EXP_MAX, RATE_FLOOR, TAIL_SAFETY
 from sweep.integrate.solvers import METHODS
+from sweep.protocols.stop.chunk import execute
 from sweep.protocols.stop.estimate import estimate_seconds
-from sweep.run.runner import execute
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_OUT = HERE / "results" / "throughput.json"

@@ -19,7 +19,7 @@ from .scene.presets import presets, provenance  # eager: the name would otherwis
 _moved.install()  # the module paths of earlier layouts (sweep.io, sweep.api, ...) stay importable, with a warning
 
 _PUBLIC = {
-    "run_sweep": "run.api", "solve_point": "run.api", "local_cluster": "run.backends", "locate_hopf": "analysis.hopf",
+    "run_sweep": "api", "solve_point": "api", "local_cluster": "run.backends", "locate_hopf": "analysis.hopf",
     "open": ("write.read", "open_sweep_file"), "save": "write.netcdf", "Plan": "plan.plan", "make_plan": "plan.plan",
     "Scene": "scene.scene", "default_scene": "scene.scene", "load_scene": "scene.scene", "Status": "status",
 }
@@ -52,8 +52,8 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
     from .analysis.hopf import locate_hopf
+    from .api import run_sweep, solve_point
     from .plan.plan import Plan, make_plan
-    from .run.api import run_sweep, solve_point
     from .run.backends import local_cluster
     from .scene.scene import Scene, default_scene, load_scene
     from .status import Status

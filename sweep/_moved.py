@@ -17,7 +17,6 @@ from types import MappingProxyType, ModuleType
 __all__ = ["MOVED", "install", "new_name"]
 
 MOVED = MappingProxyType({
-    "sweep.api": "sweep.run.api",
     "sweep.backends": "sweep.run.backends",
     "sweep.compile_notice": "sweep.run.compile_notice",
     "sweep.concurrent_chunks": "sweep.run.concurrent_chunks",

@@ -14,24 +14,23 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..analysis.hopf import with_simulated_line
-from ..assemble.dataset import build_dataset, build_driven_dataset
-from ..errors import InputError, OutputError
-from ..jitcache import source_digest
-from ..plan.plan import Plan, make_plan
-from ..protocols.stop.engine import n_samples
-from ..protocols.stop.model_choice import warm_up_models
-from ..scene.params import FrictionParams
-from ..scene.plausibility import PlausibilityWarning, warn_implausible, warn_not_ok
-from ..scene.scene import Scene
-from ..write.netcdf import open_dataset, write
-from ..write.targets import check_targets, write_failed
-from .backends import check_backend, open_backend
-from .compile_notice import announce_if_cold, inertial_stop_compiled_aside
-from .journal import Journal, journal_path
-from .lock import output_lock
-from .runner import chunk_ranges, chunk_task, run_chunks, sampled_blocks, stop_outputs, warm_up
-from .size import check_fits, estimate_size
+from . import protocols
+from .analysis.hopf import with_simulated_line
+from .errors import InputError, OutputError
+from .jitcache import source_digest
+from .plan.plan import Plan, make_plan
+from .run.backends import check_backend, open_backend
+from .run.compile_notice import announce_if_cold
+from .run.journal import Journal, journal_path
+from .run.lock import output_lock
+from .run.runner import chunk_ranges, run_chunks
+from .run.size import check_fits, estimate_size
+from .scene.params import FrictionParams
+from .scene.plausibility import PlausibilityWarning, warn_implausible, warn_not_ok
+from .scene.scene import Scene
+from .write.netcdf import open_dataset, write
+from .write.targets import check_targets, write_failed
+from .write.writer import FlatArrays
 
 __all__ = ["PreparedRun", "check_run_arguments", "prepare_run", "run_sweep", "solve_point"]
 
@@ -114,20 +113,18 @@ class PreparedRun:
         sampled in time stayed in the journal, after the write, with the Dataset read from the file. The write is
         always waited for: the file is whole or absent when this returns or raises."""
         scene, plan, size, journal = self.scene, self.plan, self.chunk_size, self.journal
+        protocol = protocols.get(scene.protocol)
+        # with a journal the arrays sampled in time stay there: written into the file chunk by chunk, never held
+        kept = protocol.journal_keeps(scene, plan) if journal is not None else frozenset()
+        result = FlatArrays(plan.n_points, skip=kept)
         t0 = time.perf_counter()
-        flat, seconds = run_chunks(scene, plan, size, journal, progress, self.imap)
+        run_chunks(scene, plan, size, [result] if journal is None else [journal, result], progress, self.imap)
         self.compute_s = time.perf_counter() - t0
-        # with a journal the arrays sampled in time stayed there: written into the file chunk by chunk, never held
-        blocks = None
-        if journal is not None and plan.protocol == "stop" and n_samples(scene, plan) > 0:
-            blocks = sampled_blocks(scene, plan.tau_samples.size, size, journal)  # (holds no reference to the plan)
-        if plan.protocol == "driven":
-            ds = build_driven_dataset(scene, flat, seconds, plan.describe(), history=history)
-        else:
-            ds = build_dataset(scene, plan, *stop_outputs(flat, seconds), history=history, sampled=blocks is None)
+        blocks = protocol.sampled_blocks(scene, plan, size, journal) if kept else None  # (no reference to the plan)
+        ds = protocol.dataset(scene, plan, result.flat, result.seconds, history, sampled=blocks is None)
         # the Dataset holds what it needs; the plan's and the unused outputs' per-point arrays (~100 bytes per point)
         # go before the netCDF write, whose copies are the peak of a large run's memory
-        del plan, flat
+        del plan, result
         self.plan = None
         if scene.simulated_hopf_line:  # asked for: the driven kernel is compiled only then
             ds = with_simulated_line(ds, scene.params, scene.model, scene.model_tol, scene.state_law)
@@ -221,18 +218,9 @@ def _bytes_in(folder: Path) -> int:
 
 
 def warm_up_kernels(scene: Scene, plan) -> None:
-    """Compile (or load from numba's disk cache) every kernel the scene uses, on one point each: the stop scene's
-    chunks (the inertial stop kernels only where the model policy can use them) or the driven scene's, and the
-    driven kernel of the simulated Hopf line only where the scene asks for that line."""
-    if plan.protocol == "stop":
-        with inertial_stop_compiled_aside(scene):  # a cold cache: two kernel families compile on two cores
-            warm_up(scene, plan)
-        if scene.model != "quasistatic":
-            warm_up_models()
-    else:  # one point per variant of the driven kernel the plan uses (quasi-static, inertial)
-        inertial = plan.inertial & (plan.G > 0.0)
-        firsts = np.unique([int(np.argmax(inertial == used)) for used in (False, True) if (inertial == used).any()])
-        chunk_task(scene, plan.take(firsts), firsts)
+    """Compile (or load from numba's disk cache) every kernel the scene uses, on one point each (its protocol's
+    Protocol.warm_up), and the driven kernel of the simulated Hopf line only where the scene asks for that line."""
+    protocols.get(scene.protocol).warm_up(scene, plan)
     if scene.simulated_hopf_line:
         with warnings.catch_warnings():  # the scene's axes were checked; this is one of its velocities
             warnings.simplefilter("ignore", PlausibilityWarning)

@@ -40,21 +40,22 @@ def _cmd_run(args: argparse.Namespace) -> int:
     _check_run_targets(scene, args)
     check_fits(scene, size)  # (api.prepare_run checks again) before the plan's and the kernels' imports: at once
     announce_if_cold(scene)  # within a second of the start, before the plan imports and compiles anything
-    if scene.protocol == "driven":
-        return _run_driven(scene, args)
+    from . import protocols
     from .run.compile_notice import SLOW_S
 
+    protocol = protocols.get(scene.protocol)
     picture = _StagedPicture(_png(args))
     try:
-        ds, compile_s, elapsed, compute_s = _run_to_file(scene, args, warm=True, picture=picture)
+        ds, compile_s, elapsed, compute_s = _run_to_file(scene, args, warm=protocol.warm_up_timed, picture=picture)
         out = args.output
         # the rate of the computing alone: with the file and the picture in it, the default scene's 20,000 points
         # read ~20,000 points/s, of a computing at ~500,000
+        kernel = (f"; kernel {'compiled' if compile_s > SLOW_S else 'loaded'} in {compile_s:.1f} s beforehand"
+                  if protocol.warm_up_timed else ", including compilation on a first run")
         print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s: computed in {_seconds(compute_s)} s, "
-              f"{scene.n_points / max(compute_s, 1e-9):,.0f} points/s, then the file and the picture; kernel "
-              f"{'compiled' if compile_s > SLOW_S else 'loaded'} in {compile_s:.1f} s beforehand)")
-        print(_flag_summary(ds, "status"))
-        print(_model_summary(ds))
+              f"{scene.n_points / max(compute_s, 1e-9):,.0f} points/s, then the file and the picture{kernel})")
+        for line in protocol.summary(ds):
+            print(line)
         for png in picture.publish():
             print(f"wrote {png}")
     finally:
@@ -114,8 +115,7 @@ def _check_run_targets(scene, args: argparse.Namespace) -> None:
 
     targets = {"data": args.output}
     if not args.output.is_dir():  # (refused below; its picture's name cannot be made from a folder's)
-        kind = "driven" if scene.protocol == "driven" else "stop"
-        pictures = picture_paths(_png(args), kind, trajectories="trajectory" in scene.observables,
+        pictures = picture_paths(_png(args), scene.protocol, trajectories="trajectory" in scene.observables,
                                  points=scene.n_points)
         targets.update({("picture" if i == 0 else "second picture"): path for i, path in enumerate(pictures)})
     check_targets(targets, overwrite=args.overwrite, inputs={"scene file": args.config})
@@ -123,61 +123,23 @@ def _check_run_targets(scene, args: argparse.Namespace) -> None:
 
 def _dry_run(scene, size) -> int:
     """``sweep run --dry-run``: the size from the grid's shape (refused, like the run, if it does not fit in
-    memory), then the plan and the pilot's estimate of the time, both from a subsample where the grid is large."""
+    memory), then the plan and, where its protocol measures it, the pilot's estimate of the time, both from a
+    subsample where the grid is large (Protocol.dry_run)."""
+    from . import protocols
     from .run.size import check_fits
 
+    protocol = protocols.get(scene.protocol)
     axes = " x ".join(f"{n} {name}" for n, name in zip(scene.shape, ("K/M", "V", *scene.dims[2:])))
     print(f"{'grid':>28}: {axes} = {scene.n_points:,} points, "
-          + (f"rtol {scene.rtol:g}, " if scene.protocol == "stop" else "")
+          + (f"rtol {scene.rtol:g}, " if protocol.warm_up_timed else "")
           + f"observables {', '.join(scene.observables)}")
     for line in size.lines():
         print(line)
     sys.stdout.flush()
     check_fits(scene, size)  # before the imports of the plan and the kernels (~1 s): a refusal answers at once
-    from .plan.plan import make_plan
-    from .protocols.stop.estimate import estimate_seconds, plan_sample
-
-    planned, note = plan_sample(scene)
-    if note:
-        print(f"{'plan of':>28}: {note}")
-    plan = make_plan(planned)
-    if scene.protocol == "driven":
-        for key, text in plan.describe().items():
-            print(f"{key:>28}: {text}")
-        return 0
-    seconds, mean_steps = estimate_seconds(planned, plan, n_points=scene.n_points)
-    print(_plan_text(scene, plan))
-    print(f"{'estimated steps per point':>28}: {mean_steps:.0f} (mean of a pilot subsample)")
-    print(f"{'estimated time':>28}: {seconds:.1f} s on this machine (timed pilot)")
+    for line in protocol.dry_run(scene):
+        print(line)
     return 0
-
-
-def _plan_text(scene, plan) -> str:
-    """The plan's text with one line about the model: the scene's (the plan describes the quasi-static pass; with
-    model "auto" the inertial points are chosen per point after it)."""
-    model = f"{'model':>28}: {scene.model}" + (
-        f" (model_tol {scene.model_tol:g}): the quasi-static plan below for every point, then the inertial model "
-        "where the estimated error of the quasi-static one is larger" if scene.model == "auto" else "")
-    lines = plan.text().splitlines()
-    keep = [line for line in lines if line.split(":")[0].strip() != "model"]
-    hopf = f"{'hopf_line':>28}: " + ("analytic chi_c and the line located by simulation (driven kernel)"
-                                     if scene.simulated_hopf_line else
-                                     "analytic chi_c (simulated_hopf_line = true adds the line located by simulation)")
-    return "\n".join([model, *keep, hopf])
-
-
-def _run_driven(scene, args: argparse.Namespace) -> int:
-    """``sweep run`` of a driven scene: one simulation per point (no plan, no pilot estimate)."""
-    from .plot.files import plot_regimes
-
-    ds, _, elapsed, _ = _run_to_file(scene, args, warm=False)
-    out = args.output
-    print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s, including compilation on a first run)")
-    print(_flag_summary(ds, "status"))
-    print(_model_summary(ds))
-    print(_flag_summary(ds, "regime"))
-    print(f"wrote {plot_regimes(ds, _png(args))}")
-    return _most_failed(ds, out)
 
 
 MOST_FAILED = 0.5
@@ -207,7 +169,7 @@ def _run_to_file(scene, args: argparse.Namespace, warm: bool, picture=None):
     lock and the journal's check before the kernels are loaded (``warm``: separately, timed; a dask run always
     warms up before its fan-out); ``picture(ds)`` drawn while the file is written (api.PreparedRun.finish).
     Returns (Dataset, seconds warming up, seconds running (the picture included), seconds of the chunk loop)."""
-    from .run.api import prepare_run, warm_up_kernels
+    from .api import prepare_run, warm_up_kernels
     from .run.compile_notice import timed
 
     dask = args.workers is not None or args.scheduler is not None
@@ -226,23 +188,6 @@ def _run_to_file(scene, args: argparse.Namespace, warm: bool, picture=None):
 def _history() -> str:
     """The command line, for the file's history attribute."""
     return "sweep " + " ".join(shlex.quote(a) for a in sys.argv[1:])
-
-
-def _flag_summary(ds, name: str) -> str:
-    """"name: meaning count, ..." of a flag variable."""
-    meanings = ds[name].attrs["flag_meanings"].split()
-    codes, counts = np.unique(ds[name].values, return_counts=True)
-    return f"{name}: " + ", ".join(f"{meanings[c]} {n}" for c, n in zip(codes, counts))
-
-
-def _model_summary(ds) -> str:
-    """The model flag counts, and the largest estimated error of the quasi-static model where it was used."""
-    text = _flag_summary(ds, "model")
-    if "model_error" in ds:
-        used = ds["model_error"].where(ds["model"] == 0)
-        if bool(used.notnull().any()):
-            text += f" (largest estimated error of the quasi-static model where used: {float(used.max()):.2g})"
-    return text
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:
@@ -267,6 +212,7 @@ FLAGS = ("status", "regime", "bifurcation", "model")
 
 def _cmd_info(args: argparse.Namespace) -> int:
     """``sweep info FILE``: what the file is, where it comes from, its axes, flag counts and value ranges."""
+    from .status import flag_summary
     from .write.read import read_sweep_file
 
     ds, kind = read_sweep_file(args.file)
@@ -282,7 +228,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
         print(f"  {key}: {ds.attrs[key]}")
     for name in FLAGS:
         if name in ds and "flag_meanings" in ds[name].attrs:
-            print("  " + _flag_summary(ds, name))
+            print("  " + flag_summary(ds, name))
     for name, var in ds.data_vars.items():
         vals = var.values[np.isfinite(var.values)] if var.dtype.kind == "f" else var.values
         rng = f"{float(vals.min()):.4g} .. {float(vals.max()):.4g}" if vals.size else "all NaN"
@@ -295,6 +241,7 @@ def _cmd_hopf(args: argparse.Namespace) -> int:
     from .analysis.hopf import locate_hopf
     from .plot.files import plot_hopf
     from .scene.scene import hopf_config
+    from .status import flag_summary
     from .write.netcdf import save
     from .write.targets import check_targets
 
@@ -305,8 +252,8 @@ def _cmd_hopf(args: argparse.Namespace) -> int:
     ds = locate_hopf(params, v, progress=False if args.quiet else None, **kwargs)
     ds.attrs["history"] = _history()
     out = save(ds, args.output, overwrite=args.overwrite)
-    print(f"wrote {out} ({v.size} velocities in {time.perf_counter() - t0:.2f} s; {_flag_summary(ds, 'bifurcation')}; "
-          f"{_flag_summary(ds, 'model')})")
+    print(f"wrote {out} ({v.size} velocities in {time.perf_counter() - t0:.2f} s; {flag_summary(ds, 'bifurcation')}; "
+          f"{flag_summary(ds, 'model')})")
     print(f"wrote {plot_hopf(ds, _png(args))}")
     return 0
 

@@ -45,3 +45,14 @@ def flag_attrs() -> dict[str, object]:
         "flag_values": np.array([s.value for s in Status], dtype=np.int8),
         "flag_meanings": " ".join(s.name.lower() for s in Status),
     }
+
+
+MODEL_FLAG = {"flag_values": np.array([0, 1], np.int8), "flag_meanings": "quasistatic inertial"}
+"""CF flag attributes of the per-point ``model`` variable (0: the quasi-static model, 1: the inertial one)."""
+
+
+def flag_summary(ds, name: str) -> str:
+    """"name: meaning count, ..." of the flag variable ``name`` of a Dataset."""
+    meanings = ds[name].attrs["flag_meanings"].split()
+    codes, counts = np.unique(ds[name].values, return_counts=True)
+    return f"{name}: " + ", ".join(f"{meanings[c]} {n}" for c, n in zip(codes, counts))

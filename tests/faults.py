@@ -38,9 +38,9 @@ def interrupt_after(monkeypatch, chunks: int) -> list[int]:
     """Make the next stop runs raise KeyboardInterrupt when chunk number ``chunks`` + 1 starts (the journal then holds
     ``chunks`` chunks, as a run killed at that moment leaves it); undo with ``monkeypatch.undo()``. Returns the list
     the sizes of the chunks computed before the interrupt go into."""
-    import sweep.run.runner as runner
+    import sweep.protocols.stop.chunk as stop_chunks
 
-    real, sizes = runner.stop_chunk, []
+    real, sizes = stop_chunks.stop_chunk, []
 
     def stopped(scene, plan, progress=False):
         compute = real(scene, plan, progress)
@@ -52,16 +52,16 @@ def interrupt_after(monkeypatch, chunks: int) -> list[int]:
             return compute(points)
         return counted
 
-    monkeypatch.setattr(runner, "stop_chunk", stopped)
+    monkeypatch.setattr(stop_chunks, "stop_chunk", stopped)
     return sizes
 
 
 def trace_chunks(monkeypatch) -> None:
     """Print :data:`TRACE` on stderr before each chunk of a stop run is computed (the ``trace-chunks`` fault of a
     command, in this process)."""
-    import sweep.run.runner as runner
+    import sweep.protocols.stop.chunk as stop_chunks
 
-    monkeypatch.setattr(runner, "stop_chunk", _wrapped(runner.stop_chunk, lambda: sys.stderr.write(TRACE + "\n")))
+    monkeypatch.setattr(stop_chunks, "stop_chunk", _wrapped(stop_chunks.stop_chunk, lambda: sys.stderr.write(TRACE + "\n")))
 
 
 def truncate(path: Path, keep: float = 0.5) -> None:
@@ -147,7 +147,7 @@ def _read_only(folder: Path) -> None:
 
 
 def _folder_in_the_way(path: Path) -> None:
-    import sweep.run.api as api
+    import sweep.api as api
 
     real = api.write
 
@@ -172,9 +172,9 @@ def _wrapped(stop_chunk, action):
 
 
 def _before_each_chunk(action) -> None:
-    import sweep.run.runner as runner
+    import sweep.protocols.stop.chunk as stop_chunks
 
-    runner.stop_chunk = _wrapped(runner.stop_chunk, action)
+    stop_chunks.stop_chunk = _wrapped(stop_chunks.stop_chunk, action)
 
 
 def install(spec: str) -> None:

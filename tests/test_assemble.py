@@ -3,11 +3,11 @@ anything else falls back to the public constructor."""
 
 import numpy as np
 import pytest
-import sweep.assemble.construct as assemble_module
 import xarray as xr
-from sweep.assemble.construct import assemble
 
 import sweep
+import sweep.assemble.construct as assemble_module
+from sweep.assemble.construct import assemble
 
 
 def public(ds: xr.Dataset) -> xr.Dataset:

@@ -98,14 +98,15 @@ def test_the_file_is_cf_with_units_on_every_coordinate_and_its_scene_round_trips
 
 
 def test_a_4d_sweep_resumes_to_the_same_numbers(tmp_path, monkeypatch):
+    import sweep.protocols.stop.chunk as stop_chunks
     import sweep.run.runner as runner
 
     sc, out = scene({"A": [0.006, 0.009], "m1": [0.005, 0.0125]}, **TIME_RESOLVED), tmp_path / "r.nc"
-    real_chunk = runner.stop_chunk
+    real_chunk = stop_chunks.stop_chunk
     interrupt_after(monkeypatch, 2)
     with pytest.raises(runner.Interrupted, match="2 of 4 chunks are saved"):
         sweep.run_sweep(sc, progress=False, output=out, chunk_size=7)
-    monkeypatch.setattr(runner, "stop_chunk", real_chunk)
+    monkeypatch.setattr(stop_chunks, "stop_chunk", real_chunk)
     resumed = sweep.run_sweep(sc, progress=False, output=out, chunk_size=7, resume=True)
     xr.testing.assert_identical(resumed.load().drop_attrs(deep=False),
                                 sweep.run_sweep(sc, progress=False).drop_attrs(deep=False))

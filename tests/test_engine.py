@@ -1,10 +1,10 @@
 """The engine's two batch paths agree, and results do not depend on how the grid is chunked."""
 
 import numpy as np
-from sweep.plan.plan import make_plan
 
 import sweep
-from sweep.run.runner import execute
+from sweep.plan.plan import make_plan
+from sweep.protocols.stop.chunk import execute
 
 PARAMS = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0033, D0=0.7e-6)
 

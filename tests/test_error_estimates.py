@@ -127,10 +127,9 @@ def test_rounding_bound_covers_the_amplified_scatter(chi_over_A, mu1_over_A):
     """A weakening stop amplifies rounding made early by mu1/chi (sweep.physics.perturbation_growth): runs at
     steps 1e-7 apart (truncation errors equal to ~1e-7 relative of each other) scatter by the amplified rounding.
     The ladder's rounding term must cover that scatter, and not by more than 100x."""
-    from sweep.plan.plan import ROUNDOFF
-
     from sweep.integrate.ladder import rounding_error
     from sweep.integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
+    from sweep.plan.plan import ROUNDOFF
 
     relax_runs = lane_kernels(np.dtype(np.float64), "rk4")[0]
     k, a, b = np.array([chi_over_A]), np.array([mu1_over_A]), np.zeros(1)

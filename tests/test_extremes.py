@@ -31,10 +31,10 @@ import pytest
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 from reference import reference_stop
-from sweep.plan.plan import make_plan
 
 import sweep
-from sweep.run.runner import execute
+from sweep.plan.plan import make_plan
+from sweep.protocols.stop.chunk import execute
 
 G = 9.81  # m s-2 (FrictionParams default)
 V0 = 1e-6  # m s-1 (FrictionParams default)

@@ -337,6 +337,7 @@ def test_two_velocities_hatch_follows_the_line_not_the_cells():
     hatching grid cells put a stable band under the hatch."""
     import matplotlib.pyplot as plt
     import numpy as np
+
     from sweep.plot.maps import hopf_line_dense
 
     ds = _stop(np.logspace(4, 6, 40), [1e-7, 1e-6])
@@ -376,6 +377,7 @@ def test_the_simulated_line_over_200_velocities_is_thinned():
 def test_hopf_gap_shows_the_bisection_bracket_on_each_point():
     import matplotlib.pyplot as plt
     import numpy as np
+
     from sweep.plot.curves import draw_hopf_gap
     from sweep.plot.style import new_figure
 

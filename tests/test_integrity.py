@@ -287,16 +287,16 @@ def test_two_runs_on_one_output(tmp_path, config, monkeypatch, capsys, reference
     """A run going on in this process (held in its first chunk) holds the lock: a second run, with or without
     --resume (the advice of the first refusal), is refused naming it, before doing anything; once the first ends,
     its file is the uninterrupted one. A lock left by a process that is gone is removed with one line."""
-    import sweep.run.runner as runner
+    import sweep.protocols.stop.chunk as stop_chunks
 
     out = tmp_path / "s.nc"
-    real, started, release = runner.stop_chunk, threading.Event(), threading.Event()
+    real, started, release = stop_chunks.stop_chunk, threading.Event(), threading.Event()
 
     def held(sc, plan, progress=False):
         compute = real(sc, plan, progress)
         return lambda points: started.set() or release.wait(120) and compute(points)
 
-    monkeypatch.setattr(runner, "stop_chunk", held)
+    monkeypatch.setattr(stop_chunks, "stop_chunk", held)
     first = threading.Thread(target=sweep.run_sweep, args=(scene(),),
                              kwargs=dict(progress=False, output=out, chunk_size=CHUNK))
     first.start()
@@ -485,8 +485,8 @@ def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeyp
     (exit 3), and --resume finishes once the space is freed. Needs a tmpfs to mount (root on Linux); the same faults
     injected are test_a_chunk_write_failing_mid_run_keeps_the_journal_for_resume and
     test_a_netcdf_write_failing_at_the_end_keeps_the_journal_for_resume."""
-    import sweep.run.api as api
-    import sweep.run.runner as runner
+    import sweep.api as api
+    import sweep.protocols.stop.chunk as stop_chunks
     from sweep.cli import main
 
     disk = tmp_path / "disk"
@@ -497,7 +497,7 @@ def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeyp
     try:
         out, computed_ = disk / "s.nc", []
         if when == "chunks":
-            real = runner.stop_chunk
+            real = stop_chunks.stop_chunk
 
             def filling(sc, plan, progress=False):
                 compute = real(sc, plan, progress)
@@ -505,7 +505,7 @@ def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeyp
                 return lambda points: (computed_.append(1), len(computed_) == 6
                                        and (chunks_on_disk(out, 5), fill(disk)), compute(points))[-1]
 
-            monkeypatch.setattr(runner, "stop_chunk", filling)
+            monkeypatch.setattr(stop_chunks, "stop_chunk", filling)
         else:
             real_write = api.write
             monkeypatch.setattr(api, "write", lambda *a, **k: (fill(disk), real_write(*a, **k))[-1])

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from cases import STOP_CASES, case_params
 from reference import reference_stop
-from sweep.plan.plan import make_plan
 
 import sweep
 from sweep.integrate.lanes_adaptive import _log2_approx
+from sweep.plan.plan import make_plan
 from sweep.protocols.stop.engine import _adaptive_runner
 from sweep.status import Status
 
@@ -76,7 +76,7 @@ def test_a_run_past_max_steps_is_flagged_not_silent():
     """A point that needs more attempts than max_steps comes back max_steps, with no value."""
     case = next(c for c in FINITE_CASES if c.name == "s2_KM1e4_V100um_corner")
     s = case_scene(case, 1e-8, max_steps=5)
-    out = sweep.run.runner.execute(s, make_plan(s), progress=False)
+    out = sweep.protocols.stop.chunk.execute(s, make_plan(s), progress=False)
     assert out.status[0] == Status.MAX_STEPS and np.isnan(out.xi_inf[0])
 
 
@@ -145,6 +145,6 @@ def test_a_sweep_compiles_each_adaptive_kernel_once():
     kernels = {"relax_runs (auto)": adaptive_lane_kernels(sweep.plan.plan.LANES_METHOD, True)[0], "_judge": _judge,
                "_route": _route}
     assert {name: len(k.signatures) for name, k in kernels.items()} == dict.fromkeys(kernels, 1)
-    # the warm-up (sweep.run.runner.warm_up, the command line's) and the dask workers pass writable arrays
+    # the warm-up (sweep.protocols.stop.chunk.warm_up, the command line's) and the dask workers pass writable arrays
     readonly = {name: str(k.signatures[0]) for name, k in kernels.items() if "readonly" in str(k.signatures[0])}
     assert not readonly, readonly

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from cases import STOP_CASES, case_params
 from reference import reference_stop
-from sweep.plan.plan import make_plan
 
 import sweep
 import sweep.protocols.stop.engine as engine
 from sweep.integrate.lanes_sampled import sampled_lane_kernels
+from sweep.plan.plan import make_plan
 from sweep.status import Status
 
 FINITE_CASES = [c for c in STOP_CASES if c.expect_finite]

@@ -1,4 +1,4 @@
-"""``sweep run`` draws its picture while the netCDF file is written (sweep.run.api.PreparedRun.finish ``picture``), and
+"""``sweep run`` draws its picture while the netCDF file is written (sweep.api.PreparedRun.finish ``picture``), and
 the picture appears only once the data are safe: a failed write leaves no new picture and keeps an old one; Ctrl-C
 while drawing still leaves a whole file (and no journal)."""
 
@@ -11,11 +11,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import sweep.plot.files as plot
 import xarray as xr
 
 import sweep
-import sweep.run.api as api
+import sweep.api as api
+import sweep.plot.files as plot
 from sweep.cli import main
 from sweep.run.journal import journal_path
 

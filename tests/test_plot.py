@@ -12,13 +12,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 import xarray as xr  # noqa: E402
+
+import sweep  # noqa: E402
+from sweep.cli import main  # noqa: E402
 from sweep.plot.curves import draw_hopf, draw_psi, draw_xi, trajectory_points  # noqa: E402
 from sweep.plot.files import file_kind, plot_file  # noqa: E402
 from sweep.plot.maps import draw_map, draw_regime_map  # noqa: E402
 from sweep.plot.style import caption, no_hopf_line_band  # noqa: E402
-
-import sweep  # noqa: E402
-from sweep.cli import main  # noqa: E402
 
 SAMPLE2 = sweep.presets["sample2"]
 PAIR, MAP = (520, 1280), (560, 760)  # pixel sizes (rows, columns) of the two-panel and one-panel pictures

@@ -12,10 +12,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
-from sweep.plot.blocks import MAX_CELLS, block_edges, block_means, block_size, reduction_note  # noqa: E402
-from sweep.plot.maps import draw_map  # noqa: E402
 
 import sweep  # noqa: E402
+from sweep.plot.blocks import MAX_CELLS, block_edges, block_means, block_size, reduction_note  # noqa: E402
+from sweep.plot.maps import draw_map  # noqa: E402
 
 
 def matplotlib_edges(x: np.ndarray) -> np.ndarray:

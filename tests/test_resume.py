@@ -65,7 +65,8 @@ def test_results_do_not_depend_on_the_chunking(make):
     (141, ("xi_inf",), "inertial", 4096),  # an inertial point costs ~1 ms: the chunks are the progress
 ])
 def test_default_chunks_grow_with_the_grid_and_leave_enough_chunks(side, observables, model, size):
-    from sweep.plan.plan import CHUNKS_AT_LEAST, ONE_CHUNK_POINTS, make_plan
+    from sweep.plan.plan import make_plan
+    from sweep.protocols.stop.protocol import CHUNKS_AT_LEAST, ONE_CHUNK_POINTS
 
     scene = stop_scene(K_over_M=np.logspace(3, 6, side), V=np.logspace(-7, -4, side), observables=observables,
                        model=model)
@@ -115,21 +116,23 @@ def test_trajectories_go_into_the_file_chunk_by_chunk_never_held_whole(tmp_path,
     """With an output the arrays sampled in time stay in the journal and are written block by block (a V row is 17
     points: chunks of whole rows, chunks with partial rows at both ends, chunks inside a row); the file is identical
     to the Dataset of a run held in memory."""
-    import sweep.run.api as api
+    import sweep.api as api
     import sweep.write.netcdf as io
+    from sweep.write.writer import FlatArrays
 
     scene = stop_scene(**TIME_RESOLVED)
     in_memory = sweep.run_sweep(scene, progress=False)
     real_run_chunks, real_write = api.run_chunks, io._write_flat
     held, written = [], []
-    monkeypatch.setattr(api, "run_chunks", lambda *a, **k: held.append(real_run_chunks(*a, **k)) or held[-1])
+    monkeypatch.setattr(api, "run_chunks", lambda scene, plan, size, writers, *a, **k:
+                        held.append(writers) or real_run_chunks(scene, plan, size, writers, *a, **k))
     monkeypatch.setattr(io, "_write_flat", lambda var, start, values, n_v: written.append(values.shape[0]) or
                         real_write(var, start, values, n_v))
     for size in (34, 40, 5):
         held.clear(), written.clear()
         out = tmp_path / f"t{size}.nc"
         returned = sweep.run_sweep(scene, progress=False, output=out, chunk_size=size)
-        flat, _ = held[0]
+        flat = next(w.flat for w in held[0] if isinstance(w, FlatArrays))
         assert not {"xi_at", "u_at", "xi_at_err", "u_at_err"} & set(flat), "sampled arrays consolidated in memory"
         assert 0 < max(written) <= size and sum(written) == 6 * scene.n_points  # xi, psi, slip_at and their errors
         in_file = open_dataset(out)
@@ -141,14 +144,15 @@ def test_trajectories_go_into_the_file_chunk_by_chunk_never_held_whole(tmp_path,
 def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, monkeypatch, kw):
     """A journal holding some chunks (as a killed run leaves it): resume computes the rest only, and the file
     equals an uninterrupted run; a different scene, or no --resume, is refused before any work."""
+    import sweep.protocols.stop.chunk as stop_chunks
     import sweep.run.runner as runner
 
     scene, out = stop_scene(**kw), tmp_path / "s.nc"
-    real_chunk = runner.stop_chunk
+    real_chunk = stop_chunks.stop_chunk
     calls = interrupt_after(monkeypatch, 3)
     with pytest.raises(runner.Interrupted, match="3 of 8 chunks are saved"):
         sweep.run_sweep(scene, progress=False, output=out, chunk_size=50)
-    monkeypatch.setattr(runner, "stop_chunk", real_chunk)
+    monkeypatch.setattr(stop_chunks, "stop_chunk", real_chunk)
     assert len(list(journal_path(out).glob("chunk-*.npz"))) == 3 and not out.exists()
     with pytest.raises(InputError, match="resume"):
         sweep.run_sweep(scene, progress=False, output=out, chunk_size=50)
@@ -156,7 +160,7 @@ def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, 
         sweep.run_sweep(stop_scene(rtol=1e-5, **kw), progress=False, output=out, chunk_size=50, resume=True)
     with pytest.raises(InputError, match="differs in chunk_size"):
         sweep.run_sweep(scene, progress=False, output=out, chunk_size=60, resume=True)
-    import sweep.run.api as api  # another version of sweep (its sources' digest) may give other numbers: refused
+    import sweep.api as api  # another version of sweep (its sources' digest) may give other numbers: refused
 
     with monkeypatch.context() as m:
         m.setattr(api, "source_digest", lambda: "0123456789abcdef")
@@ -169,7 +173,7 @@ def test_resume_computes_only_the_missing_chunks_and_checks_the_scene(tmp_path, 
         compute = real_chunk(sc, plan, progress)
         return lambda points: computed.append(points.size) or compute(points)
 
-    monkeypatch.setattr(runner, "stop_chunk", counting_stop_chunk)
+    monkeypatch.setattr(stop_chunks, "stop_chunk", counting_stop_chunk)
     resumed = sweep.run_sweep(scene, progress=False, output=out, chunk_size=50, resume=True)
     assert sum(computed) == scene.n_points - sum(calls)
     assert_same_numbers(resumed.load(), sweep.run_sweep(scene, progress=False))

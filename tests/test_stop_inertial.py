@@ -11,7 +11,7 @@ from reference_inertial import reference_inertial_stop
 import sweep
 from sweep import physics
 from sweep.errors import InputError
-from sweep.protocols.stop.model_choice import MODEL_FLAG
+from sweep.status import MODEL_FLAG
 
 G_OVER_A = np.array([1e-3, 1e-2, 0.1, 1.0, 10.0])
 PARAM_SETS = {
@@ -140,10 +140,9 @@ def test_model_tol_is_checked_before_any_work():
 def lane_estimate(k: float, a: float, b: float, G: float) -> tuple[float, float, int]:
     """(xi_inf, first-order correction, status) as model="auto" estimates them for one point where the ladder did not
     carry the correction (time-resolved scenes): the RK4 lane run at ESTIMATE_STEP."""
-    from sweep.plan.plan import time_scale
-
     from sweep.accuracy import ESTIMATE_RTOL, ESTIMATE_STEP
     from sweep.integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
+    from sweep.plan.plan import time_scale
     from sweep.protocols.stop.model_choice import ESTIMATE_MAX_STEPS
 
     relax_runs = lane_kernels(np.dtype(np.float64), "rk4", True)[0]

@@ -17,9 +17,9 @@ from .. import physics
 from ..accuracy import ESTIMATE_RTOL, TIGHTER
 from ..plan.plan import Plan, line_uses_inertia
 from ..protocols.stop.engine import SAMPLED, RawResult
-from ..protocols.stop.model_choice import MODEL_FLAG, ModelChoice
+from ..protocols.stop.model_choice import ModelChoice
 from ..scene.scene import AXIS_UNITS, Scene
-from ..status import Status, flag_attrs
+from ..status import MODEL_FLAG, Status, flag_attrs
 from .construct import assemble
 
 __all__ = ["build_dataset", "build_driven_dataset", "sampled_variables", "REFERENCES"]

@@ -31,7 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .. import physics
+from .. import physics, protocols
 from ..accuracy import (
     AUTO_METHOD,
     C_STABLE,
@@ -40,9 +40,7 @@ from ..accuracy import (
     COARSE_GAIN,
     CONSERVATIVE_GAIN,
     CTRL_TOL_FACTOR,
-    DECAYED,
     ERROR_GAIN,
-    GROWTH_RTOL,
     H_MAX,
     H_PILOT,
     LANE_H0_FACTOR,
@@ -50,13 +48,10 @@ from ..accuracy import (
     MAX_RATIO,
     MAX_RUNS,
     MIN_RATIO,
-    NEUTRAL_SPREAD,
     ORDER_WINDOW,
     PILOT_FACTOR,
     RATE_FLOOR,
-    RUNAWAY_XI_DOT,
     SHARP_GAIN,
-    STATIONARY_TOL,
     STEP_SAFETY,
     STIFF_H_PILOT,
     STIFF_K_MAX,
@@ -68,55 +63,23 @@ from ..accuracy import (
     TARGET,
     TIME_RESOLVED_FACTOR,
     TOL_RATIO,
-    driven_stepper_rtol,
     lane_control_tolerance,
 )
 from ..integrate.solvers import METHODS
 from ..scene.scene import Scene
 
-__all__ = ["CHUNK_POINTS", "Plan", "PointParams", "chunk_size_for", "make_plan", "choose_method", "line_uses_inertia",
+__all__ = ["Plan", "PointParams", "chunk_size_for", "common_fields", "point_params", "make_plan", "choose_method", "line_uses_inertia",
            "samples_in_lanes", "stop_plan_for_points"]
 
 LANES_METHOD = "dop853"
 """The embedded pair of the adaptive lanes (model "auto", relaxed slip): fewer attempts than dp5 at every rtol of
 1e-4..1e-10 and as cheap at 1e-3 for the same achieved error (measured on the default scene)."""
 
-CHUNK_POINTS = {"stop": 4096, "driven": 1024}
-"""Points per chunk by protocol (one compiled batch call, one progress update, one journal entry): a driven point
-costs ~10-100x a stop point. The smallest chunk of a large grid: :func:`chunk_size_for`."""
-LARGE_CHUNK_POINTS = 16384
-"""The largest default chunk of a stop scene that samples nothing in time (:func:`chunk_size_for`)."""
-ONE_CHUNK_POINTS = 32768
-"""A stop grid that samples nothing in time, of model "quasistatic" or "auto", is one chunk up to this many points
-(:func:`chunk_size_for`): a quasi-static point costs ~1-10 us on one core (the default grid at rtol 1e-3, its costly
-corner at rtol 1e-10), and the chunk's fixed cost is paid once: the tolerance ladder's numpy between its kernel
-calls, the choice of model, the kernel calls' hand-over to the threads and each call's last runs, on which the other
-threads wait. Measured (default scene, 20,000 points, rtol 1e-6, ``run_sweep``, best of 20 twice; 5 chunks of 4096
-points -> one): model "quasistatic" 27.9 -> 26.6 ms on 1 thread, 16.8 -> 15.8 ms on 2; model "auto" 31.8 -> 30.9 ms,
-19.2 -> 18.0 ms. The points that "auto" solves with inertia (~1 ms each) are solved in batches with a bar of their
-own (model_choice.RELAX_BATCH, runner.in_process), which the run's bar, counting chunks, would not show until the
-end. Not with model "inertial", whose chunks are its progress."""
-CHUNKS_AT_LEAST = 60
-"""A grid keeps at least this many chunks when its chunks grow (:func:`chunk_size_for`): ~8 a thread on 8 threads to
-share out side by side (sweep/run/concurrent_chunks.py), the last chunks' idle share small."""
-
-
 def chunk_size_for(scene: Scene) -> int:
-    """The default chunk size of ``scene``: CHUNK_POINTS of its protocol, doubled up to LARGE_CHUNK_POINTS while the
-    grid still has CHUNKS_AT_LEAST chunks, for a stop scene that samples nothing in time (a chunk's trajectories
-    are held whole until it is journaled). A chunk has a fixed cost besides its points (~1 ms of numpy between its
-    kernel calls and in the choice of model, ~2.4 ms writing it to the journal: numpy's .npz and a checksum of
-    ~150 kB): at 4096 points it was ~25 % of the compute of a 1e6-point run (2 cores), at 16384 (61 chunks) ~7 %:
-    `sweep run` of 1e6 points 2.6-3.2 s against 3.0-3.9 s (benchmarks/end_to_end.py, docs/design.md). The layout
+    """The default chunk size of ``scene``: its protocol's (sweep.protocols.base.Protocol.chunk_size). The layout
     depends on the grid only, never on the machine: a journal resumes anywhere."""
-    size = CHUNK_POINTS[scene.protocol]
-    if scene.protocol != "stop" or {"trajectory", "slip_at"} & set(scene.observables):
-        return size
-    if scene.model != "inertial" and scene.n_points <= ONE_CHUNK_POINTS:
-        return max(1, scene.n_points)
-    while 2 * size <= LARGE_CHUNK_POINTS and scene.n_points >= CHUNKS_AT_LEAST * 2 * size:
-        size *= 2
-    return size
+    return protocols.get(scene.protocol).chunk_size(scene)
+
 
 ROUNDOFF = {np.dtype(np.float64): 2.0 * np.finfo(np.float64).eps, np.dtype(np.float32): 2.0 * np.finfo(np.float32).eps}
 """Rounding error per step, relative (added to the estimate as steps * ROUNDOFF * |xi_inf|)."""
@@ -304,7 +267,7 @@ class Plan:
         step = (f"{self.step.min():.6g}..{self.step.max():.6g}" if self.step.min() < self.step.max()
                 else f"{self.step[0]:.6g}")
         text = {
-            "model": _model_policy(self.protocol, self.model, self.model_tol),
+            "model": _model_policy(self.model, self.model_tol),
             "state_law": self.state_law,
             "state": ("xi (u = s - xi)" + (" + tau quadrature" if self.needs_tau else "") if self.state_law == "aging"
                       else "(xi, u) in the phase plane, then xi in t = 1/u (docs/physics.md 7.3)"),
@@ -386,13 +349,10 @@ def line_uses_inertia(gamma_over_A: np.ndarray, model: str, model_tol: float) ->
     return np.full(g.shape, model == "inertial")
 
 
-def _model_policy(protocol: str, model: str, model_tol: float) -> str:
-    """What the plan says of the model (the same words as the Dataset's plan_model)."""
+def _model_policy(model: str, model_tol: float) -> str:
+    """What a stop plan says of the model (the same words as the Dataset's plan_model)."""
     if model != "auto":
         return model
-    if protocol == "driven":
-        return (f"auto (model_tol {model_tol:g}): inertial where gamma/A > model_tol and where the quasi-static run "
-                f"broke down (regime runaway), quasi-static elsewhere (variable model)")
     return (f"auto (model_tol {model_tol:g}): per point, inertial where the estimated error of the quasi-static model "
             f"is larger (variable model)")
 
@@ -417,7 +377,7 @@ class PointParams(NamedTuple):
         return self.chi / self.A, self.mu1 / self.A, self.m2 / self.A
 
 
-def _axes(scene: Scene) -> PointParams:
+def point_params(scene: Scene) -> PointParams:
     """The per-point inputs, flat in C order over the scene's grid (K_over_M, V and its extra axes: each point
     with its own A, m1, m2, D0 where the scene sweeps them). Each formula is evaluated per point, so a point's
     inputs are the same numbers whatever the other axes."""
@@ -429,46 +389,11 @@ def _axes(scene: Scene) -> PointParams:
     return PointParams(chi, mu1, flat(at["A"]).astype(float), flat(at["m2"]).astype(float), G)
 
 
-def _common(scene: Scene, chi, mu1, k, a, b, G, finite, inertial) -> dict:
+def common_fields(scene: Scene, chi, mu1, k, a, b, G, finite, inertial) -> dict:
     """The fields of a Plan that every protocol fills the same way."""
     return dict(protocol=scene.protocol, model=scene.model, model_tol=scene.model_tol, max_steps=int(scene.max_steps),
                 chi=chi, mu1=mu1, k=k, a=a, b=b, s_c=time_scale(k, a), finite=finite, G=G, inertial=inertial,
                 chunk_size=chunk_size_for(scene), state_law=scene.state_law)
-
-
-def _driven_plan(scene: Scene) -> Plan:
-    """The plan of a driven scene: one simulation per point (sweep/integrate/driven.py)."""
-    pts = _axes(scene)
-    chi, mu1, G = pts.chi, pts.mu1, pts.G
-    k, a, b = pts.reduced
-    inertial = line_uses_inertia(G, scene.model, scene.model_tol)
-    n = k.size
-    return Plan(method="dp5", method_reason="adaptive, PI control; rodas3 where the inertial mode is stiff",
-                point_methods=("dp5",), point_method=np.zeros(n, np.int8), adaptive=True, lanes=False,
-                dtype=np.dtype(np.float64), step=np.full(n, np.nan), step_source="controller",
-                ctrl_tol=driven_stepper_rtol(scene.rtol), rule="", tau_samples=np.empty(0), needs_tau=False,
-                notes=tuple(_driven_notes(scene).items()),
-                **_common(scene, chi, mu1, k, a, b, G, np.ones(n, bool), inertial))
-
-
-W_TEXT = ", w = ln xi' with inertia"
-
-
-def _driven_notes(scene: Scene) -> dict[str, str]:
-    """What the driven run chose, for the Dataset attrs."""
-    return {
-        "model": _model_policy("driven", scene.model, scene.model_tol),
-        "state_law": scene.state_law,
-        "method": f"dp5 (adaptive, PI control) in tau on (z = tau - xi, u = ln psi"
-                  f"{W_TEXT if scene.model != 'quasistatic' else ''}), local rtol "
-                  f"{driven_stepper_rtol(scene.rtol):g} x max(perturbation, |z|)",
-        "regime_rule": (f"runaway: slip velocity > {RUNAWAY_XI_DOT:g} V; steady: state below {DECAYED:g} x "
-                        f"perturbation or 3 per-cycle growth rates < 0 agreeing to {GROWTH_RTOL:g}; stationary: "
-                        f"|a_k/a_k-1 - 1| <= {STATIONARY_TOL:g} over 3 cycles, neutral within {NEUTRAL_SPREAD:g} "
-                        f"of the first cycle's amplitude, else stick_slip; undecided after {scene.max_cycles} "
-                        f"cycles or {scene.max_steps} steps"),
-        "perturbation": f"z(0) = {scene.perturbation:g}, u(0) = 0",
-    }
 
 
 def finite_relaxed_slip(a: np.ndarray, b: np.ndarray, state_law: str = "aging") -> np.ndarray:
@@ -493,14 +418,13 @@ def _general_plan(scene: Scene, chi, mu1, k, a, b, G, finite) -> Plan:
                       f"rtol/{TIGHTER**2:g}, rtol/{TIGHTER**3:g}, the middle one returned, {GENERAL_ESTIMATE_GAIN:g} x "
                       f"the larger difference to its neighbours its error estimate"),
                 tau_samples=scene.tau_samples, needs_tau=False,
-                **_common(scene, chi, mu1, k, a, b, G, finite, np.zeros(k.size, bool)))
+                **common_fields(scene, chi, mu1, k, a, b, G, finite, np.zeros(k.size, bool)))
 
 
 def make_plan(scene: Scene) -> Plan:
-    """Decide model policy, state, method, float type and per-point step parameters for ``scene`` (any protocol)."""
-    if scene.protocol == "driven":
-        return _driven_plan(scene)
-    return stop_plan_for_points(scene, _axes(scene))
+    """What to model and how to step for every point of ``scene``: its protocol's plan
+    (sweep.protocols.base.Protocol.make_plan)."""
+    return protocols.get(scene.protocol).make_plan(scene)
 
 
 def stop_plan_for_points(scene: Scene, points: PointParams) -> Plan:
@@ -554,5 +478,5 @@ def stop_plan_for_points(scene: Scene, points: PointParams) -> Plan:
         tau_samples=scene.tau_samples,
         needs_tau=scene.time_resolved,
         sampled_lanes=samples_in_lanes(scene),
-        **_common(scene, chi, mu1, k, a, b, G, finite, finite & (scene.model == "inertial")),
+        **common_fields(scene, chi, mu1, k, a, b, G, finite, finite & (scene.model == "inertial")),
     )

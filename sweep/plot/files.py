@@ -19,9 +19,9 @@ from pathlib import Path
 
 import xarray as xr
 
+from .. import protocols
 from ..errors import InputError
 from ..write.read import KINDS, file_kind  # noqa: F401 (re-exported: sweep.plot.files.file_kind)
-from ..write.targets import picture_paths
 from .curves import draw_curve, draw_hopf, draw_hopf_gap, draw_psi, draw_regime_curve, draw_xi, trajectory_points
 from .maps import draw_map, draw_regime_map
 from .slices import extra_dims, plot_slices
@@ -38,33 +38,23 @@ def has_trajectories(ds: xr.Dataset) -> bool:
 
 
 def plot_file(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = None) -> list[Path]:
-    """The pictures that fit the file (module docstring), written to ``path`` and, for the transients of a stop
-    sweep over more than one point, ``<path stem>_trajectories.png``. ``variable``: map or draw that variable of a
-    stop or driven file alone. Returns the paths written."""
+    """The pictures that fit the file, written to ``path`` (and beside it, where its protocol draws more than one:
+    Protocol.draw). ``variable``: map or draw that variable of a sweep file alone. Returns the paths written."""
     kind = file_kind(ds)
-    if kind == "stop" and extra_dims(ds):
-        return _plot_extra_axes(ds, Path(path), variable)
-    pictures = picture_paths(path, kind, has_trajectories(ds), ds.sizes.get("K_over_M", 1) * ds.sizes.get("V", 1),
-                             variable)
-    if variable is not None:
-        if variable not in ds.data_vars or set(ds[variable].dims) != {"K_over_M", "V"}:
-            names = [n for n, v in ds.data_vars.items() if set(v.dims) == {"K_over_M", "V"}]
-            raise InputError(f"--variable must be a (K_over_M, V) variable of the file, one of {names}; "
-                             f"got {variable!r}")
-        return [plot_landscape(ds, pictures[0], variable=variable)]
     if kind == "hopf":
-        return [plot_hopf(ds, pictures[0])]
-    if kind == "driven":
-        return [plot_regimes(ds, pictures[0])]
-    if has_trajectories(ds) and len(pictures) == 1:
-        return [plot_trajectories(ds, pictures[0])]  # a single point: its transient is the whole story
-    written = [plot_landscape(ds, pictures[0])]
-    if len(pictures) > 1:
-        written.append(plot_trajectories(ds, pictures[1]))
-    return written
+        check_map_variable(ds, variable)
+        return [plot_hopf(ds, path)]
+    return protocols.get(kind).draw(ds, path, variable)
 
 
-def _plot_extra_axes(ds: xr.Dataset, path: Path, variable: str | None) -> list[Path]:
+def check_map_variable(ds: xr.Dataset, variable: str | None) -> None:
+    """InputError unless ``variable`` is None or a (K_over_M, V) variable of the file."""
+    if variable is not None and (variable not in ds.data_vars or set(ds[variable].dims) != {"K_over_M", "V"}):
+        names = [n for n, v in ds.data_vars.items() if set(v.dims) == {"K_over_M", "V"}]
+        raise InputError(f"--variable must be a (K_over_M, V) variable of the file, one of {names}; got {variable!r}")
+
+
+def plot_extra_axes(ds: xr.Dataset, path: Path, variable: str | None) -> list[Path]:
     """A stop sweep with axes beyond (K/M, V): 2-D slices of ``variable`` (default xi_inf; sweep.plot.slices) and,
     where the file holds transients, those of its middle slice along the extra axes."""
     grid = ds["xi_inf"].dims
@@ -79,10 +69,12 @@ def _plot_extra_axes(ds: xr.Dataset, path: Path, variable: str | None) -> list[P
     return written
 
 
-def plot_landscape(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = None) -> Path:
-    """Stop (or driven) sweep: ``variable`` (default: xi_inf and the stress relaxation side by side) as a log-log
-    map over (K/M, V) (sweep.plot.maps.draw_map), or as a curve along the axis of a grid with a single K/M or a
-    single V (sweep.plot.curves.draw_curve)."""
+def plot_landscape(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = None, title: str = "stop scene",
+                   eq10: bool = True) -> Path:
+    """A sweep file's ``variable`` (default: xi_inf and the stress relaxation side by side) as a log-log map over
+    (K/M, V) (sweep.plot.maps.draw_map), or as a curve along the axis of a grid with a single K/M or a single V
+    (sweep.plot.curves.draw_curve, with the paper's eq. 10 where ``eq10``). ``title``: the scene's words."""
+    check_map_variable(ds, variable)
     variables = (variable,) if variable else STOP_VARIABLES
     fig, axes = new_figure("pair" if len(variables) > 1 else "map", len(variables))
     two_d = min(ds.sizes["K_over_M"], ds.sizes["V"]) > 1
@@ -90,11 +82,11 @@ def plot_landscape(ds: xr.Dataset, path: str | os.PathLike, variable: str | None
         if two_d:
             draw_map(fig, ax, ds, name)
         else:
-            draw_curve(ax, ds, name, eq10=file_kind(ds) == "stop")
+            draw_curve(ax, ds, name, eq10=eq10)
     if two_d:
         figure_legend(fig, axes)
     note = "; hatched: steady sliding unstable (stick-slip side)" if two_d else ""
-    fig.suptitle(caption(ds, f"{_scene_name(ds)}{note}"), fontsize=9)
+    fig.suptitle(caption(ds, f"{title}{note}"), fontsize=9)
     return save(fig, path)
 
 
@@ -128,16 +120,12 @@ def plot_hopf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     return save(fig, path)
 
 
-def plot_trajectories(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+def plot_trajectories(ds: xr.Dataset, path: str | os.PathLike, title: str = "stop scene") -> Path:
     """Stop file with transients: xi(tau) (with eq. 12 and xi_inf) and psi(tau) (with its asymptotes) on log axes
     for up to six points spread over the grid."""
     points = trajectory_points(ds)
     fig, (ax_xi, ax_psi) = new_figure("pair", 2)
     draw_xi(ax_xi, ds, points)
     draw_psi(ax_psi, ds, points)
-    fig.suptitle(caption(ds, f"{_scene_name(ds)}: transients after the stop"), fontsize=9)
+    fig.suptitle(caption(ds, f"{title}: transients after the stop"), fontsize=9)
     return save(fig, path)
-
-
-def _scene_name(ds: xr.Dataset) -> str:
-    return "stop scene" if file_kind(ds) == "stop" else "driven scene"

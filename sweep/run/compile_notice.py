@@ -35,6 +35,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from .. import protocols
 from ..log import LOGGER
 
 __all__ = ["COLD_COMPILE_S", "HELPER_WAIT_S", "SLOW_S", "announce_if_cold", "cache_is_cold", "compiled_aside",
@@ -49,7 +50,8 @@ SLOW_S = 3.0
 HELPER_WAIT_S = 300.0
 """At most this long a block of :func:`compiled_aside` waits for its helper once it is done itself (a family compiles
 in ~20-45 s on 2 cores): a helper stuck for any reason is killed, and this process compiles what it still needs."""
-PACKAGE = Path(__file__).resolve().parent
+PACKAGE = Path(__file__).resolve().parents[1]
+"""The package's folder (numba keeps its cache in the __pycache__ folders below it)."""
 _checked = False
 _compiling_announced = False
 
@@ -70,33 +72,15 @@ def _has_index(folder: Path, must_contain: str = "") -> bool:
     return folder.is_dir() and any(must_contain in str(p) for p in folder.rglob("*.nbi"))
 
 
-def _samples_in_lanes(scene) -> bool:
-    """:func:`sweep.plan.plan.samples_in_lanes` (imported here, not at the top: the notice module stays light)."""
-    from ..plan.plan import samples_in_lanes
-
-    return samples_in_lanes(scene)
-
-
 def kernel_families(scene=None) -> list[str]:
-    """The kernel families (keys of :data:`COLD_COMPILE_S`) a scene compiles on first use; every family without a
-    scene. The stop scene: the relaxed-slip engine, or the per-point path for time-resolved observables, the
-    slip law's own march, the inertial kernels where the model can be inertial (time-resolved: the sampled lanes
-    where :func:`sweep.plan.plan.samples_in_lanes` takes them; their points without a finite relaxed slip compile the
-    per-point path besides, which the scene alone does not tell); the driven scene: the quasi-static
-    and/or inertial variant; the simulated Hopf line adds the driven variant of the scene's model."""
+    """The kernel families (keys of :data:`COLD_COMPILE_S`) a scene compiles on first use (its protocol's
+    Protocol.kernel_families; the simulated Hopf line adds the driven variant of the scene's model); every family
+    without a scene."""
     if scene is None:
         return list(COLD_COMPILE_S)
-    families = []
-    if scene.protocol == "stop":
-        if scene.state_law == "slip":
-            families.append("slip-law stop")
-        elif scene.model != "inertial":
-            families.append("relaxed-slip engine" if scene.observables == ("xi_inf",) else
-                            "time-resolved lanes" if _samples_in_lanes(scene) else "time-resolved stop")
-        if scene.model != "quasistatic":
-            families.append("inertial stop")
-    if scene.protocol == "driven" or scene.simulated_hopf_line:
-        families += driven_families(scene.model)
+    families = protocols.get(scene.protocol).kernel_families(scene)
+    if scene.simulated_hopf_line:
+        families += [f for f in driven_families(scene.model) if f not in families]
     return families
 
 

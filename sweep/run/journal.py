@@ -53,6 +53,7 @@ import numpy as np
 
 from ..errors import InputError, JournalWarning, OutputError
 from ..write.targets import remove_quietly, write_failed
+from ..write.writer import Writer
 
 __all__ = ["FORMAT", "JOURNAL_RECORD", "Journal", "journal_path", "rejected_path"]
 
@@ -135,8 +136,9 @@ def _move_aside(path: Path, folder: Path) -> Path:
     return target
 
 
-class Journal:
-    """The finished chunks of one run (module docstring). Use :meth:`open`.
+class Journal(Writer):
+    """The finished chunks of one run (module docstring), a writer of the chunk loop (sweep/write/writer.py) that
+    keeps what it holds across runs. Use :meth:`open`.
 
     ``ranges[i]`` = (first point, last point + 1) of chunk i: the run's chunk layout (sweep.run.runner.chunk_ranges)."""
 
@@ -285,6 +287,24 @@ class Journal:
         self._done.add(index)
 
     @contextlib.contextmanager
+    def start(self, layout: tuple[np.ndarray, ...]) -> None:  # chunks written in a helper thread
+        self.layout = layout
+        self._writing = contextlib.ExitStack()
+        self._keep = self._writing.enter_context(self.background())
+
+    def put(self, index: int, arrays: dict[str, np.ndarray]) -> None:
+        self._keep(index, arrays)
+
+    def close(self) -> None:
+        self._writing.close()
+
+    def abort(self, error: BaseException) -> None:
+        self._writing.__exit__(type(error), error, error.__traceback__)
+
+    def resume_hint(self, n_chunks: int) -> str | None:
+        return (f"interrupted: {len(self.done())} of {n_chunks} chunks are saved in {self.path}; run the same command "
+                f"with --resume (run_sweep(..., resume=True)) to compute only the rest")
+
     def background(self) -> Iterator[Callable[[int, dict[str, np.ndarray]], None]]:
         """``with journal.background() as keep: keep(index, arrays)``: :meth:`write` in one helper thread, chunks
         written in the order handed over (module docstring). A failed write is raised (its :class:`OutputError`) by

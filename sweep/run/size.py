@@ -19,28 +19,19 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+from .. import protocols
 from ..errors import InputError
 from ..scene.scene import Scene
 from ..write.targets import human_bytes
 
 __all__ = ["RunSize", "available_memory", "check_fits", "estimate_size"]
 
-MEMORY_PER_POINT = {"stop": 180, "driven": 300}
-"""Peak bytes of a run per point, besides its sampled times (module docstring)."""
 MEMORY_PER_SAMPLE = 50
 """Peak bytes per point and sampled time held in memory (a run without an output file)."""
-FILE_PER_POINT = {"stop": 80, "driven": 80}
-"""Bytes per point of a file, before compression, besides what the observables below add."""
-FILE_PER_VALUE = {"t50": 16, "t90": 16, "trajectory": 32, "slip_at": 16}
-"""Bytes per point that each observable adds to the file, per value (trajectory: per sampled time, xi, psi and
-their errors; slip_at: per time of t_obs, with its error)."""
 UNCHECKED_MEMORY = 32 * 2**20
 """Bytes of memory a run may need without a look at what the machine has (:func:`check_fits`): less than the
 process's own imports took (numba, xarray: ~200 MB), and the look (/proc/meminfo, the control group's files) costs
 0.05-0.2 ms, a few percent of a sweep of a few thousand points."""
-CORE_SECONDS_PER_POINT = {"stop": 2.2e-5, "driven": 3.2e-4}
-"""Typical core-seconds a point takes (module docstring); a scene's own cost can differ tenfold either way, which the
-dry run's pilot measures where the grid can be planned."""
 
 
 @dataclass(frozen=True)
@@ -79,22 +70,19 @@ def _duration(seconds: float) -> str:
 
 
 def file_bytes_per_point(scene: Scene) -> int:
-    """Bytes per point of the scene's file before compression."""
-    values = {"t50": 1, "t90": 1, "trajectory": scene.trajectory_tau[2], "slip_at": len(scene.t_obs)}
-    return FILE_PER_POINT[scene.protocol] + sum(FILE_PER_VALUE[name] * values[name]
-                                                for name in scene.observables if name in FILE_PER_VALUE)
+    """Bytes per point of the scene's file before compression (its protocol's Protocol.file_bytes_per_point)."""
+    return protocols.get(scene.protocol).file_bytes_per_point(scene)
 
 
 def estimate_size(scene: Scene, journaled: bool) -> RunSize:
     """The size of running ``scene`` (``journaled``: with an output file, whose journal keeps the sampled times)."""
     n = scene.n_points
-    samples = 0 if journaled or scene.protocol != "stop" else (
-        ("trajectory" in scene.observables) * scene.trajectory_tau[2] + ("slip_at" in scene.observables) *
-        len(scene.t_obs))
-    memory = n * (MEMORY_PER_POINT[scene.protocol] + MEMORY_PER_SAMPLE * samples)
+    protocol = protocols.get(scene.protocol)  # its bytes and seconds per point (sweep/protocols/)
+    samples = 0 if journaled else protocol.samples_per_point(scene)
+    memory = n * (protocol.memory_per_point + MEMORY_PER_SAMPLE * samples)
     file = n * file_bytes_per_point(scene)
     return RunSize(points=n, memory=memory, file=file, disk=2 * file if journaled else file,
-                   seconds=n * CORE_SECONDS_PER_POINT[scene.protocol] / _cores())
+                   seconds=n * protocol.core_seconds_per_point / _cores())
 
 
 def available_memory() -> int | None:

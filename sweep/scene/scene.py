@@ -15,30 +15,28 @@ from typing import Any
 
 import numpy as np
 
+from .. import protocols
 from ..errors import InputError
-from ..integrate.models import REGISTRY, available
+from ..integrate.models.state_laws import STATE_LAWS as _LAWS
 from ..integrate.solvers import METHODS
 from .params import FrictionParams, require_finite, require_positive
 from .presets import presets
 
-__all__ = ["Scene", "OBSERVABLES", "DRIVEN_OBSERVABLES", "PROTOCOLS", "DEFAULT_ATOL", "EXTRA_AXES", "AXIS_UNITS",
+__all__ = ["Scene", "PROTOCOLS", "DEFAULT_ATOL", "EXTRA_AXES", "AXIS_UNITS",
            "default_scene", "load_scene"]
 
-PROTOCOLS = ("stop", "driven")
-OBSERVABLES = ("xi_inf", "trajectory", "slip_at", "t50", "t90")
-"""Observables of the stop protocol."""
-DRIVEN_OBSERVABLES = ("regime", "growth_rate", "period", "amplitude")
-"""Observables of the driven protocol (regime, with status, is always stored)."""
-DRIVEN_METHODS = ("auto", "dp5")
+PROTOCOLS = protocols.names()
+"""The protocols a scene may name (sweep/protocols/: each owns its fields, plan, chunks, schema and picture)."""
 MODELS = ("auto", "quasistatic", "inertial")
-STATE_LAWS = tuple(sorted({law for (_, _, law) in REGISTRY}))
-"""The state laws (sweep/integrate/models/state_laws.py; docs/physics.md 7), as the model registry has them."""
+STATE_LAWS = tuple(sorted(_LAWS))
+"""The state laws (sweep/integrate/models/state_laws.py; docs/physics.md 7), as their registry has them."""
 MODEL_TOL_RANGE = (1e-6, 0.5)
 """Allowed bound on the relative error of the model choice (Scene.model_tol)."""
 PERTURBATION_RANGE = (1e-8, 1.0)
 """Allowed initial spring stretch of the driven scene (reduced, z = tau - xi)."""
 DEFAULT_ATOL = {"xi_inf": 1e-12, "trajectory": 1e-12, "slip_at": 1e-12, "t50": 0.0, "t90": 0.0}
-"""Absolute floors per observable, in the observable's reduced unit (xi for slips, tau for times)."""
+"""Absolute floors per observable with a numerical tolerance, in the observable's reduced unit (xi for slips, tau for
+times)."""
 RTOL_RANGE = (1e-10, 1e-2)
 PRECISIONS = ("float64", "float32")
 FLOAT32_RTOL_MIN = 1e-5
@@ -175,6 +173,7 @@ class Scene:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen dataclass)
         if self.protocol not in PROTOCOLS:
             raise InputError(f"protocol must be one of {PROTOCOLS}, got {self.protocol!r}")
+        protocol = protocols.get(self.protocol)
         if not isinstance(self.params, FrictionParams):
             raise InputError(f"params must be a sweep.FrictionParams, got {type(self.params).__name__}")
         set_("K_over_M", _axis("K_over_M", self.K_over_M))
@@ -183,9 +182,9 @@ class Scene:
         if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
             raise InputError(f"rtol must be in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}], got {rtol!r}")
         set_("rtol", rtol)
-        allowed, always = (DRIVEN_OBSERVABLES, "regime") if self.protocol == "driven" else (OBSERVABLES, "xi_inf")
+        allowed, always = protocol.observables, protocol.always
         if self.observables is None:
-            obs = allowed if self.protocol == "driven" else (always,)
+            obs = protocol.default_observables
         else:
             obs = (self.observables,) if isinstance(self.observables, str) else tuple(self.observables)
         unknown = [o for o in obs if o not in allowed]
@@ -195,8 +194,8 @@ class Scene:
         set_("observables", tuple(o for o in allowed if o in obs or o == always))
         atol = dict(self.atol)
         for name, value in atol.items():
-            if name not in OBSERVABLES:
-                raise InputError(f"atol has unknown observable {name!r}; allowed: {list(OBSERVABLES)}")
+            if name not in DEFAULT_ATOL:
+                raise InputError(f"atol has unknown observable {name!r}; allowed: {list(DEFAULT_ATOL)}")
             if require_finite(f"atol[{name!r}]", value) < 0:
                 raise InputError(f"atol[{name!r}] must be >= 0 (allowed range: 0 <= atol < inf), got {value!r}")
         set_("atol", {**DEFAULT_ATOL, **{k: float(v) for k, v in atol.items()}})
@@ -207,6 +206,8 @@ class Scene:
         set_("t_obs", tuple(t_obs.tolist()))
         self._check_method()
         self._check_driven()
+        self._check_model()
+        protocol.check(self)
         if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, (int, np.integer)) or self.max_steps < 1:
             raise InputError(f"max_steps must be an integer >= 1, got {_plain(self.max_steps)!r}")
         if not isinstance(self.simulated_hopf_line, (bool, np.bool_)):
@@ -223,9 +224,10 @@ class Scene:
             raise InputError(f"axes has unknown name(s) {unknown}; allowed: {list(EXTRA_AXES)} (K_over_M and V are "
                              f"the scene's own axes)")
         axes = {n: _axis(n, self.axes[n]) for n in EXTRA_AXES if n in self.axes}
-        if axes and self.protocol != "stop":
-            raise InputError(f"axes {list(axes)}: extra axes are offered for protocol 'stop' only, got protocol "
-                             f"{self.protocol!r}")
+        if axes and not protocols.get(self.protocol).extra_axes:
+            offered = [name for name in PROTOCOLS if protocols.get(name).extra_axes]
+            raise InputError(f"axes {list(axes)}: extra axes are offered for protocol {' and '.join(map(repr, offered))} "
+                             f"only, got protocol {self.protocol!r}")
         if axes and self.simulated_hopf_line:
             raise InputError(f"simulated_hopf_line needs one parameter set (it is located per V); leave it false "
                              f"with axes {list(axes)}")
@@ -259,6 +261,7 @@ class Scene:
                                  f"{self.method!r}")
 
     def _check_driven(self) -> None:
+        """The driven scene's fields, checked for every protocol (a scene file may carry them unused)."""
         pert = require_positive("perturbation", self.perturbation)
         if not PERTURBATION_RANGE[0] <= pert <= PERTURBATION_RANGE[1]:
             raise InputError(f"perturbation must be in [{PERTURBATION_RANGE[0]:g}, {PERTURBATION_RANGE[1]:g}] "
@@ -267,16 +270,6 @@ class Scene:
         if isinstance(self.max_cycles, bool) or not isinstance(self.max_cycles, (int, np.integer)) \
                 or self.max_cycles < 4:
             raise InputError(f"max_cycles must be an integer >= 4, got {_plain(self.max_cycles)!r}")
-        self._check_model()
-        if self.protocol != "driven":
-            return
-        if self.method not in DRIVEN_METHODS:
-            raise InputError(f"protocol 'driven' runs the adaptive dp5 stepper: method must be one of "
-                             f"{list(DRIVEN_METHODS)}, got {self.method!r}")
-        for name, value, default in (("step", self.step, None), ("precision", self.precision, "float64"),
-                                     ("t_obs", self.t_obs, ())):
-            if value != default:
-                raise InputError(f"{name} is not used by protocol 'driven' (leave it at {default!r}), got {value!r}")
 
     def _check_model(self) -> None:
         if self.model not in MODELS:
@@ -287,33 +280,15 @@ class Scene:
                              f"error of the model choice), got {tol!r}")
         object.__setattr__(self, "model_tol", tol)
         self._check_state_law()
-        if self.protocol == "stop" and self.model == "inertial":
-            self._require_relaxed_slip_only("model 'inertial'", "the adaptive Rosenbrock rodas3")
 
     def _check_state_law(self) -> None:
         if self.state_law not in STATE_LAWS:
             raise InputError(f"state_law must be one of {list(STATE_LAWS)}, got {self.state_law!r}")
-        if not available(self.protocol, self.model, self.state_law):
-            have = sorted(m for (proto, m, law) in REGISTRY if proto == self.protocol and law == self.state_law)
-            raise InputError(f"state_law {self.state_law!r} runs with model {' or '.join(map(repr, have))} only "
-                             f"(sweep.integrate.models.REGISTRY), got model={self.model!r}")
-        if self.state_law == "aging":
-            return
-        if self.protocol == "stop":
-            self._require_relaxed_slip_only(f"state_law {self.state_law!r}",
-                                            "the adaptive dp5 of the general two-state path")
-
-    def _require_relaxed_slip_only(self, what: str, stepper: str) -> None:
-        """InputError unless the stop scene asks for the relaxed slip alone, with the default method, step and
-        precision (``what`` computes xi_inf only, with its own ``stepper``)."""
-        if self.observables != ("xi_inf",):
-            raise InputError(f"{what} computes the relaxed slip only (observables = ['xi_inf']), got "
-                             f"observables={list(self.observables)}")
-        for name, value, default in (("method", self.method, "auto"), ("step", self.step, None),
-                                     ("precision", self.precision, "float64")):
-            if value != default:
-                raise InputError(f"{name} is not used by {what} (its stepper is {stepper}; leave {name} at "
-                                 f"{default!r}), got {value!r}")
+        protocol = protocols.get(self.protocol)
+        if not protocol.supports(self.model, self.state_law):
+            have = sorted(m for (m, law) in protocol.models if law == self.state_law)
+            raise InputError(f"state_law {self.state_law!r} runs with model {' or '.join(map(repr, have))} only on "
+                             f"protocol {self.protocol!r}, got model={self.model!r}")
 
     def _check_trajectory_tau(self) -> None:
         try:
@@ -365,7 +340,7 @@ class Scene:
     @property
     def time_resolved(self) -> bool:
         """True when values inside the transient are asked for (not only its limit xi_inf)."""
-        return self.protocol == "stop" and any(o != "xi_inf" for o in self.observables)
+        return protocols.get(self.protocol).time_resolved(self)
 
     @property
     def n_points(self) -> int:
@@ -391,9 +366,7 @@ class Scene:
             lines.append(f"step = {self.step!r}")
         lines.append(f'precision = "{self.precision}"')
         lines.append(f"max_steps = {int(self.max_steps)}")
-        if self.protocol == "driven":
-            lines.append(f"perturbation = {self.perturbation!r}")
-            lines.append(f"max_cycles = {int(self.max_cycles)}")
+        lines += protocols.get(self.protocol).toml_lines(self)
         lines.append(f'model = "{self.model}"')
         lines.append(f"model_tol = {self.model_tol!r}")
         lines.append(f'state_law = "{self.state_law}"')
@@ -523,3 +496,10 @@ def default_scene() -> Scene:
     """The built-in scene of ``sweep run``: preset sample2, K/M 1e3..1e6 s^-2 (200), V 0.1..100 um/s (100)."""
     return Scene(protocol="stop", params=presets["sample2"], K_over_M=np.logspace(3, 6, 200),
                  V=np.logspace(-7, -4, 100), rtol=1e-6)
+
+
+def __getattr__(name: str):
+    """OBSERVABLES and DRIVEN_OBSERVABLES: the observables of the stop and driven protocols (Protocol.observables)."""
+    if name in ("OBSERVABLES", "DRIVEN_OBSERVABLES"):
+        return protocols.get(PROTOCOLS[name.startswith("DRIVEN")]).observables
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -13,11 +13,13 @@ from pathlib import Path
 
 import xarray as xr
 
+from .. import protocols
 from ..errors import InputError
 
 __all__ = ["KINDS", "file_kind", "open_sweep_file", "read_sweep_file"]
 
-KINDS = ("stop", "driven", "hopf")
+KINDS = (*protocols.names(), "hopf")
+"""The kinds of sweep's files: one per protocol (sweep/protocols/), and the Hopf line of ``sweep hopf``."""
 
 
 def file_kind(ds: xr.Dataset) -> str:
@@ -25,10 +27,9 @@ def file_kind(ds: xr.Dataset) -> str:
     :class:`InputError` for a Dataset that is none of them."""
     if "K_over_M_c" in ds.data_vars and "bifurcation" in ds:
         return "hopf"
-    if "regime" in ds:
-        return "driven"
-    if "xi_inf" in ds:
-        return "stop"
+    protocol = protocols.file_protocol(ds)
+    if protocol is not None:
+        return protocol.name
     raise InputError("not a sweep file: expected xi_inf (stop sweep), regime (driven sweep) or K_over_M_c (Hopf "
                      f"line); found {sorted(ds.data_vars)}")
 

@@ -27,6 +27,7 @@ import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
+from .. import protocols
 from ..errors import InputError, OutputError
 
 __all__ = ["check_targets", "free_bytes", "human_bytes", "picture_paths", "remove_quietly", "same_path",
@@ -124,13 +125,12 @@ def free_bytes(folder: str | os.PathLike) -> int:
 
 def picture_paths(path: str | os.PathLike, kind: str, trajectories: bool, points: int,
                   variable: str | None = None) -> list[Path]:
-    """The pictures sweep.plot.files.plot_file writes for a file of ``kind`` (sweep.write.read.KINDS) with ``points`` grid
-    points (``trajectories``: it holds transients), so that a command checks them before any work: ``path``, and for
-    the transients of a stop sweep over more than one point ``<path stem>_trajectories.png``."""
-    path = Path(path)
-    if variable is None and kind == "stop" and trajectories and points > 1:
-        return [path, path.with_name(path.stem + "_trajectories.png")]
-    return [path]
+    """The pictures sweep.plot.files.plot_file writes for a file of ``kind`` (sweep.write.read.KINDS) with ``points``
+    grid points (``trajectories``: it holds transients), so that a command checks them before any work: ``path``
+    for a Hopf file, else what the file's protocol draws (Protocol.picture_paths)."""
+    if kind not in protocols.CATALOGUE:
+        return [Path(path)]
+    return protocols.get(kind).picture_paths(path, trajectories, points, variable)
 
 
 def write_failed(exc: BaseException, path: str | os.PathLike, journal: str | os.PathLike | None = None,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ...run.api import run_sweep
+from ...api import run_sweep
 from ...scene.scene import Scene
 
 __all__ = ["PAPER", "model_summary", "row", "run"]

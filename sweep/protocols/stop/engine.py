@@ -13,7 +13,6 @@ adaptive lanes (integrate/lanes_sampled.py, :func:`samples_in_lanes`), the rest 
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass
 
 import numba
@@ -30,16 +29,15 @@ from ...integrate.solvers import METHODS
 from ...integrate.stop_point import Method, StopPoints, Tolerances
 from ...integrate.tolerance_ladder import SampleEstimates, climb_tolerances
 from ...physics import perturbation_growth
-from ...plan.plan import CHUNK_POINTS, LANES_METHOD, Plan
+from ...plan.plan import LANES_METHOD, Plan
 from ...plan.plan import samples_in_lanes as plan_samples_in_lanes
 from ...scene.scene import Scene
 from ...status import Status
 
-__all__ = ["SAMPLED", "RawResult", "chunk_points", "lane_runs", "mark_error_above_tol", "n_samples", "run_points"]
+__all__ = ["SAMPLED", "RawResult", "lane_runs", "mark_error_above_tol", "n_samples", "run_points"]
 
 FRACTIONS = np.array([0.5, 0.9])
 """Fractions of the relaxed slip whose times are reported as t50 and t90."""
-ORDER_SEED = 20261121
 ERROR_ABOVE_TOL = int(Status.ERROR_ABOVE_TOL)
 SAMPLED = ("xi_at", "u_at", "xi_at_err", "u_at_err")
 """The RawResult arrays sampled in time (n points x n samples): the large ones, written per chunk by a journaled run."""
@@ -320,22 +318,6 @@ def run_points(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray | No
         return _relax_in_lanes(scene, plan, g, correction)
     obs_tau = _obs_tau(scene, plan.flat_index(g)) if obs_tau is None else np.ascontiguousarray(obs_tau, float)
     return _time_resolved(scene, plan, g, obs_tau, estimates)
-
-
-@functools.lru_cache(maxsize=8)
-def chunk_points(n: int, chunk_size: int | None = None) -> tuple[np.ndarray, ...]:
-    """The points 0..n-1 split into consecutive chunks of at most ``chunk_size`` (default: a stop chunk), each in a
-    fixed pseudo-random order: the costly points cluster on the grid, and every thread's share of a chunk then
-    mixes cheap and costly ones. A chunk covers a contiguous range of the flat (K/M, V) index, so that its
-    trajectories can be written into the file as one block (sweep/write/netcdf.py) and never held whole. Cached (read-only
-    arrays): a run asks twice, for its journal's ranges and for its chunks, and the permutations cost ~0.3 ms of
-    the default scene's ~35 ms run."""
-    rng = np.random.default_rng(ORDER_SEED)
-    bounds = np.array_split(np.arange(n), max(1, math.ceil(n / (chunk_size or CHUNK_POINTS["stop"]))))
-    chunks = tuple(rng.permutation(block) for block in bounds)
-    for chunk in chunks:
-        chunk.flags.writeable = False
-    return chunks
 
 
 def mark_error_above_tol(scene: Scene, out: RawResult) -> None:

@@ -41,9 +41,13 @@ from ...integrate.stop_inertial import RELAX_KEYS
 from ...jitcache import pin_module
 from ...plan.plan import Plan
 from ...run.progress import Progress
+from ...run.runner import ORDER_SEED
 from ...scene.scene import Scene
-from ...status import Status
-from .engine import ORDER_SEED, RawResult, lane_runs
+from ...status import (
+    MODEL_FLAG,  # noqa: F401 (re-exported: the model variable's flags)
+    Status,
+)
+from .engine import RawResult, lane_runs
 
 OK = int(Status.OK)
 
@@ -58,7 +62,6 @@ RELAX_BATCH = 256
 """Points per call of the per-point module (:func:`_relax`): an inertial point takes ~1 ms, so a batch ends every
 ~0.1 s on two threads and the progress bar moves (a grid of up to plan.ONE_CHUNK_POINTS is one chunk, whose
 inertial points could otherwise take half a minute in one silent call)."""
-MODEL_FLAG = {"flag_values": np.array([0, 1], np.int8), "flag_meanings": "quasistatic inertial"}
 QUASISTATIC, INERTIAL = 0, 1
 
 

@@ -1,0 +1,142 @@
+"""What a protocol is: the hooks through which the scene, the plan, the run, the size check, the compile notice, the
+dry run, the command line and the pictures reach the one protocol a scene names (:func:`sweep.protocols.get`).
+
+A protocol's module keeps its own imports inside its methods, so that validating a scene or naming a file's kind
+loads no kernels.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING, ClassVar
+
+import numpy as np
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from ..plan.plan import Plan
+    from ..scene.scene import Scene
+
+__all__ = ["ChunkCompute", "Protocol"]
+
+ChunkCompute = Callable[[np.ndarray], dict[str, np.ndarray]]
+"""compute(points) -> per-point arrays of one chunk (points: rows of the plan it was made with)."""
+
+
+class Protocol(ABC):
+    """One loading of the spring-block: its scene fields, plan, chunk computation, output schema and picture."""
+
+    name: ClassVar[str]
+    """The scene's ``protocol`` value."""
+    title: ClassVar[str]
+    """Words for pictures and messages, e.g. "stop scene"."""
+    marker: ClassVar[str]
+    """The variable that marks this protocol's files (sweep.write.read.file_kind)."""
+    observables: ClassVar[tuple[str, ...]]
+    """Observables a scene of this protocol may ask for, in the order the scene stores them."""
+    always: ClassVar[str]
+    """The observable always computed and stored."""
+    default_observables: ClassVar[tuple[str, ...]]
+    """Observables of a scene that names none."""
+    models: ClassVar[frozenset[tuple[str, str]]]
+    """The (model, state law) pairs it runs; model "auto" needs both models of a law."""
+    extra_axes: ClassVar[bool] = False
+    """Whether a scene of this protocol may sweep friction parameters beside (K/M, V) (Scene.axes)."""
+    default_chunk: ClassVar[int]
+    """Points per chunk by default (:meth:`chunk_size` may grow it)."""
+    memory_per_point: ClassVar[int]
+    """Peak bytes of a run per point, besides its sampled times (sweep/run/size.py)."""
+    file_per_point: ClassVar[int]
+    """Bytes per point of its file before compression, besides what its observables add."""
+    core_seconds_per_point: ClassVar[float]
+    """Typical core-seconds a point takes (the size check's rough time; the dry run measures its own)."""
+    warm_up_timed: ClassVar[bool] = True
+    """Whether ``sweep run`` loads the kernels before the chunk loop and reports how long that took."""
+
+    # --- the scene ------------------------------------------------------------------------------------------------
+    def supports(self, model: str, state_law: str) -> bool:
+        """Whether the protocol runs ``model`` ("auto": both models) with ``state_law``."""
+        wanted = ("quasistatic", "inertial") if model == "auto" else (model,)
+        return all((m, state_law) in self.models for m in wanted)
+
+    @abstractmethod
+    def check(self, scene: Scene) -> None:
+        """InputError for settings this protocol does not use or cannot run (the common checks are made)."""
+
+    def toml_lines(self, scene: Scene) -> list[str]:
+        """The protocol's own lines of the scene's canonical TOML (after max_steps)."""
+        return []
+
+    def time_resolved(self, scene: Scene) -> bool:
+        """Whether values inside the transient are asked for."""
+        return False
+
+    def samples_per_point(self, scene: Scene) -> int:
+        """Values sampled in time per point (held in memory by a run without a file)."""
+        return 0
+
+    def file_bytes_per_point(self, scene: Scene) -> int:
+        """Bytes per point of the scene's file before compression."""
+        return self.file_per_point
+
+    # --- the plan and the chunks ------------------------------------------------------------------------------------
+    def chunk_size(self, scene: Scene) -> int:
+        """The default chunk size of ``scene`` (a layout that depends on the grid only: a journal resumes anywhere)."""
+        return self.default_chunk
+
+    @abstractmethod
+    def make_plan(self, scene: Scene) -> Plan:
+        """What to model and how to step, for every point of ``scene``."""
+
+    @abstractmethod
+    def chunk(self, scene: Scene, plan: Plan, progress: bool | None = False) -> ChunkCompute:
+        """compute(points) of one chunk of ``plan``."""
+
+    @abstractmethod
+    def kernel_families(self, scene: Scene) -> list[str]:
+        """The kernel families (sweep.run.compile_notice.COLD_COMPILE_S) the scene compiles on first use."""
+
+    @abstractmethod
+    def warm_up(self, scene: Scene, plan: Plan) -> None:
+        """Compile (or load from numba's cache) every kernel the scene uses, on one point each."""
+
+    # --- the output -------------------------------------------------------------------------------------------------
+    def journal_keeps(self, scene: Scene, plan: Plan) -> frozenset[str]:
+        """Names of the chunk arrays that a journaled run leaves in its journal, written into the file chunk by chunk
+        (:meth:`sampled_blocks`) instead of being held whole."""
+        return frozenset()
+
+    def sampled_blocks(self, scene: Scene, plan: Plan, chunk_size: int, journal) -> Iterator | None:
+        """The variables kept in the journal (:meth:`journal_keeps`), one chunk at a time, for the netCDF writer."""
+        return None
+
+    @abstractmethod
+    def dataset(self, scene: Scene, plan: Plan, flat: dict[str, np.ndarray], seconds: float, history: str,
+                sampled: bool) -> xr.Dataset:
+        """The Dataset of a finished run from its per-point arrays (flat over the grid); ``sampled=False``: the
+        variables kept in the journal are left out."""
+
+    # --- what the user sees -------------------------------------------------------------------------------------------
+    @abstractmethod
+    def dry_run(self, scene: Scene) -> list[str]:
+        """The dry run's lines after the size: the plan (of a subsample where the grid is large) and, where it is
+        measured, the time."""
+
+    def summary(self, ds: xr.Dataset) -> list[str]:
+        """Lines ``sweep run`` prints about a finished file: the flags' counts."""
+        from ..status import flag_summary
+
+        return [flag_summary(ds, "status"), flag_summary(ds, "model")]
+
+    def picture_paths(self, path: str | Path, trajectories: bool, points: int, variable: str | None = None
+                      ) -> list[Path]:
+        """The pictures :meth:`draw` writes for a file with ``points`` grid points (``trajectories``: it holds
+        transients), so that a command checks them before any work."""
+        return [Path(path)]
+
+    @abstractmethod
+    def draw(self, ds: xr.Dataset, path: str | Path, variable: str | None = None) -> list[Path]:
+        """The pictures of a file of this protocol (``variable``: that variable alone); returns the paths written."""

@@ -1,0 +1,227 @@
+"""The stop protocol: steady sliding at V, the drive frozen at t = 0, the slider relaxes towards its final slip
+(docs/physics.md 3a). Its observables are the relaxed slip xi_inf and, on request, values inside the transient; a
+stop scene may sweep friction parameters beside (K/M, V)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ...errors import InputError
+from ..base import ChunkCompute, Protocol
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from ...plan.plan import Plan
+    from ...scene.scene import Scene
+
+__all__ = ["PROTOCOL", "StopProtocol"]
+
+LARGE_CHUNK_POINTS = 16384
+"""The largest default chunk of a stop scene that samples nothing in time (:meth:`StopProtocol.chunk_size`)."""
+ONE_CHUNK_POINTS = 32768
+"""A stop grid that samples nothing in time, of model "quasistatic" or "auto", is one chunk up to this many points
+(:meth:`StopProtocol.chunk_size`): a quasi-static point costs ~1-10 us on one core (the default grid at rtol 1e-3, its
+costly corner at rtol 1e-10), and the chunk's fixed cost is paid once: the tolerance ladder's numpy between its kernel
+calls, the choice of model, the kernel calls' hand-over to the threads and each call's last runs, on which the other
+threads wait (benchmarks/README.md). The points that "auto" solves with inertia (~1 ms each) are solved in batches
+with a bar of their own (model_choice.RELAX_BATCH, sweep.run.runner.in_process), which the run's bar, counting
+chunks, would not show until the end. Not with model "inertial", whose chunks are its progress."""
+CHUNKS_AT_LEAST = 60
+"""A grid keeps at least this many chunks when its chunks grow: ~8 a thread on 8 threads to share out side by side
+(sweep/run/concurrent_chunks.py), the last chunks' idle share small."""
+FILE_PER_VALUE = {"t50": 16, "t90": 16, "trajectory": 32, "slip_at": 16}
+"""Bytes per point that each observable adds to the file, per value (trajectory: per sampled time, xi, psi and
+their errors; slip_at: per time of t_obs, with its error)."""
+
+
+class StopProtocol(Protocol):
+    name = "stop"
+    title = "stop scene"
+    marker = "xi_inf"
+    observables = ("xi_inf", "trajectory", "slip_at", "t50", "t90")
+    always = "xi_inf"
+    default_observables = ("xi_inf",)
+    models = frozenset({("quasistatic", "aging"), ("quasistatic", "slip"), ("inertial", "aging")})
+    extra_axes = True
+    default_chunk = 4096
+    memory_per_point = 180
+    file_per_point = 80
+    core_seconds_per_point = 2.2e-5
+
+    # --- the scene ------------------------------------------------------------------------------------------------
+    def check(self, scene: Scene) -> None:
+        if scene.state_law != "aging":
+            _require_relaxed_slip_only(scene, f"state_law {scene.state_law!r}",
+                                       "the adaptive dp5 of the general two-state path")
+        if scene.model == "inertial":
+            _require_relaxed_slip_only(scene, "model 'inertial'", "the adaptive Rosenbrock rodas3")
+
+    def time_resolved(self, scene: Scene) -> bool:
+        return any(o != "xi_inf" for o in scene.observables)
+
+    def samples_per_point(self, scene: Scene) -> int:
+        return (("trajectory" in scene.observables) * scene.trajectory_tau[2]
+                + ("slip_at" in scene.observables) * len(scene.t_obs))
+
+    def file_bytes_per_point(self, scene: Scene) -> int:
+        values = {"t50": 1, "t90": 1, "trajectory": scene.trajectory_tau[2], "slip_at": len(scene.t_obs)}
+        return self.file_per_point + sum(FILE_PER_VALUE[name] * values[name]
+                                         for name in scene.observables if name in FILE_PER_VALUE)
+
+    # --- the plan and the chunks ------------------------------------------------------------------------------------
+    def chunk_size(self, scene: Scene) -> int:
+        """The default chunk, doubled up to LARGE_CHUNK_POINTS while the grid still has CHUNKS_AT_LEAST chunks, for a
+        scene that samples nothing in time (a chunk's trajectories are held whole until it is journaled); a grid of
+        at most ONE_CHUNK_POINTS such points (model not "inertial") is one chunk. A chunk has a fixed cost besides
+        its points (~1 ms of numpy between its kernel calls and in the choice of model, ~2.4 ms writing it to the
+        journal): at 4096 points it was ~25 % of the compute of a 1e6-point run (2 cores), at 16384 (61 chunks)
+        ~7 % (benchmarks/end_to_end.py)."""
+        size = self.default_chunk
+        if {"trajectory", "slip_at"} & set(scene.observables):
+            return size
+        if scene.model != "inertial" and scene.n_points <= ONE_CHUNK_POINTS:
+            return max(1, scene.n_points)
+        while 2 * size <= LARGE_CHUNK_POINTS and scene.n_points >= CHUNKS_AT_LEAST * 2 * size:
+            size *= 2
+        return size
+
+    def make_plan(self, scene: Scene) -> Plan:
+        from ...plan.plan import point_params, stop_plan_for_points
+
+        return stop_plan_for_points(scene, point_params(scene))
+
+    def chunk(self, scene: Scene, plan: Plan, progress: bool | None = False) -> ChunkCompute:
+        from .chunk import stop_chunk
+
+        return stop_chunk(scene, plan, progress)
+
+    def kernel_families(self, scene: Scene) -> list[str]:
+        """The relaxed-slip engine, or the per-point path for time-resolved observables (the sampled lanes where
+        sweep.plan.plan.samples_in_lanes takes them; their points without a finite relaxed slip compile the per-point
+        path besides, which the scene alone does not tell), the slip law's own march, the inertial kernels where
+        the model can be inertial."""
+        from ...plan.plan import samples_in_lanes
+
+        families = []
+        if scene.state_law == "slip":
+            families.append("slip-law stop")
+        elif scene.model != "inertial":
+            families.append("relaxed-slip engine" if scene.observables == ("xi_inf",) else
+                            "time-resolved lanes" if samples_in_lanes(scene) else "time-resolved stop")
+        if scene.model != "quasistatic":
+            families.append("inertial stop")
+        return families
+
+    def warm_up(self, scene: Scene, plan: Plan) -> None:
+        """The stop chunks' kernels, the inertial stop kernels only where the model policy can use them (on a cold
+        cache the two families compile side by side on two cores)."""
+        from ...run.compile_notice import inertial_stop_compiled_aside
+        from .chunk import warm_up
+        from .model_choice import warm_up_models
+
+        with inertial_stop_compiled_aside(scene):
+            warm_up(scene, plan)
+        if scene.model != "quasistatic":
+            warm_up_models()
+
+    # --- the output -------------------------------------------------------------------------------------------------
+    def journal_keeps(self, scene: Scene, plan: Plan) -> frozenset[str]:
+        from .engine import SAMPLED, n_samples
+
+        return frozenset(SAMPLED) if n_samples(scene, plan) > 0 else frozenset()
+
+    def sampled_blocks(self, scene: Scene, plan: Plan, chunk_size: int, journal):
+        from .chunk import sampled_blocks
+
+        return sampled_blocks(scene, plan.tau_samples.size, chunk_size, journal)
+
+    def dataset(self, scene: Scene, plan: Plan, flat: dict[str, np.ndarray], seconds: float, history: str,
+                sampled: bool) -> xr.Dataset:
+        from ...assemble.dataset import build_dataset
+        from .chunk import stop_outputs
+
+        return build_dataset(scene, plan, *stop_outputs(flat, seconds), history=history, sampled=sampled)
+
+    # --- what the user sees -------------------------------------------------------------------------------------------
+    def dry_run(self, scene: Scene) -> list[str]:
+        from ...plan.plan import make_plan
+        from .estimate import estimate_seconds, plan_sample
+
+        planned, note = plan_sample(scene)
+        lines = [f"{'plan of':>28}: {note}"] if note else []
+        plan = make_plan(planned)
+        seconds, mean_steps = estimate_seconds(planned, plan, n_points=scene.n_points)
+        return lines + [_plan_text(scene, plan),
+                        f"{'estimated steps per point':>28}: {mean_steps:.0f} (mean of a pilot subsample)",
+                        f"{'estimated time':>28}: {seconds:.1f} s on this machine (timed pilot)"]
+
+    def summary(self, ds: xr.Dataset) -> list[str]:
+        from ...status import flag_summary
+
+        text = flag_summary(ds, "model")
+        if "model_error" in ds:  # the largest estimated error of the quasi-static model where it was used
+            used = ds["model_error"].where(ds["model"] == 0)
+            if bool(used.notnull().any()):
+                text += f" (largest estimated error of the quasi-static model where used: {float(used.max()):.2g})"
+        return [flag_summary(ds, "status"), text]
+
+    def picture_paths(self, path: str | Path, trajectories: bool, points: int, variable: str | None = None
+                      ) -> list[Path]:
+        """``path``, and for the transients of a sweep over more than one point ``<path stem>_trajectories.png``."""
+        path = Path(path)
+        if variable is None and trajectories and points > 1:
+            return [path, path.with_name(path.stem + "_trajectories.png")]
+        return [path]
+
+    def draw(self, ds: xr.Dataset, path: str | Path, variable: str | None = None) -> list[Path]:
+        """The relaxation landscape (slices along the extra axes where the file has them) and, where the file holds
+        transients, the transients of up to six points."""
+        from ...plot.files import has_trajectories, plot_extra_axes, plot_landscape, plot_trajectories
+        from ...plot.slices import extra_dims
+
+        if extra_dims(ds):
+            return plot_extra_axes(ds, Path(path), variable)
+        pictures = self.picture_paths(path, has_trajectories(ds), ds.sizes.get("K_over_M", 1) * ds.sizes.get("V", 1),
+                                      variable)
+        if variable is not None:
+            return [plot_landscape(ds, pictures[0], variable=variable, title=self.title, eq10=True)]
+        if has_trajectories(ds) and len(pictures) == 1:
+            return [plot_trajectories(ds, pictures[0], title=self.title)]  # one point: its transient is the story
+        written = [plot_landscape(ds, pictures[0], title=self.title, eq10=True)]
+        if len(pictures) > 1:
+            written.append(plot_trajectories(ds, pictures[1], title=self.title))
+        return written
+
+
+def _require_relaxed_slip_only(scene: Scene, what: str, stepper: str) -> None:
+    """InputError unless the scene asks for the relaxed slip alone, with the default method, step and precision
+    (``what`` computes xi_inf only, with its own ``stepper``)."""
+    if scene.observables != ("xi_inf",):
+        raise InputError(f"{what} computes the relaxed slip only (observables = ['xi_inf']), got "
+                         f"observables={list(scene.observables)}")
+    for name, value, default in (("method", scene.method, "auto"), ("step", scene.step, None),
+                                 ("precision", scene.precision, "float64")):
+        if value != default:
+            raise InputError(f"{name} is not used by {what} (its stepper is {stepper}; leave {name} at "
+                             f"{default!r}), got {value!r}")
+
+
+def _plan_text(scene: Scene, plan: Plan) -> str:
+    """The plan's text with one line about the model: the scene's (the plan describes the quasi-static pass; with
+    model "auto" the inertial points are chosen per point after it)."""
+    model = f"{'model':>28}: {scene.model}" + (
+        f" (model_tol {scene.model_tol:g}): the quasi-static plan below for every point, then the inertial model "
+        "where the estimated error of the quasi-static one is larger" if scene.model == "auto" else "")
+    lines = plan.text().splitlines()
+    keep = [line for line in lines if line.split(":")[0].strip() != "model"]
+    hopf = f"{'hopf_line':>28}: " + ("analytic chi_c and the line located by simulation (driven kernel)"
+                                     if scene.simulated_hopf_line else
+                                     "analytic chi_c (simulated_hopf_line = true adds the line located by simulation)")
+    return "\n".join([model, *keep, hopf])
+
+
+PROTOCOL = StopProtocol()
