@@ -396,7 +396,8 @@ def bautin_points(params: FrictionParams, V_range: tuple[float, float], model: s
     """Bautin points on the Hopf line of ``model`` ("inertial" along the whole line; "quasistatic") between the
     velocities ``V_range`` [m s-1]: l1 scanned on SCAN_POINTS log-spaced V where mu1 > 0, a root accepted only
     between scan points where |l1| exceeds l1_error on both sides (so the quasi-static m2 = 0 line, l1 = 0
-    identically, has none), then bisected in ln V to a relative width ``rtol`` in gamma/A (gamma ~ V^2)."""
+    identically, has none), then bisected in ln V to a relative width ``rtol`` in gamma/A (gamma ~ V^2); the point
+    is the root of the chord of l1 across that bracket."""
     if model not in ("inertial", "quasistatic"):
         raise InputError(f"model must be 'inertial' or 'quasistatic' (one model along the whole line), got {model!r}")
     lo, hi = (float(x) for x in V_range)
@@ -415,18 +416,20 @@ def bautin_points(params: FrictionParams, V_range: tuple[float, float], model: s
         if sign[i] == sign[j]:
             continue
         x_lo, x_hi = math.log(v[i]), math.log(v[j])
-        s_lo = sign[i]
+        f_lo, f_hi = line.l1[i], line.l1[j]
         while x_hi - x_lo > 0.5 * rtol:  # gamma ~ V^2: relative width 2 dx in gamma/A
             mid = 0.5 * (x_lo + x_hi)
             l1_mid = _l1_at(p, math.exp(mid), model, state_law)
             if l1_mid == 0.0:
                 x_lo = x_hi = mid
                 break
-            if np.sign(l1_mid) == s_lo:
-                x_lo = mid
+            if np.sign(l1_mid) == np.sign(f_lo):
+                x_lo, f_lo = mid, l1_mid
             else:
-                x_hi = mid
-        v_b = math.exp(0.5 * (x_lo + x_hi))
+                x_hi, f_hi = mid, l1_mid
+        # the root of the chord across the final bracket: its error (~ the bracket squared) is far inside the bracket
+        x_b = x_lo if x_lo == x_hi else x_lo + (x_hi - x_lo) * f_lo / (f_lo - f_hi)
+        v_b = math.exp(x_b)
         g = float(physics.inertia_number(v_b, p.D0, p.g)) / p.A if model == "inertial" else 0.0
         mu1 = float(physics.mu1(v_b, p.m1, p.m2, p.V0))
         points.append(BautinPoint(v_b, float(physics.inertia_number(v_b, p.D0, p.g)) / p.A,
