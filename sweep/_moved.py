@@ -42,7 +42,6 @@ MOVED = MappingProxyType({
     "sweep.plot_maps": "sweep.plot.maps",
     "sweep.plot_slices": "sweep.plot.slices",
     "sweep.plot_style": "sweep.plot.style",
-    "sweep.figures": "sweep.plot.figures",
     "sweep.models": "sweep.integrate.models",
     "sweep.solvers": "sweep.integrate.solvers",
 })

@@ -23,7 +23,7 @@ DEFAULT_OUT = Path("sweep-out") / "landscape.nc"
 FIGURES_OUT = Path("sweep-out") / "figures"
 OVERWRITE_HELP = "replace output files that exist (without it, an existing file is never replaced)"
 FIGURE_NAMES = ("fig2", "fig3a", "fig3b", "fig4a", "fig4b")
-"""The keys of sweep.plot.figures.FIGURES, spelt out so that the parser needs no matplotlib (tests check they agree)."""
+"""The keys of sweep.figures.FIGURES, spelt out so that the parser needs no matplotlib (tests check they agree)."""
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -260,7 +260,7 @@ def _cmd_hopf(args: argparse.Namespace) -> int:
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     """``sweep reproduce NAME -o DIR``: the paper's figures, each as netCDF + PNG + a text of key numbers."""
-    from .plot.figures import reproduce
+    from .figures import reproduce
 
     for done in reproduce(args.name, args.output, overwrite=args.overwrite):
         print(f"{done.name}: computed in {done.seconds:.2f} s; wrote {done.data}, {done.png}, {done.text}")

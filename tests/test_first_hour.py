@@ -57,7 +57,7 @@ def _write_kind(kind: str, folder: Path) -> Path:
 
     p = sweep.presets["sample2"]
     if kind == "figure":
-        from sweep.plot.figures import reproduce
+        from sweep.figures import reproduce
 
         return reproduce("fig4b", folder)[0].data
     if kind == "hopf":

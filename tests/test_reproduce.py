@@ -20,7 +20,7 @@ import pytest  # noqa: E402
 import sweep  # noqa: E402
 from sweep.cli import FIGURE_NAMES, main  # noqa: E402
 from sweep.errors import InputError  # noqa: E402
-from sweep.plot.figures import FIGURES, fig2, fig3, fig4, reproduce  # noqa: E402
+from sweep.figures import FIGURES, fig2, fig3, fig4, reproduce  # noqa: E402
 
 SINGLE = (480, 640)  # pixel size (rows, columns) of every reproduced figure
 S1, S2 = sweep.presets["sample1"], sweep.presets["sample2"]

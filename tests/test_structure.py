@@ -1,5 +1,5 @@
-"""The package's import graph has no cycles (module-level and function-level imports alike): every layer imports
-only the layers below it (docs/design.md 3)."""
+"""The package's structure: no import cycles (module-level and function-level imports alike), every import follows the
+flow of the layers (docs/design.md, "Layout"), and no module outside sweep/protocols/ compares a protocol's name."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ def imports_of(path: Path) -> set[str]:
     name = module_name(path)
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found = set()
-    for node in ast.walk(ast.parse(path.read_text())):
+    for node in _runtime_nodes(ast.parse(path.read_text())):
         if isinstance(node, ast.ImportFrom):
             if node.level:
                 base = package.split(".")
@@ -39,6 +39,19 @@ def imports_of(path: Path) -> set[str]:
             continue
         found |= {c for c in candidates if c.startswith("sweep") and c in MODULES}
     return found - {name}
+
+
+def _runtime_nodes(tree: ast.AST):
+    """The nodes of ``tree`` outside ``if TYPE_CHECKING:`` blocks (annotations only: not imported when run)."""
+    stack = [tree]
+    while stack:
+        node = stack.pop()
+        yield node
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, ast.If) and getattr(child.test, "id", None) == "TYPE_CHECKING":
+                stack.extend(child.orelse)
+                continue
+            stack.append(child)
 
 
 MODULES = {module_name(p): p for p in ROOT.rglob("*.py")}
@@ -103,3 +116,78 @@ def test_the_model_registry_names_every_state_law_and_existing_modules():
     for rhs, drivers in REGISTRY.values():
         for module in (rhs, *drivers.split(" / ")):
             assert f"sweep.{module}" in MODULES, module
+
+
+LAYERS = (
+    ("sweep._version sweep._lazy sweep._moved sweep.accuracy sweep.physics sweep.status sweep.errors sweep.jitcache "
+     "sweep.log sweep.protocols sweep.protocols.base"),
+    "sweep.integrate",
+    "sweep.scene",
+    "sweep.plan",
+    "sweep.write sweep.assemble",
+    "sweep.plot",
+    "sweep.run",
+    "sweep.protocols.stop sweep.protocols.driven sweep.analysis",
+    "sweep.fit",
+    "sweep.api sweep.figures sweep.cli",
+)
+"""The layers, lowest first (docs/design.md, "Layout"): a module imports its own layer and those below it only. The
+ground floor holds what everything uses and the protocols' catalogue and interface; the protocols' implementations
+sit above the machinery they plug into (plan, run, write, assemble, plot)."""
+
+
+def layer(module: str) -> int:
+    """The layer of ``module``: that of the longest prefix named in LAYERS."""
+    best, found = -1, None
+    for i, names in enumerate(LAYERS):
+        for prefix in names.split():
+            if (module == prefix or module.startswith(prefix + ".")) and len(prefix) > best:
+                best, found = len(prefix), i
+    assert found is not None, f"{module} is in no layer of LAYERS"
+    return found
+
+
+def test_every_import_follows_the_flow():
+    against = [f"{name} (layer {layer(name)}) imports {dep} (layer {layer(dep)})"
+               for name, deps in import_graph().items() for dep in deps if layer(dep) > layer(name)]
+    assert not against, "\n".join(against)
+
+
+def test_the_layer_check_finds_an_import_against_the_flow():
+    assert layer("sweep.scene.scene") < layer("sweep.run.runner") < layer("sweep.protocols.stop.engine")
+    assert layer("sweep.protocols") == layer("sweep.errors") < layer("sweep.protocols.driven.plan")
+
+
+PROTOCOL_NAMES = {"stop", "driven"}
+
+
+def protocol_name_uses(path: Path) -> list[str]:
+    """Comparisons with a protocol's name, and tables keyed by one, in ``path``: ``scene.protocol == "stop"``,
+    ``x in ("stop", ...)``, ``{"driven": ...}``."""
+    text = path.read_text()
+    found = []
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, ast.Compare):
+            operands = [node.left, *node.comparators]
+            named = any(isinstance(c, ast.Constant) and c.value in PROTOCOL_NAMES for c in operands) or any(
+                isinstance(c, (ast.Tuple, ast.List, ast.Set)) and any(
+                    isinstance(e, ast.Constant) and e.value in PROTOCOL_NAMES for e in c.elts) for c in operands)
+        elif isinstance(node, ast.Dict):
+            named = any(isinstance(k, ast.Constant) and k.value in PROTOCOL_NAMES for k in node.keys)
+        else:
+            continue
+        if named:
+            found.append(f"{path}:{node.lineno}: {ast.get_source_segment(text, node)}")
+    return found
+
+
+def test_no_module_outside_the_protocols_compares_a_protocol_name():
+    outside = [p for p in ROOT.rglob("*.py") if "protocols" not in p.relative_to(ROOT).parts]
+    found = [use for path in outside for use in protocol_name_uses(path)]
+    assert not found, "\n".join(found)
+
+
+def test_the_protocol_name_check_finds_a_comparison(tmp_path):
+    sample = tmp_path / "sample.py"
+    sample.write_text('def f(scene):\n    return scene.protocol == "driven" or scene.protocol in ("stop",) or {"stop": 1}\n')
+    assert len(protocol_name_uses(sample)) == 3

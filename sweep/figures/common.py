@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ...api import run_sweep
-from ...scene.scene import Scene
+from ..api import run_sweep
+from ..scene.scene import Scene
 
 __all__ = ["PAPER", "model_summary", "row", "run"]
 

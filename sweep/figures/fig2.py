@@ -7,10 +7,10 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ... import physics
-from ...scene.presets import presets
-from ...scene.scene import Scene
-from ..style import caption, new_figure
+from .. import physics
+from ..plot.style import caption, new_figure
+from ..scene.presets import presets
+from ..scene.scene import Scene
 from .common import model_summary, row, run
 
 __all__ = ["compute", "figure", "key_numbers"]

@@ -8,11 +8,11 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ... import physics
-from ...scene.presets import presets
-from ...scene.scene import Scene
-from ..curves import draw_psi, draw_xi
-from ..style import caption, new_figure
+from .. import physics
+from ..plot.curves import draw_psi, draw_xi
+from ..plot.style import caption, new_figure
+from ..scene.presets import presets
+from ..scene.scene import Scene
 from .common import model_summary, row, run
 
 __all__ = ["compute_a", "compute_b", "figure_a", "figure_b", "key_numbers_a", "key_numbers_b"]

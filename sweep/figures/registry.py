@@ -12,11 +12,11 @@ from pathlib import Path
 import matplotlib.figure
 import xarray as xr
 
-from ...errors import InputError
-from ...write.netcdf import save
-from ...write.targets import check_targets
-from ..style import file_params, preset_name
-from ..style import save as save_png
+from ..errors import InputError
+from ..plot.style import file_params, preset_name
+from ..plot.style import save as save_png
+from ..write.netcdf import save
+from ..write.targets import check_targets
 from . import fig2, fig3, fig4
 from .common import PAPER
 

@@ -6,7 +6,9 @@ compiles, its dry-run text and its picture. Everything outside this folder asks 
 protocol and calls it; nothing there compares a protocol's name (tests/test_structure.py walks the syntax tree).
 
 The catalogue is light: a protocol's module is imported on first use, so that a scene can be validated without
-loading its kernels.
+loading its kernels. What a protocol's plan must offer the machinery: ``n_points``, ``chunk_size``, ``take(rows)`` (a
+chunk's share, for a dask worker), ``hash()`` (what a resume compares) and ``describe()`` (the file's plan_*
+attributes); :class:`sweep.plan.Plan` is the stop and driven protocols' plan.
 """
 
 from __future__ import annotations
@@ -20,13 +22,23 @@ if TYPE_CHECKING:
 
     from .base import Protocol
 
-__all__ = ["CATALOGUE", "file_protocol", "get", "names"]
+__all__ = ["CATALOGUE", "file_protocol", "get", "names", "register"]
 
-CATALOGUE = MappingProxyType({
+_CATALOGUE = {
     "stop": "sweep.protocols.stop.protocol",
     "driven": "sweep.protocols.driven.protocol",
-})
-"""Protocol name -> the module whose ``PROTOCOL`` implements it. A new protocol is one folder and one line here."""
+}
+CATALOGUE = MappingProxyType(_CATALOGUE)
+"""Protocol name -> the module whose ``PROTOCOL`` implements it. A new protocol is one folder and one line here (or
+a :func:`register` call, for a protocol that lives outside the package)."""
+
+
+def register(name: str, module: str) -> None:
+    """Add the protocol ``name``, implemented by ``PROTOCOL`` of the importable ``module`` (e.g. a protocol that
+    lives in a user's package). The built-in names cannot be replaced."""
+    if name in _CATALOGUE and _CATALOGUE[name] != module:
+        raise ValueError(f"protocol {name!r} is already {_CATALOGUE[name]}")
+    _CATALOGUE[name] = module
 
 
 def names() -> tuple[str, ...]:

@@ -286,8 +286,7 @@ class Journal(Writer):
             raise write_failed(exc, self._chunk(index), self.path, len(self._done)) from None
         self._done.add(index)
 
-    @contextlib.contextmanager
-    def start(self, layout: tuple[np.ndarray, ...]) -> None:  # chunks written in a helper thread
+    def start(self, layout: tuple[np.ndarray, ...]) -> None:  # chunks written in a helper thread (background)
         self.layout = layout
         self._writing = contextlib.ExitStack()
         self._keep = self._writing.enter_context(self.background())
@@ -305,6 +304,7 @@ class Journal(Writer):
         return (f"interrupted: {len(self.done())} of {n_chunks} chunks are saved in {self.path}; run the same command "
                 f"with --resume (run_sweep(..., resume=True)) to compute only the rest")
 
+    @contextlib.contextmanager
     def background(self) -> Iterator[Callable[[int, dict[str, np.ndarray]], None]]:
         """``with journal.background() as keep: keep(index, arrays)``: :meth:`write` in one helper thread, chunks
         written in the order handed over (module docstring). A failed write is raised (its :class:`OutputError`) by

@@ -171,8 +171,8 @@ class Scene:
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen dataclass)
-        if self.protocol not in PROTOCOLS:
-            raise InputError(f"protocol must be one of {PROTOCOLS}, got {self.protocol!r}")
+        if self.protocol not in protocols.names():
+            raise InputError(f"protocol must be one of {protocols.names()}, got {self.protocol!r}")
         protocol = protocols.get(self.protocol)
         if not isinstance(self.params, FrictionParams):
             raise InputError(f"params must be a sweep.FrictionParams, got {type(self.params).__name__}")
@@ -225,7 +225,7 @@ class Scene:
                              f"the scene's own axes)")
         axes = {n: _axis(n, self.axes[n]) for n in EXTRA_AXES if n in self.axes}
         if axes and not protocols.get(self.protocol).extra_axes:
-            offered = [name for name in PROTOCOLS if protocols.get(name).extra_axes]
+            offered = [name for name in protocols.names() if protocols.get(name).extra_axes]
             raise InputError(f"axes {list(axes)}: extra axes are offered for protocol {' and '.join(map(repr, offered))} "
                              f"only, got protocol {self.protocol!r}")
         if axes and self.simulated_hopf_line:
@@ -287,6 +287,10 @@ class Scene:
         protocol = protocols.get(self.protocol)
         if not protocol.supports(self.model, self.state_law):
             have = sorted(m for (m, law) in protocol.models if law == self.state_law)
+            if not have:
+                laws = sorted({law for (_, law) in protocol.models})
+                raise InputError(f"state_law {self.state_law!r} is not offered on protocol {self.protocol!r}; "
+                                 f"supported: {laws}")
             raise InputError(f"state_law {self.state_law!r} runs with model {' or '.join(map(repr, have))} only on "
                              f"protocol {self.protocol!r}, got model={self.model!r}")
 

@@ -74,7 +74,7 @@ class DrivenProtocol(Protocol):
 
     def dataset(self, scene: Scene, plan: Plan, flat: dict[str, np.ndarray], seconds: float, history: str,
                 sampled: bool) -> xr.Dataset:
-        from ...assemble.dataset import build_driven_dataset
+        from .schema import build_driven_dataset
 
         return build_driven_dataset(scene, flat, seconds, plan.describe(), history=history)
 

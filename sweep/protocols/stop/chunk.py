@@ -85,7 +85,7 @@ def sampled_blocks(scene: Scene, n_traj: int, chunk_size: int | None, journal: J
     """The variables sampled in time (dataset.sampled_variables; ``n_traj`` trajectory times) of the journaled
     chunks, one chunk at a time in the order of the grid: (first flat point, variables over the chunk's points), for
     io.save(..., blocks=)."""
-    from ..assemble.dataset import sampled_variables
+    from .schema import sampled_variables
 
     for i, points in enumerate(chunk_points(scene.n_points, chunk_size)):
         order = np.argsort(points)  # a chunk is a consecutive range of points, shuffled (engine.chunk_points)

@@ -141,8 +141,8 @@ class StopProtocol(Protocol):
 
     def dataset(self, scene: Scene, plan: Plan, flat: dict[str, np.ndarray], seconds: float, history: str,
                 sampled: bool) -> xr.Dataset:
-        from ...assemble.dataset import build_dataset
         from .chunk import stop_outputs
+        from .schema import build_dataset
 
         return build_dataset(scene, plan, *stop_outputs(flat, seconds), history=history, sampled=sampled)
 

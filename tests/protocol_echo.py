@@ -1,0 +1,86 @@
+"""A third protocol for tests/test_protocols.py: each point's reduced stiffness chi = K D0/(M g), "computed" chunk by
+chunk. It lives outside the package, as a user's protocol would, and plugs in through sweep.protocols.register."""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from sweep.assemble.construct import assemble
+from sweep.assemble.dataset import global_attrs, grid_coords, variable
+from sweep.plan.plan import point_params
+from sweep.protocols.base import Protocol
+from sweep.status import Status, flag_attrs
+
+
+@dataclass(frozen=True)
+class EchoPlan:
+    chi: np.ndarray
+    chunk_size: int
+
+    @property
+    def n_points(self) -> int:
+        return self.chi.size
+
+    def take(self, rows: np.ndarray) -> EchoPlan:
+        return EchoPlan(self.chi[rows], self.chunk_size)
+
+    def hash(self) -> str:
+        return hashlib.sha256(self.chi.tobytes()).hexdigest()[:16]
+
+    def describe(self) -> dict[str, str]:
+        return {"rule": "chi = K D0/(M g) per point"}
+
+
+class EchoProtocol(Protocol):
+    name = "echo"
+    title = "echo scene"
+    marker = "echo"
+    observables = ("echo",)
+    always = "echo"
+    default_observables = ("echo",)
+    models = frozenset({("quasistatic", "aging"), ("inertial", "aging")})
+    default_chunk = 7
+    memory_per_point = 64
+    file_per_point = 16
+    core_seconds_per_point = 1e-7
+
+    def check(self, scene):
+        pass
+
+    def make_plan(self, scene):
+        return EchoPlan(point_params(scene).chi, self.chunk_size(scene))
+
+    def chunk(self, scene, plan, progress=False):
+        def compute(rows):
+            return {"echo": plan.chi[rows].copy(), "status": np.full(rows.size, Status.OK, np.int8)}
+        return compute
+
+    def kernel_families(self, scene):
+        return []
+
+    def warm_up(self, scene, plan):
+        pass
+
+    def dataset(self, scene, plan, flat, seconds, history, sampled):
+        grid = lambda a: a.reshape(scene.shape)  # noqa: E731
+        data = {"echo": variable(scene.dims, grid(flat["echo"]), "1", "reduced stiffness, echoed"),
+                "status": variable(scene.dims, grid(flat["status"]), "1", "numerical status", **flag_attrs())}
+        return assemble(data, grid_coords(scene), global_attrs(scene, "echo", "a test protocol", history, seconds))
+
+    def dry_run(self, scene):
+        return [f"{'plan':>28}: echo chi at {scene.n_points} points"]
+
+    def summary(self, ds):
+        return [f"echo: {int(ds['echo'].count())} points"]
+
+    def draw(self, ds, path, variable=None):
+        Path(path).write_text("echo picture")
+        return [Path(path)]
+
+
+PROTOCOL = EchoProtocol()

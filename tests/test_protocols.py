@@ -1,0 +1,86 @@
+"""The protocol seam: a third protocol, registered from outside the package (tests/protocol_echo.py), is validated,
+planned, run chunk by chunk (threads, journal, resume), written, read back and drawn by the package's own machinery,
+and the built-in protocols answer through the catalogue."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import sweep
+from sweep import physics, protocols
+from sweep.errors import InputError
+from sweep.write.read import file_kind
+
+
+@pytest.fixture
+def echo(monkeypatch):
+    monkeypatch.setitem(protocols._CATALOGUE, "echo", "protocol_echo")
+    return protocols.get("echo")
+
+
+def echo_scene(**kw):
+    p = sweep.presets["sample2"]
+    return sweep.Scene(protocol="echo", params=p, K_over_M=np.logspace(3, 6, 9), V=np.logspace(-7, -4, 5), **kw)
+
+
+def test_a_registered_protocol_runs_through_the_chunk_loop_the_journal_and_the_file(echo, tmp_path):
+    scene = echo_scene()
+    expected = physics.reduced_stiffness(scene.K_over_M, scene.params.D0, scene.params.g)[:, None] * np.ones(5)
+    out = tmp_path / "echo.nc"
+    ds = sweep.run_sweep(scene, progress=False, output=out)
+    np.testing.assert_allclose(ds["echo"].values, expected, rtol=1e-15)
+    back = sweep.open(out)
+    assert file_kind(back) == "echo"
+    xr.testing.assert_identical(back["echo"], ds["echo"])
+    assert 'protocol = "echo"' in back.attrs["scene"]
+    assert sweep.plot.plot_file(back, tmp_path / "echo.png") == [tmp_path / "echo.png"]
+
+
+def test_a_registered_protocol_resumes_from_its_journal(echo, tmp_path, monkeypatch):
+    """Interrupted after 2 of its 7-point chunks, the run resumes with only the rest and gives the same file."""
+    scene = echo_scene()
+    out = tmp_path / "echo.nc"
+    real, calls = echo.chunk, []
+
+    def interrupting(scene, plan, progress=False):
+        compute = real(scene, plan, progress)
+
+        def wrapped(rows):
+            calls.append(rows.size)
+            if len(calls) == 3:
+                raise KeyboardInterrupt
+            return compute(rows)
+        return wrapped
+
+    monkeypatch.setattr(echo, "chunk", interrupting)
+    with pytest.raises(sweep.run.runner.Interrupted, match="2 of 7 chunks are saved"):
+        sweep.run_sweep(scene, progress=False, output=out)
+    calls.clear()
+    monkeypatch.setattr(echo, "chunk", real)
+    resumed = sweep.run_sweep(scene, progress=False, output=out, resume=True)
+    whole = sweep.run_sweep(scene, progress=False)
+    xr.testing.assert_identical(resumed["echo"], whole["echo"])
+
+
+def test_a_registered_protocol_owns_its_observables_and_its_refusals(echo):
+    with pytest.raises(InputError, match=r"unknown observable\(s\) \['xi_inf'\] in observables of protocol 'echo'"):
+        echo_scene(observables=("xi_inf",))
+    with pytest.raises(InputError, match="extra axes are offered for protocol 'stop' only, got protocol 'echo'"):
+        echo_scene(axes={"A": [0.005, 0.01]})
+    with pytest.raises(InputError, match=r"state_law 'slip' is not offered on protocol 'echo'; supported: \['aging'\]"):
+        echo_scene(state_law="slip")
+    assert echo_scene().observables == ("echo",)
+
+
+def test_an_unknown_protocol_is_refused_with_the_catalogue():
+    with pytest.raises(InputError, match=r"protocol must be one of \('stop', 'driven'\), got 'hold'"):
+        sweep.Scene(protocol="hold", params=sweep.presets["sample2"], K_over_M=[1e4], V=[1e-6])
+
+
+@pytest.mark.parametrize("name, marker", [("stop", "xi_inf"), ("driven", "regime")])
+def test_the_built_in_protocols_answer_through_the_catalogue(name, marker):
+    protocol = protocols.get(name)
+    assert protocol.name == name and protocol.marker == marker and protocol.always in protocol.observables
+    assert set(protocol.default_observables) <= set(protocol.observables)
