@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep.analysis.hopf import BIFURCATIONS
+from sweep.analysis.hopf import AGREEMENT, BIFURCATIONS, hopf_summary
+from sweep.analysis.lyapunov import TYPES
 from sweep.cli import main
 from sweep.errors import InputError
 from sweep.write.netcdf import open_dataset
@@ -28,6 +29,8 @@ def test_line_by_simulation_matches_the_analytic_line(params, kind):
     np.testing.assert_allclose(ds["K_over_M_c"], ds["K_over_M_c_linear"], rtol=6e-4)
     names = ds["bifurcation"].attrs["flag_meanings"].split()
     assert [names[c] for c in ds["bifurcation"].values] == [kind] * V.size
+    assert [TYPES[c] for c in ds["bifurcation_l1"].values] == [kind] * V.size  # l1 agrees, degenerate too
+    assert np.all(ds["types_agree"].values == AGREEMENT.index("agree"))
     assert np.all(ds["simulations"].values > 2)
     if kind == "supercritical":
         assert np.all(ds["limit_cycle_amplitude"].values > 0)
@@ -113,6 +116,10 @@ def test_inertia_unfolds_the_degenerate_m2_zero_line_subcritical_then_supercriti
     assert kinds == ["subcritical", "supercritical"]
     amp = ds["limit_cycle_amplitude"].values
     assert amp[0] > 1.0 and amp[1] < 0.2  # a jump to large stick-slip vs a cycle born small
+    # the normal form says the same (sweep/analysis/lyapunov.py), and the file says that they agree
+    assert [TYPES[i] for i in ds["bifurcation_l1"].values] == kinds
+    assert ds["types_agree"].values.tolist() == [AGREEMENT.index("agree")] * 2
+    assert ds["l1"].values[0] > ds["l1_error"].values[0] and ds["l1"].values[1] < -ds["l1_error"].values[1]
 
 
 def test_auto_model_follows_gamma_over_A_per_velocity():
@@ -125,3 +132,28 @@ def test_auto_model_follows_gamma_over_A_per_velocity():
     np.testing.assert_allclose(ds["K_over_M_c_linear"].values, params.g / params.D0 * params.m1 * np.array(
         [1.0, 1.0 + ratios[1]]), rtol=1e-12)
     np.testing.assert_allclose(ds["K_over_M_c"], ds["K_over_M_c_linear"], rtol=6e-4)
+
+
+def test_hopf_file_carries_the_bautin_point_the_bistable_band_and_draws_the_type(tmp_path):
+    """Inertial m2 = 0 over gamma/A = 0.05 .. 0.5 (model "inertial"; no simulated type, so nothing compared): l1
+    changes sign once, at the Bautin point in the attributes; the bistable band is measured where l1 > 0 only; the
+    file survives netCDF; hopf_summary and the picture show it."""
+    from sweep.plot.files import plot_hopf
+    from sweep.write.netcdf import save
+
+    params = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0, D0=0.7e-6)
+    ratios = np.array([0.05, 0.1, 0.5])
+    v = np.sqrt(ratios * params.g * params.D0 * params.A)
+    ds = sweep.locate_hopf(params, v, model="inertial", bifurcation=False, bistable_band=True)
+    assert [TYPES[c] for c in ds["bifurcation_l1"].values] == ["subcritical", "subcritical", "supercritical"]
+    assert np.all(ds["types_agree"].values == AGREEMENT.index("not_compared"))
+    assert 0.1 < float(np.atleast_1d(ds.attrs["bautin_gamma_over_A"])[0]) < 0.5
+    width = ds["bistable_width"].values
+    assert np.all(width[:2] > 0) and np.isnan(width[2]) and width[0] > width[1]  # shrinks towards the Bautin point
+    back = open_dataset(save(ds, tmp_path / "h.nc"))
+    text = hopf_summary(back)
+    assert "supercritical 1, subcritical 2" in text and "Bautin point" in text and "gamma/A = 0.128" in text
+    assert "relative width" in text
+    assert plot_hopf(back, tmp_path / "h.png").stat().st_size > 10_000
+    single = sweep.locate_hopf(params, v[:1], model="inertial", bifurcation=False)
+    assert "not searched" in hopf_summary(single)
