@@ -10,11 +10,18 @@
 * throughput of the driven scene: run_sweep on a 40 x 20 (K/M, V) grid of sample2, quasi-static, points per
   second, per regime (mean steps and cycles), 1 thread and 2 threads; and with model="auto", where the
   quasi-static breakdowns (regime runaway) are run again with inertia (gamma/A 2e-5..2e-3 there: stiff);
-* the regime map with the analytic and the simulated Hopf lines (sweep.plot.files.plot_regimes, PNG).
+* the regime map with the analytic and the simulated Hopf lines (sweep.plot.files.plot_regimes, PNG);
+* the type of the line from the normal form (sweep/analysis/lyapunov.py, docs/hopf-type.md; key "lyapunov"): l1
+  with its error along 1,000 velocities (targets < 1 s), the Bautin point of the inertial m2 = 0 line to 1e-3 in
+  gamma/A (< 2 s) and its convergence, the bistable band's width by simulation at 5 velocities on the inverted
+  side (< 30 s on 2 cores) with width / l1^2, the square-root law's coefficient against simulation at 2 distances,
+  and the Bautin point as a function of mu1/A (m2 = 0) and of m2/A (where the inverted window closes).
 
 Writes benchmarks/results/hopf.json and hopf.png. Run: python benchmarks/hopf.py (~1 min on 2 cores).
 
-    python benchmarks/hopf.py [--quick] [--out benchmarks/results/hopf.json] [--no-png]
+    python benchmarks/hopf.py [--quick] [--out benchmarks/results/hopf.json] [--no-png] [--only-lyapunov]
+
+--only-lyapunov: the "lyapunov" part alone (~30 s), written to --out (default benchmarks/results/lyapunov.json).
 
 --quick: every part on tiny sets (4 velocities on the line, 2 on the inertial line, a 4 x 2 deep grid, an 8 x 4
 driven grid), one timed call each: checks that the script works; its numbers are not results. The driven
@@ -35,11 +42,13 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import loadavg, machine_info, sweep_digest  # noqa: E402
-from sweep.plot.files import plot_regimes  # noqa: E402
 
 import sweep  # noqa: E402
 from sweep import physics  # noqa: E402
-from sweep.integrate.driven import Regime  # noqa: E402
+from sweep.analysis.bistable import bistable_band  # noqa: E402
+from sweep.analysis.lyapunov import bautin_points, lyapunov_line, reduced_l1  # noqa: E402
+from sweep.integrate.driven import DrivenParams, DrivenSettings, Regime, simulate_point  # noqa: E402
+from sweep.plot.files import plot_regimes  # noqa: E402
 
 OUT = Path(__file__).resolve().parent / "results"
 PARAMS = sweep.presets["sample2"]
@@ -58,13 +67,120 @@ def best_of(fn, repeats=3):
     return min(times), out
 
 
+def _v_of(params, ratio):
+    """Velocities [m s-1] at the given gamma/A."""
+    return np.sqrt(np.asarray(ratio) * params.g * params.D0 * params.A)
+
+
+def _bautin_g(a: float, b: float, g_grid: np.ndarray) -> list[float]:
+    """gamma/A of the sign changes of l1 at fixed a = mu1/A, b = m2/A (chord root on the grid; the parameter map)."""
+    l1, err, _ = reduced_l1(a, b, g_grid)
+    sign = np.where(l1 > err, 1, np.where(l1 < -err, -1, 0))
+    out = []
+    for i in np.flatnonzero((sign[:-1] * sign[1:]) < 0):
+        x0, x1 = np.log(g_grid[i]), np.log(g_grid[i + 1])
+        out.append(float(np.exp(x0 + (x1 - x0) * l1[i] / (l1[i] - l1[i + 1]))))
+    return out
+
+
+def _window_closes(a: float, g_grid: np.ndarray, halvings: int) -> dict:
+    """The b = m2/A above which l1 <= 0 at every gamma/A of the grid (the inverted window closed), at a = mu1/A:
+    bisection on the largest l1 - l1_error over the grid, from [0, 2]."""
+    def opens(b):
+        l1, err, _ = reduced_l1(a, b, g_grid)
+        return bool(np.any(l1 > err))
+
+    lo, hi = 0.0, 2.0
+    for _ in range(halvings):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if opens(mid) else (lo, mid)
+    return {"mu1_over_A": a, "m2_over_A": 0.5 * (lo + hi), "bracket": [lo, hi],
+            "gamma_over_A_grid": [float(g_grid[0]), float(g_grid[-1]), int(g_grid.size)]}
+
+
+def lyapunov_part(quick: bool) -> dict:
+    """The "lyapunov" part of the JSON (module docstring)."""
+    params = PARAMS.replace(m2=0.0)
+    a = params.m1 / params.A
+    repeats = 1 if quick else 5
+    v_1000 = np.logspace(-7, -4, 100 if quick else 1000)
+    lyapunov_line(PARAMS, v_1000[:4])  # numpy's first calls
+    t_line, line = best_of(lambda: lyapunov_line(PARAMS, v_1000), repeats)
+    v_inertial = _v_of(params, np.logspace(-3, 1, v_1000.size))
+    t_line_in, line_in = best_of(lambda: lyapunov_line(params, v_inertial, model="inertial"), repeats)
+    v_range = (float(v_inertial[0]), float(v_inertial[-1]))
+    t_bautin, points = best_of(lambda: bautin_points(params, v_range, rtol=1e-3), repeats)
+    finer = bautin_points(params, v_range, rtol=5e-4)
+    reference = bautin_points(params, v_range, rtol=1e-9)
+    g_b = [b.gamma_over_A for b in points]
+    bautin = {"params": "sample2 with m2 = 0, inertial line gamma/A 1e-3 .. 10", "seconds": t_bautin, "rtol": 1e-3,
+              "gamma_over_A": g_b, "V_um_s": [b.V * 1e6 for b in points],
+              "K_over_M": [b.K_over_M for b in points], "direct_above": [b.direct_above for b in points],
+              "moved_by_halving_rtol_rel_V": [abs(f.V / b.V - 1) for f, b in zip(finer, points)],
+              "error_vs_rtol_1e-9_rel_gamma_over_A": [abs(b.gamma_over_A / r.gamma_over_A - 1)
+                                                      for b, r in zip(points, reference)]}
+    # the bistable band (simulation) at 5 velocities on the inverted side, towards the Bautin point
+    band_ratios = [0.05, 0.115] if quick else [0.02, 0.05, 0.08, 0.1, 0.115]
+    bistable_band(a, 0.0, 0.1, rtol=0.5)  # compile the inertial driven kernel outside the timing
+    t0 = time.perf_counter()
+    bands = [bistable_band(a, 0.0, g, rtol=0.1 if quick else 1e-2) for g in band_ratios]
+    t_band = time.perf_counter() - t0
+    l1_band = reduced_l1(a, 0.0, np.array(band_ratios))[0]
+    band = {"gamma_over_A": band_ratios, "seconds_total": t_band, "rtol": 0.1 if quick else 1e-2,
+            "width_rel": [b.d_hi for b in bands], "width_lower_bracket": [b.d_lo for b in bands],
+            "bistable_checked": [b.bistable for b in bands], "simulations": [b.simulations for b in bands],
+            "undecided": [b.undecided for b in bands], "l1": l1_band.tolist(),
+            "width_over_l1_squared": [b.d_hi / x**2 for b, x in zip(bands, l1_band)]}
+    # the square-root law below a direct line: simulated amplitude / normal form's sqrt(c d)
+    sqrt_law = []
+    for g in ([1.0] if quick else [0.3, 1.0]):
+        l1, _, nf = reduced_l1(a, 0.0, g)
+        c = nf.dlambda[0].real * a * (1 + g) / (nf.omega[0] * l1[0])
+        for d in (1e-3, 4e-3):
+            r = simulate_point(DrivenParams(a * (1 + g) * (1 - d), a, 0.0, g), DrivenSettings(1e-4, 1e-10, 10_000,
+                                                                                             20_000_000))
+            sqrt_law.append({"gamma_over_A": g, "d": d, "simulated": r.amplitude, "normal_form": float(np.sqrt(c * d)),
+                             "ratio": r.amplitude / float(np.sqrt(c * d))})
+    # the Bautin point over the parameters (reduced: a = mu1/A, b = m2/A), l1 on a gamma/A grid at each
+    g_grid = np.logspace(-3, 1.5, 200 if quick else 2000)
+    by_a = {f"{x:.3g}": _bautin_g(x, 0.0, g_grid) for x in ([0.5, 1.786, 5.0] if quick else
+                                                              [0.2, 0.5, 1.0, 1.786, 3.0, 5.0, 10.0])}
+    b_values = [0.0, 0.1, 0.3] if quick else [0.0, 0.02, 0.05, 0.1, 0.2, 0.3, 0.35, 0.4, 0.5]
+    by_b = {f"{x:.3g}": _bautin_g(a, x, g_grid) for x in b_values}
+    closes = _window_closes(a, g_grid, 20 if quick else 40)
+    return {"line_1000_velocities": {"velocities": int(v_1000.size), "seconds_sample2_auto": t_line,
+                                     "seconds_inertial_m2_zero": t_line_in,
+                                     "l1_error_max_over_abs_l1_median": float(np.nanmax(line_in.l1_error) /
+                                                                               np.nanmedian(np.abs(line_in.l1))),
+                                     "types_sample2_auto": np.bincount(line.kind, minlength=4).tolist()},
+            "bautin": bautin, "bistable_band": band, "sqrt_law": sqrt_law,
+            "bautin_gamma_over_A_by_mu1_over_A_at_m2_zero": by_a,
+            "bautin_gamma_over_A_by_m2_over_A_at_mu1_over_A_1.786": by_b,
+            "inverted_window_closes_at_m2_over_A": closes,
+            "targets": {"line_1000_under_1_s": max(t_line, t_line_in) < 1.0, "bautin_under_2_s": t_bautin < 2.0,
+                        "band_5_velocities_under_30_s": t_band < 30.0}}
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="tiny sets, one timed call each (a smoke run)")
     ap.add_argument("--out", type=Path, default=OUT / "hopf.json", help="the JSON (the PNG beside it, .png)")
     ap.add_argument("--no-png", action="store_true")
+    ap.add_argument("--only-lyapunov", action="store_true", help="the type of the line from l1 alone")
     args = ap.parse_args(argv)
     quick = args.quick
+    if args.only_lyapunov:
+        out = args.out if args.out != OUT / "hopf.json" else OUT / "lyapunov.json"
+        t_start = time.perf_counter()
+        result = {"benchmark": "hopf --only-lyapunov" + (" --quick" if quick else ""), "quick": quick,
+                  "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "machine": machine_info(),
+                  "loadavg_start": loadavg(), "lyapunov": lyapunov_part(quick)}
+        result["loadavg_end"], result["benchmark_wall_s"] = loadavg(), time.perf_counter() - t_start
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(result, indent=1))
+        print(json.dumps(result, indent=1))
+        print(f"wrote {out}")
+        return
     v_line = V_LINE_QUICK if quick else V_LINE
     grid = GRID_QUICK if quick else GRID
     repeats = 1 if quick else 3
@@ -143,6 +259,7 @@ def main(argv: list[str] | None = None) -> None:
         "driven_grid": {"shape": list(scene.shape), "model": "quasistatic", **driven, "regimes": regimes,
                         "steady_iff_linearly_stable_fraction": float(agree.mean())},
         "driven_grid_auto": driven_auto,
+        "lyapunov": lyapunov_part(quick),
         "benchmark_wall_s": time.perf_counter() - t_start,
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)

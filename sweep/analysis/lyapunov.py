@@ -27,7 +27,11 @@ inverted (subcritical). The value depends on the scale of q; the sign does not.
 the amplitude of the spring stretch z = tau - xi (to leading order, the driven scene's ``amplitude``), and just below
 a direct line the stationary cycle has r^2 = Re(dlambda/dk) (k - k_c) / (omega l1). For a textbook oscillator whose
 first component is x this is the "z = x + i y" scaling (Lienard: l1 = -1/8). ``normalisation="unit"`` gives
-Kuznetsov's <q, q> = 1 instead (|q|^2 / (1/4 |q|^2 / |q_0|^2) times the stretch value).
+Kuznetsov's <q, q> = 1 instead (l1 scales with the square of the
+eigenvector's length: unit = 4 |q_0|^2 x stretch, q_0 the first component of the unit vector; Lienard: -1/4).
+
+The second Lyapunov coefficient is not computed: its sign at the Bautin point comes from simulation (the bistable
+band of sweep/analysis/bistable.py exists on the inverted side and shrinks like l1^2: l2 < 0; docs/hopf-type.md 4).
 
 **Error** (:func:`first_lyapunov_with_error`): l1 again from central finite differences of the right-hand side
 (B and C by polarisation of the second and third directional derivatives, complex directions, steps h and h/2,
@@ -115,7 +119,7 @@ def _solve(M: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 def _critical_pair(J: np.ndarray, normalisation: str, index: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(omega, q, p) of the eigenvalue with positive imaginary part nearest the imaginary axis."""
-    n_pts, n = J.shape[0], J.shape[1]
+    n_pts = J.shape[0]
     lam, vec = np.linalg.eig(J)
     score = np.where(lam.imag > 0.0, np.abs(lam.real), np.inf)
     pick = np.argmin(score, axis=1)
@@ -132,7 +136,6 @@ def _critical_pair(J: np.ndarray, normalisation: str, index: int) -> tuple[np.nd
     else:
         raise InputError(f"normalisation must be 'stretch' or 'unit', got {normalisation!r}")
     p = p / _bdot(p, q).conj()[:, None]
-    del n
     return lam0.imag, q, p
 
 
