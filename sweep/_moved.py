@@ -63,10 +63,14 @@ class _Alias(importlib.abc.Loader):
     def create_module(self, spec) -> ModuleType:
         warnings.warn(f"{spec.name} is now {self.new}: import it from there (the old path will be removed)",
                       FutureWarning, stacklevel=2)
-        return importlib.import_module(self.new)
+        module = importlib.import_module(self.new)
+        self.spec = module.__spec__
+        return module
 
     def exec_module(self, module: ModuleType) -> None:
-        """The module under its new name is already executed."""
+        """The module under its new name is already executed; importlib gave it the old name's spec: its own back
+        (relative imports and pickling go by it)."""
+        module.__spec__ = self.spec
 
 
 class _Finder(importlib.abc.MetaPathFinder):

@@ -238,7 +238,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 def _cmd_hopf(args: argparse.Namespace) -> int:
     """``sweep hopf CONFIG.toml -o hopf.nc``: the Hopf line over the file's V axis, netCDF + PNG."""
-    from .analysis.hopf import locate_hopf
+    from .analysis.hopf import hopf_summary, locate_hopf
     from .plot.files import plot_hopf
     from .scene.scene import hopf_config
     from .status import flag_summary
@@ -254,6 +254,7 @@ def _cmd_hopf(args: argparse.Namespace) -> int:
     out = save(ds, args.output, overwrite=args.overwrite)
     print(f"wrote {out} ({v.size} velocities in {time.perf_counter() - t0:.2f} s; {flag_summary(ds, 'bifurcation')}; "
           f"{flag_summary(ds, 'model')})")
+    print(hopf_summary(ds))
     print(f"wrote {plot_hopf(ds, _png(args))}")
     return 0
 

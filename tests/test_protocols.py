@@ -84,3 +84,28 @@ def test_the_built_in_protocols_answer_through_the_catalogue(name, marker):
     protocol = protocols.get(name)
     assert protocol.name == name and protocol.marker == marker and protocol.always in protocol.observables
     assert set(protocol.default_observables) <= set(protocol.observables)
+
+
+@pytest.fixture
+def dummy_law(monkeypatch):
+    from sweep.integrate.models.state_laws import STATE_LAWS, StateLaw, aging
+
+    law = StateLaw("dummy", aging, aging_identity=False, stop_family=None, inertial=False, finite_at_zero_m2=False)
+    monkeypatch.setitem(STATE_LAWS, "dummy", law)
+    return law
+
+
+def test_a_registered_state_law_is_refused_where_no_kernel_runs_it(dummy_law):
+    """A law without a stop kernel or an inertial model: the stop scene refuses it listing the laws it runs, the
+    driven scene takes it quasi-statically only; an unknown law lists every law."""
+    p = sweep.presets["sample2"]
+    grid = dict(params=p, K_over_M=[1e4, 1e5], V=[1e-6, 1e-5])
+    with pytest.raises(InputError, match=r"state_law 'dummy' is not offered on protocol 'stop'; supported: "
+                                         r"\['aging', 'slip'\]"):
+        sweep.Scene(protocol="stop", state_law="dummy", model="quasistatic", **grid)
+    with pytest.raises(InputError, match="state_law 'dummy' runs with model 'quasistatic' only on protocol 'driven', "
+                                         "got model='auto'"):
+        sweep.Scene(protocol="driven", state_law="dummy", **grid)
+    assert sweep.Scene(protocol="driven", state_law="dummy", model="quasistatic", **grid).state_law == "dummy"
+    with pytest.raises(InputError, match=r"state_law must be one of \['aging', 'dummy', 'slip'\], got 'ageing'"):
+        sweep.Scene(protocol="driven", state_law="ageing", **grid)

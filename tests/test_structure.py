@@ -106,16 +106,17 @@ def test_models_do_not_import_the_drivers_and_solvers_do_not_import_the_models()
             assert not {d for d in inside if not d.startswith(("sweep.integrate.models", "sweep.integrate.solvers"))}, name
 
 
-def test_the_model_registry_names_every_state_law_and_existing_modules():
-    """sweep.integrate.models.REGISTRY is the one table of what exists: its state laws are those of models/state_laws.py,
-    and every module it names exists."""
-    from sweep.integrate.models import REGISTRY
+def test_every_state_law_names_a_kernel_family_the_package_has():
+    """The state laws' registry is what the package dispatches on: each law's stop kernel family is one the compile
+    notice knows and, without the aging identity, one the stop engine dispatches to."""
     from sweep.integrate.models.state_laws import STATE_LAWS
+    from sweep.protocols.stop.engine import GENERAL_PATHS
+    from sweep.run.compile_notice import COLD_COMPILE_S
 
-    assert {law for (_, _, law) in REGISTRY} == set(STATE_LAWS)
-    for rhs, drivers in REGISTRY.values():
-        for module in (rhs, *drivers.split(" / ")):
-            assert f"sweep.{module}" in MODULES, module
+    for law in STATE_LAWS.values():
+        assert law.stop_family is None or law.stop_family in COLD_COMPILE_S, law.name
+        if law.stop_family and not law.aging_identity:
+            assert law.stop_family in GENERAL_PATHS, law.name
 
 
 LAYERS = (
@@ -189,5 +190,6 @@ def test_no_module_outside_the_protocols_compares_a_protocol_name():
 
 def test_the_protocol_name_check_finds_a_comparison(tmp_path):
     sample = tmp_path / "sample.py"
-    sample.write_text('def f(scene):\n    return scene.protocol == "driven" or scene.protocol in ("stop",) or {"stop": 1}\n')
+    sample.write_text('def f(scene):\n'
+                      '    return scene.protocol == "driven" or scene.protocol in ("stop",) or {"stop": 1}\n')
     assert len(protocol_name_uses(sample)) == 3

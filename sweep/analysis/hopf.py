@@ -55,12 +55,12 @@ from ..assemble.dataset import REFERENCES, versions
 from ..errors import InputError
 from ..integrate.driven import DrivenParams, DrivenSettings, Regime, simulate_point
 from ..plan.plan import line_uses_inertia
-from ..protocols.stop.model_choice import MODEL_FLAG
 from ..run.compile_notice import announce_if_cold, driven_families
 from ..run.progress import Progress
 from ..scene.params import FrictionParams
 from ..scene.plausibility import warn_implausible
 from ..scene.scene import MODEL_TOL_RANGE, MODELS, STATE_LAWS
+from ..status import MODEL_FLAG
 from . import bistable
 from .lyapunov import TYPES, bautin_points, lyapunov_line
 

@@ -254,7 +254,7 @@ def _make_simulate(law: str, with_inertia: bool):
     """simulate(p, settings) -> DrivenResult for one state law, compiled for the quasi-static model only
     (``with_inertia`` False: the stiff stepper is not compiled into the loop, which was 18 % slower with it, and
     compiling takes half the time) or for both."""
-    rhs = make_driven_rhs(STATE_LAWS[law], with_inertia)
+    rhs = make_driven_rhs(STATE_LAWS[law].rate, with_inertia)
     n = _size(with_inertia)
     variant = (law, "inertial" if with_inertia else "quasistatic")
     advance = _make_advance(rhs, with_inertia, variant)
@@ -383,9 +383,9 @@ def simulate_driven(chi: float, mu1: float, m2: float, A: float, perturbation: f
         raise ValueError(f"chi must be finite and > 0, got {chi!r}")
     if not (math.isfinite(gamma) and gamma >= 0.0):
         raise ValueError(f"gamma must be finite and >= 0, got {gamma!r}")
-    if state_law not in STATE_LAWS or (gamma > 0.0 and state_law != "aging"):
-        raise ValueError(f"state_law must be one of {sorted(STATE_LAWS)} (inertia with 'aging' only), got "
-                         f"{state_law!r}")
+    if state_law not in STATE_LAWS or (gamma > 0.0 and not STATE_LAWS[state_law].inertial):
+        raise ValueError(f"state_law must be one of {sorted(STATE_LAWS)} (inertia with "
+                         f"{[n for n, law in STATE_LAWS.items() if law.inertial]} only), got {state_law!r}")
     r = simulate_point(DrivenParams(chi / A, mu1 / A, m2 / A, gamma / A),
                        DrivenSettings(perturbation, rtol, max_cycles, max_steps), state_law)
     return {"regime": Regime(r.regime).name.lower(), "status": Status(r.status).name.lower(),

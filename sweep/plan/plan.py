@@ -65,6 +65,7 @@ from ..accuracy import (
     TOL_RATIO,
     lane_control_tolerance,
 )
+from ..integrate.models.state_laws import STATE_LAWS
 from ..integrate.solvers import METHODS
 from ..scene.scene import Scene
 
@@ -160,7 +161,7 @@ def samples_in_lanes(scene: Scene) -> bool:
     in float64 with no step given, aging law, samples only (t50/t90 and explicitly named methods keep the per-point
     path, which also takes the points the lanes fail on and those without a finite relaxed slip)."""
     return (scene.time_resolved and scene.method == "auto" and scene.step is None and scene.precision == "float64"
-            and scene.state_law == "aging" and not {"t50", "t90"} & set(scene.observables))
+            and STATE_LAWS[scene.state_law].aging_identity and not {"t50", "t90"} & set(scene.observables))
 
 
 def choose_method(scene: Scene) -> tuple[str, str]:
@@ -269,7 +270,7 @@ class Plan:
         text = {
             "model": _model_policy(self.model, self.model_tol),
             "state_law": self.state_law,
-            "state": ("xi (u = s - xi)" + (" + tau quadrature" if self.needs_tau else "") if self.state_law == "aging"
+            "state": ("xi (u = s - xi)" + (" + tau quadrature" if self.needs_tau else "") if self.aging_identity
                       else "(xi, u) in the phase plane, then xi in t = 1/u (docs/physics.md 7.3)"),
             "method": f"{self.method} ({self.method_reason})" + "".join(
                 f"; {m} at {self.points_of(m).size} stiff points (chi/A <= {STIFF_K_MAX:g}, mu1 < 0, m2 > 0, "
@@ -299,12 +300,17 @@ class Plan:
             "points": str(self.n_points),
             "points_without_finite_limit": str(int(np.count_nonzero(~self.finite))),
         }
-        if self.state_law != "aging":  # the general path (its rule says the rest)
+        if not self.aging_identity:  # the general path (its rule says the rest)
             text.update(step=f"adaptive, local tolerance {self.ctrl_tol:.3g}",
                         error_estimate="from the solutions at three local tolerances (step_rule): <name>_error "
                                        "variables",
                         horizon="exact: xi at t = 1/u = 0")
         return text
+
+    @property
+    def aging_identity(self) -> bool:
+        """Whether the plan's state law has the aging identity xi + u = s (the one-state stop paths)."""
+        return STATE_LAWS[self.state_law].aging_identity
 
     def points_of(self, method: str) -> np.ndarray:
         """Flat indices of the points integrated with ``method``."""
@@ -397,11 +403,8 @@ def common_fields(scene: Scene, chi, mu1, k, a, b, G, finite, inertial) -> dict:
 
 
 def finite_relaxed_slip(a: np.ndarray, b: np.ndarray, state_law: str = "aging") -> np.ndarray:
-    """Where the relaxed slip is finite, from a = mu1/A and b = m2/A: aging, iff m2 > 0, or m2 = 0 and mu1 > 0
-    (docs/physics.md 6); slip, iff m2 > 0 (docs/physics.md 7.3)."""
-    if state_law == "aging":
-        return (b > 0) | ((b == 0) & (a > 0))
-    return b > 0
+    """Where the relaxed slip is finite, from a = mu1/A and b = m2/A (the law's StateLaw.finite_relaxed_slip)."""
+    return STATE_LAWS[state_law].finite_relaxed_slip(a, b)
 
 
 def _general_plan(scene: Scene, chi, mu1, k, a, b, G, finite) -> Plan:
@@ -434,7 +437,7 @@ def stop_plan_for_points(scene: Scene, points: PointParams) -> Plan:
     chi, mu1, G = points.chi, points.mu1, points.G
     k, a, b = points.reduced
     finite = finite_relaxed_slip(a, b, scene.state_law)
-    if scene.state_law != "aging":
+    if not STATE_LAWS[scene.state_law].aging_identity:
         return _general_plan(scene, chi, mu1, k, a, b, G, finite)
     method, reason = choose_method(scene)
     tab = METHODS[method]

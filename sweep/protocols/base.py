@@ -41,8 +41,9 @@ class Protocol(ABC):
     """The observable always computed and stored."""
     default_observables: ClassVar[tuple[str, ...]]
     """Observables of a scene that names none."""
-    models: ClassVar[frozenset[tuple[str, str]]]
-    """The (model, state law) pairs it runs; model "auto" needs both models of a law."""
+    models: frozenset[tuple[str, str]]
+    """The (model, state law) pairs it runs (model "auto" needs both models of a law): a property where it follows
+    the state laws' registry (sweep.integrate.models.state_laws.STATE_LAWS)."""
     extra_axes: ClassVar[bool] = False
     """Whether a scene of this protocol may sweep friction parameters beside (K/M, V) (Scene.axes)."""
     default_chunk: ClassVar[int]

@@ -282,8 +282,8 @@ class Scene:
         self._check_state_law()
 
     def _check_state_law(self) -> None:
-        if self.state_law not in STATE_LAWS:
-            raise InputError(f"state_law must be one of {list(STATE_LAWS)}, got {self.state_law!r}")
+        if self.state_law not in _LAWS:
+            raise InputError(f"state_law must be one of {sorted(_LAWS)}, got {self.state_law!r}")
         protocol = protocols.get(self.protocol)
         if not protocol.supports(self.model, self.state_law):
             have = sorted(m for (m, law) in protocol.models if law == self.state_law)
@@ -424,11 +424,17 @@ SCENE_KEYS = ({f.name for f in fields(Scene)} - {"axes"}) | {"preset"} | set(EXT
 """Keys of a scene TOML: the Scene's fields (its extra axes as tables [A], [m1], [m2], [D0]) and ``preset``."""
 
 
-def _check_keys(cfg: Mapping[str, Any]) -> None:
-    """InputError naming the keys of a scene file that no command knows (a misspelt ``rtoll`` is never ignored)."""
-    unknown = set(cfg) - SCENE_KEYS
+def _check_keys(cfg: Mapping[str, Any], also: frozenset[str] = frozenset()) -> None:
+    """InputError naming the keys of a scene file that no command knows (a misspelt ``rtoll`` is never ignored);
+    ``also``: the keys of the command reading it (``sweep hopf``: :data:`HOPF_KEYS`)."""
+    allowed = SCENE_KEYS | also
+    unknown = set(cfg) - allowed
     if unknown:
-        raise InputError(f"unknown key(s) {sorted(unknown)} in scene; allowed: {sorted(SCENE_KEYS)}")
+        raise InputError(f"unknown key(s) {sorted(unknown)} in scene; allowed: {sorted(allowed)}")
+
+
+HOPF_KEYS = frozenset({"bistable_band"})
+"""Keys of a scene file that only ``sweep hopf`` reads (sweep.locate_hopf's options)."""
 
 
 def scene_from_mapping(cfg: Mapping[str, Any]) -> Scene:
@@ -481,13 +487,16 @@ def _read_toml(source: str | Path) -> dict[str, Any]:
 
 def hopf_config(source: str | Path) -> tuple[FrictionParams, np.ndarray, dict[str, Any]]:
     """(params, V axis, keyword arguments of sweep.locate_hopf) from a TOML file with preset and/or [params], a
-    [V] axis table and optionally rtol, model, model_tol and state_law. The other keys of a scene (e.g. [K_over_M])
-    are allowed, so that a scene file serves both commands, and unused; any other key is refused, as in a scene."""
+    [V] axis table and optionally rtol, model, model_tol, state_law and bistable_band (true: measure the bistable
+    band above an inverted line by simulation). The other keys of a scene (e.g. [K_over_M]) are allowed, so that a
+    scene file serves both commands, and unused; any other key is refused, as in a scene."""
     cfg = _read_toml(source)
-    _check_keys(cfg)
+    _check_keys(cfg, HOPF_KEYS)
     if "V" not in cfg:
         raise InputError("hopf needs the [V] axis table of velocities [m s-1]")
-    kwargs = {k: cfg[k] for k in ("rtol", "model", "model_tol", "state_law") if k in cfg}
+    if "bistable_band" in cfg and not isinstance(cfg["bistable_band"], bool):
+        raise InputError(f"bistable_band must be true or false, got {cfg['bistable_band']!r}")
+    kwargs = {k: cfg[k] for k in ("rtol", "model", "model_tol", "state_law", "bistable_band") if k in cfg}
     return _params_from(cfg), _axis_from_toml("V", cfg["V"]), kwargs
 
 

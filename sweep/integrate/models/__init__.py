@@ -1,34 +1,26 @@
-"""Right-hand sides of the model, one per protocol x model x state law, and the registry that names them.
+"""Right-hand sides of the model, one per protocol x model, with the state laws composed into them.
 
 A right-hand side (with its Jacobian and closed-form tails where it has them) knows nothing of steppers; the drivers
-of :mod:`sweep.integrate` compose it with a stepper, a controller and what is recorded. :data:`REGISTRY` is the
-single table of what exists: the scene accepts exactly these combinations (a second state law is one more entry
-here and one function in :mod:`sweep.integrate.models.state_laws`).
+of :mod:`sweep.integrate` compose it with a stepper, a controller and what is recorded. The state laws are a registry
+(:data:`sweep.integrate.models.state_laws.STATE_LAWS`); which (model, state law) pairs a protocol runs, each protocol
+says (sweep.protocols.base.Protocol.models).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from types import MappingProxyType
-
-__all__ = ["REGISTRY", "Entry"]
-
-Entry = tuple[str, str]
-"""(module of the right-hand side, module of the driver that integrates it), both under sweep."""
-
-REGISTRY: Mapping[tuple[str, str, str], Entry] = MappingProxyType({
-    ("stop", "quasistatic", "aging"): ("integrate.models.stop", "integrate.stop_point / integrate.lanes"),
-    ("stop", "quasistatic", "slip"): ("integrate.models.stop_slip", "integrate.stop_slip"),
-    ("stop", "inertial", "aging"): ("integrate.models.stop_inertial", "integrate.stop_inertial"),
-    ("driven", "quasistatic", "aging"): ("integrate.models.driven", "integrate.driven"),
-    ("driven", "quasistatic", "slip"): ("integrate.models.driven", "integrate.driven"),
-    ("driven", "inertial", "aging"): ("integrate.models.driven", "integrate.driven"),
-})
-"""(protocol, model, state law) -> (right-hand side, driver). model="auto" chooses per point between the
-quasi-static and inertial entries of its protocol and law, so it needs both."""
+import warnings
 
 
-def available(protocol: str, model: str, state_law: str) -> bool:
-    """Whether the scene's combination exists (model "auto" needs both models of the protocol and law)."""
-    models = ("quasistatic", "inertial") if model == "auto" else (model,)
-    return all((protocol, m, state_law) in REGISTRY for m in models)
+def __getattr__(name: str):
+    """REGISTRY and available(), of an earlier layout: each protocol now says what it runs (Protocol.models)."""
+    from ... import protocols
+
+    if name == "REGISTRY":
+        warnings.warn("sweep.integrate.models.REGISTRY is replaced by sweep.protocols.get(name).models and "
+                      "sweep.integrate.models.state_laws.STATE_LAWS", FutureWarning, stacklevel=2)
+        return {(p, m, law): protocols.CATALOGUE[p] for p in protocols.names() for (m, law) in protocols.get(p).models}
+    if name == "available":
+        warnings.warn("sweep.integrate.models.available(protocol, model, law) is replaced by "
+                      "sweep.protocols.get(protocol).supports(model, law)", FutureWarning, stacklevel=2)
+        return lambda protocol, model, state_law: protocols.get(protocol).supports(model, state_law)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -30,12 +30,20 @@ class DrivenProtocol(Protocol):
     observables = ("regime", "growth_rate", "period", "amplitude")
     always = "regime"
     default_observables = observables
-    models = frozenset({("quasistatic", "aging"), ("quasistatic", "slip"), ("inertial", "aging")})
     default_chunk = 1024  # a driven point costs ~10-100x a stop point
     memory_per_point = 300
     file_per_point = 80
     core_seconds_per_point = 3.2e-4
     warm_up_timed = False
+
+    @property
+    def models(self) -> frozenset[tuple[str, str]]:
+        """Quasi-static with every state law (its rate composed into the driven right-hand side); inertial with the
+        laws that have an inertial model."""
+        from ...integrate.models.state_laws import STATE_LAWS
+
+        return frozenset({("quasistatic", n) for n in STATE_LAWS} | {("inertial", n) for n, law in STATE_LAWS.items()
+                                                                     if law.inertial})
 
     def check(self, scene: Scene) -> None:
         if scene.method not in DRIVEN_METHODS:

@@ -24,6 +24,7 @@ from ...integrate.ladder import climb
 from ...integrate.lanes import LaneOutputs, LanePoints, LaneRuns, lane_kernels
 from ...integrate.lanes_adaptive import AdaptiveOutputs, AdaptiveRuns, adaptive_lane_kernels
 from ...integrate.lanes_sampled import LANES, SampledOutputs, SampledRuns, sampled_lane_kernels
+from ...integrate.models.state_laws import STATE_LAWS
 from ...integrate.models.stop import MAX_STEPS, NO_FINITE_LIMIT, NONFINITE, OK
 from ...integrate.solvers import METHODS
 from ...integrate.stop_point import Method, StopPoints, Tolerances
@@ -190,13 +191,17 @@ def _relax_in_lanes(scene: Scene, plan: Plan, g: np.ndarray, correction: np.ndar
     return out
 
 
-def _relax_general(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
-    """Relaxed slip of the points g with a state law other than aging (sweep/integrate/stop_slip.py)."""
+def _relax_slip_law(scene: Scene, plan: Plan, g: np.ndarray) -> RawResult:
+    """Relaxed slip of the points g with the slip law, in its phase plane (sweep/integrate/stop_slip.py)."""
     out = RawResult.empty(g.size, 0, 0)
     slip_batch(plan.k[g], plan.a[g], plan.b[g], scene.rtol, scene.atol["xi_inf"], plan.max_steps, out.xi_inf,
                out.xi_inf_err, out.status, out.steps)
     out.work[:] = out.steps
     return out
+
+
+GENERAL_PATHS = {"slip-law stop": _relax_slip_law}
+"""The stop kernels of the state laws without the aging identity, by their kernel family (StateLaw.stop_family)."""
 
 
 def lane_groups(n: int) -> int:
@@ -312,8 +317,8 @@ def run_points(scene: Scene, plan: Plan, g: np.ndarray, obs_tau: np.ndarray | No
     correction of their rk4 points is written there. ``estimates=False``: the points that the sampled lanes solve
     are run once each, at the ladder's first control tolerance, without their fine twin (~0.6x the cost), and carry
     no error estimate (NaN): for callers that check the accuracy otherwise (sweep.fit's iterations)."""
-    if plan.state_law != "aging":
-        return _relax_general(scene, plan, g)
+    if not plan.aging_identity:  # the law's own stop kernel (StateLaw.stop_family)
+        return GENERAL_PATHS[STATE_LAWS[plan.state_law].stop_family](scene, plan, g)
     if plan.lanes:
         return _relax_in_lanes(scene, plan, g, correction)
     obs_tau = _obs_tau(scene, plan.flat_index(g)) if obs_tau is None else np.ascontiguousarray(obs_tau, float)

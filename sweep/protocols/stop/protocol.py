@@ -45,7 +45,6 @@ class StopProtocol(Protocol):
     observables = ("xi_inf", "trajectory", "slip_at", "t50", "t90")
     always = "xi_inf"
     default_observables = ("xi_inf",)
-    models = frozenset({("quasistatic", "aging"), ("quasistatic", "slip"), ("inertial", "aging")})
     extra_axes = True
     default_chunk = 4096
     memory_per_point = 180
@@ -53,8 +52,19 @@ class StopProtocol(Protocol):
     core_seconds_per_point = 2.2e-5
 
     # --- the scene ------------------------------------------------------------------------------------------------
+    @property
+    def models(self) -> frozenset[tuple[str, str]]:
+        """Quasi-static: every law with a stop kernel (StateLaw.stop_family); inertial: the aging identity's laws
+        with an inertial model (the inertial stop integrates (xi, ln(xi' psi)) with that identity)."""
+        from ...integrate.models.state_laws import STATE_LAWS
+
+        return frozenset({("quasistatic", n) for n, law in STATE_LAWS.items() if law.stop_family}
+                         | {("inertial", n) for n, law in STATE_LAWS.items() if law.inertial and law.aging_identity})
+
     def check(self, scene: Scene) -> None:
-        if scene.state_law != "aging":
+        from ...integrate.models.state_laws import STATE_LAWS
+
+        if not STATE_LAWS[scene.state_law].aging_identity:
             _require_relaxed_slip_only(scene, f"state_law {scene.state_law!r}",
                                        "the adaptive dp5 of the general two-state path")
         if scene.model == "inertial":
@@ -104,11 +114,13 @@ class StopProtocol(Protocol):
         sweep.plan.plan.samples_in_lanes takes them; their points without a finite relaxed slip compile the per-point
         path besides, which the scene alone does not tell), the slip law's own march, the inertial kernels where
         the model can be inertial."""
+        from ...integrate.models.state_laws import STATE_LAWS
         from ...plan.plan import samples_in_lanes
 
         families = []
-        if scene.state_law == "slip":
-            families.append("slip-law stop")
+        law = STATE_LAWS[scene.state_law]
+        if not law.aging_identity:
+            families.append(law.stop_family)
         elif scene.model != "inertial":
             families.append("relaxed-slip engine" if scene.observables == ("xi_inf",) else
                             "time-resolved lanes" if samples_in_lanes(scene) else "time-resolved stop")
