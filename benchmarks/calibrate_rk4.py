@@ -9,7 +9,8 @@ C = C_STABLE or C_UNSTABLE. Stable (chi > mu1) and unstable points are reported 
 constant for each). Every point goes through the public engine: a 1 x 1 Scene (method "rk4", step h, rtol 1e-10,
 the smallest a Scene takes, so the tail test adds < 1e-13 relative; atol 1e-14) whose friction parameters
 reproduce the point's reduced k = chi/A, a = mu1/A, b = m2/A (A = 0.01, D0 = 1e-6 m, V = V0), run by
-sweep.make_plan + sweep.protocols.stop.engine.execute. Also recorded per step: the engine's own error estimate over the true
+sweep.make_plan + sweep.protocols.stop.engine.execute. Also recorded per step: the engine's own error estimate over
+the true
 error (the plan assumes it is ~ERROR_GAIN).
 Points: 400 random (chi/A 1e-2..1e3; m2/A = 0 with m1/A 0.3..3, or m2/A 1e-3..3 with mu1/A -3..3) plus a
 structured set of corners (--quick: 40 random, two steps). Reference per point: the same engine at h = 0.008
@@ -117,7 +118,8 @@ def main(argv=None):
         rows.append(row)
     out = {"benchmark": "benchmarks/calibrate_rk4.py" + (" --quick" if args.quick else ""),
            "points": len(pts), "reference_failures": int(np.isnan(ref).sum()),
-           "setup": {"path": "sweep.make_plan + sweep.protocols.stop.engine.execute on a 1 x 1 Scene per point and step",
+           "setup": {"path": "sweep.make_plan + sweep.protocols.stop.chunk.execute on a 1 x 1 Scene per point and "
+                              "step",
                      "method": "rk4", "rtol": RTOL, "atol": ATOL, "h_reference": H_REF,
                      "h": "fine-run step in sigma (the returned value's run; the coarse run has 2h)"},
            "rows": rows,

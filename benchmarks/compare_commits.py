@@ -40,7 +40,8 @@ Writes --out (JSON: machine, versions, the exact worker commands, every timing) 
 --self-test: the script's own machinery in seconds (the smoke run of tests/test_benchmarks.py): --old (default
 HEAD) checked out as a worktree as above, the new tree as it is, one worker per tree for each part, on the
 SELF_TEST workload instead of the real ones: every workload's inputs built in both trees (scenes made, not run),
-one small kernel of the tree compiled into the empty cache (sweep.integrate.models.stop.tail_is_accurate: the compile part),
+one small kernel of the tree compiled into the empty cache (sweep.integrate.models.stop.tail_is_accurate: the compile
+part),
 the analytic Hopf line timed (the speed part), and as numbers the closed-form xi_inf (m2 = 0) of every case of
 tests/cases.py. The timing caches live in the scratch directory. Checks, in the JSON under self_test (exit 1 if one
 fails): each compile worker wrote its kernel into its empty cache, the numbers of both trees are equal, the worktree
@@ -105,7 +106,8 @@ QUICK_COMPILE_FAMILIES = ("driven",)
 NUMBER_SETS = ("default_quasistatic", "default_auto", "cases_auto", "cases_quasistatic", "cases_time_resolved")
 SELF_TEST = "self_test"
 SELF_TEST_WORKLOADS = {SELF_TEST: "--self-test: every workload's inputs built (not run), one small kernel compiled "
-                                  "(sweep.integrate.models.stop.tail_is_accurate), the analytic Hopf line over 20 velocities"}
+                                  "(sweep.integrate.models.stop.tail_is_accurate), the analytic Hopf line over 20 "
+                                  "velocities"}
 SELF_TEST_COMPILE_FAMILIES = {SELF_TEST: (SELF_TEST, True)}
 SELF_TEST_NUMBER_SETS = (SELF_TEST,)
 

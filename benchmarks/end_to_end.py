@@ -146,7 +146,8 @@ def instrumented(watch: Stopwatch):
         (sweep.api, "write", "netcdf"),
         (sweep.plot.files, "plot_file", "png"),
     ]
-    lane_kernels, adaptive_kernels = sweep.protocols.stop.engine.lane_kernels, sweep.protocols.stop.engine.adaptive_lane_kernels
+    engine = sweep.protocols.stop.engine
+    lane_kernels, adaptive_kernels = engine.lane_kernels, engine.adaptive_lane_kernels
     if hasattr(sweep.run.journal.Journal, "background"):  # chunks journaled in a helper thread
         patches.append((sweep.run.journal.Journal, "background", "journal_wait"))
     saved = [(owner, name, getattr(owner, name)) for owner, name, _ in patches]
@@ -160,10 +161,10 @@ def instrumented(watch: Stopwatch):
             else:
                 setattr(owner, name, watch.wrap(original, key))
         sweep.protocols.stop.engine.lane_kernels = lambda *a, **k: _lane_kernels_timed(watch, lane_kernels, *a, **k)
-        sweep.protocols.stop.engine.adaptive_lane_kernels = lambda *a, **k: _lane_kernels_timed(watch, adaptive_kernels, *a, **k)
+        engine.adaptive_lane_kernels = lambda *a, **k: _lane_kernels_timed(watch, adaptive_kernels, *a, **k)
         yield
     finally:
-        sweep.protocols.stop.engine.lane_kernels, sweep.protocols.stop.engine.adaptive_lane_kernels = lane_kernels, adaptive_kernels
+        engine.lane_kernels, engine.adaptive_lane_kernels = lane_kernels, adaptive_kernels
         for owner, name, original in saved:
             setattr(owner, name, original)
 

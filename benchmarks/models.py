@@ -116,7 +116,8 @@ def time_models(scene, label, model_tol=1e-2, repeats=3):
 
 def auto_reasons(scene, ds_auto, mask=False):
     """Why auto solved its inertial points: outside the first-order expansion's trusted range, or estimate above
-    model_tol / ESTIMATE_MARGIN (sweep/protocols/stop/model_choice.py; recomputed here from the plan and the file). mask=True:
+    model_tol / ESTIMATE_MARGIN (sweep/protocols/stop/model_choice.py; recomputed here from the plan and the file).
+    mask=True:
     the (K/M, V) mask of the untrusted points instead."""
     plan = sweep.make_plan(scene)
     G = np.tile(gamma_over_A(scene), scene.K_over_M.size)
@@ -179,7 +180,8 @@ def accuracy(ds_auto, ds_qs, ds_ref, model_tol):
                                         "model_error": float(ds["model_error"].values[i, j])}
     out["quasistatic"]["points_true_error_above_model_tol"] = out["quasistatic"].pop("points_above_model_tol")
     # true gap / model_error, per kind of auto point: where auto kept the quasi-static model its model_error is the
-    # estimate, where it solved with inertia the measured gap (the gap as sweep/protocols/stop/model_choice.py defines it: relative
+    # estimate, where it solved with inertia the measured gap (the gap as sweep/protocols/stop/model_choice.py defines
+    # it: relative
     # to the quasi-static value, |x_in / x_qs - 1|)
     def gap_ratio(model_flag: int) -> dict:
         sel = (ds_auto["model"].values == model_flag) & np.isfinite(ds_qs["xi_inf"].values) & np.isfinite(ref)

@@ -9,7 +9,8 @@ rectangular sub-grid of it), at rtol 1e-3 .. 1e-10, in one process, one after th
 
 * engine, run_sweep   sweep.run_sweep (plan + kernels + Dataset: what a user calls), wall time, with
                       numba.set_num_threads(1) and with all threads; the whole grid.
-* engine, execute     the kernel path (sweep.make_plan + sweep.protocols.stop.chunk.execute, as benchmarks/throughput.py uses
+* engine, execute     the kernel path (sweep.make_plan + sweep.protocols.stop.chunk.execute, as
+benchmarks/throughput.py uses
                       it), 1 thread and all threads, the whole grid; 1 thread on the subsample as well.
 * numbalsoda          LSODA (numbalsoda.lsoda) called from an @njit(parallel=True) prange loop over points, 1
                       thread and all threads; the whole grid and the subsample.
@@ -21,7 +22,8 @@ rectangular sub-grid of it), at rtol 1e-3 .. 1e-10, in one process, one after th
 Every peer gets the engine's own formulation, as benchmarks/throughput.py gives it to scipy: the 1-D ODE
 dxi/ds = E = exp(-(chi xi + mu1 u + m2 u^2)/A), u = s - xi, xi(0) = 0, in contact-age time s (reduced:
 k = chi/A, a = mu1/A, b = m2/A from the engine's plan), stopped once the engine's tail test
-(sweep.integrate.models.stop.tail_is_accurate, tolerance rtol xi + atol_scene) passes, then the engine's closed-form tail
+(sweep.integrate.models.stop.tail_is_accurate, tolerance rtol xi + atol_scene) passes, then the engine's closed-form
+tail
 (sweep.integrate.models.stop.tail_slip) added. So the comparison is of the integrators, not of the formulation. Each
 peer runs at atol = ATOL_OVER_RTOL x rtol. Where the tail test is checked: scipy and diffrax at every step end
 (diffrax: a diffrax.Event); numbalsoda, whose lsoda returns the solution at given output times only, at
@@ -666,7 +668,8 @@ def main(argv=None):
             "numba_threads_all": n_all,
         },
         "formulation": "dxi/ds = exp(-(k xi + a u + b u^2)), u = s - xi, xi(0) = 0 (k = chi/A, a = mu1/A, b = m2/A "
-                       "from the engine's plan); stop once sweep.integrate.models.stop.tail_is_accurate passes (tolerance "
+                       "from the engine's plan); stop once sweep.integrate.models.stop.tail_is_accurate passes "
+                       "(tolerance "
                        "rtol xi + atol_scene), then + sweep.integrate.models.stop.tail_slip",
         "scenes": out_scenes,
         "benchmark_wall_s": None,

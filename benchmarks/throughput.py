@@ -3,7 +3,8 @@
 
     python benchmarks/throughput.py [--quick] [--out benchmarks/results/throughput.json] [--no-png]
 
-Every engine number goes through the public path (sweep.make_plan + sweep.protocols.stop.chunk.execute, what run_sweep runs,
+Every engine number goes through the public path (sweep.make_plan + sweep.protocols.stop.chunk.execute, what run_sweep
+runs,
 or run_sweep itself), so the script does not depend on the kernels' internals. Every point is solved as the
 engine always solves it: down its step ladder (sweep/integrate/ladder.py: a pilot pair at 2 h0, h0, then up to three
 finer runs at steps chosen from the point's own error; with a step given by the user, Scene(step=h), the fixed
@@ -111,7 +112,8 @@ def random_indices(scene: sweep.Scene, n: int, seed: int = RANDOM_SEED) -> np.nd
 
 
 def evals_per_step(method: str) -> int:
-    """Right-hand-side evaluations per accepted step of a method of sweep.integrate.solvers.METHODS: the stages after the
+    """Right-hand-side evaluations per accepted step of a method of sweep.integrate.solvers.METHODS: the stages after
+    the
     first, whose derivative is the previous step's end, plus the end derivative (an FSAL tableau's last stage is
     that derivative). A Rosenbrock stage with the same evaluation point as the one before reuses its value
     (Shampine's ROS4: 3 evaluations for 4 stages)."""
@@ -346,7 +348,8 @@ def _tail_slip(k, a, b, u, E):
 def numpy_lockstep(plan, method, run_point, run_h, rtol, atol):
     """The engine's fixed-step stepper as lockstep numpy over runs (a run = one point at one step h in sigma):
     state (xi, s), ds/dsigma = w = 1/(1/(s + s_c) + r(u)) with r = sqrt(g^2 + |b|/4) + RATE_FLOOR, g = a + 2 b u
-    (sweep.integrate.models.stop.make_rate), the explicit tableau of ``method`` (RK4: stage i from stage i-1 only) with the end
+    (sweep.integrate.models.stop.make_rate), the explicit tableau of ``method`` (RK4: stage i from stage i-1 only)
+    with the end
     derivative
     reused as the next step's first stage, each run frozen (removed from the active set) once its tail test
     passes (or it leaves the finite range), then the closed-form tail. Returns per run (xi_inf, status, steps),

@@ -170,7 +170,8 @@ def rtol_for_step(h: float, lo: float, hi: float) -> float:
 
 def time_engine(scene, plan, target_s, repeats, n_min=64, n_max=400_000, probes=3):
     """Best-of-``repeats`` seconds per trajectory (CPU, wall) of the problem repeated N times through
-    sweep.protocols.stop.chunk.execute (the kernel path run_sweep takes, without building the Dataset); N is chosen so that
+    sweep.protocols.stop.chunk.execute (the kernel path run_sweep takes, without building the Dataset); N is chosen so
+    that
     one call lasts about ``target_s``, from probes at growing N (a call has a fixed cost of ~0.4 ms, so a probe
     at 64 points overstates the cost per point several times at loose rtol and would leave batches of a few
     hundred points, timed mostly on that fixed cost). Returns (CPU s per trajectory, wall s per trajectory, N,
@@ -594,7 +595,8 @@ def main(argv=None):
             "error": "max over problems of |xi_inf/ref - 1|; per problem in per_problem",
             "time": "mean over problems of the per-problem CPU time per trajectory (time.process_time; the "
                     "best wall time is kept beside it as *_wall); engine: best of "
-                    f"{repeats} calls of sweep.protocols.stop.chunk.execute on the problem repeated N times (N so that a call "
+                    f"{repeats} calls of sweep.protocols.stop.chunk.execute on the problem repeated N times "
+                    f"(N so that a call "
                     f"lasts ~{target_s:g} s) in each of {passes} passes over all configurations, best of all; 1 thread;"
                     " scipy: best of 7 single trajectories (3 if one takes > 50 ms, 1 if > 1 s), plus 3 more per later "
                     "pass; 2 threads: us_per_traj_per_core_2threads = 2 x best wall / N",

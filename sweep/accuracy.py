@@ -162,7 +162,8 @@ MAX_RUNS = 5
 
 ERROR_GAIN = 15.0
 """Nominal ratio of the Richardson estimate of a fine solution, ERROR_GAIN/(2^p - 1) |fine - coarse|, to its true
-error: the estimate of the relaxed-slip lanes (sweep.protocols.stop.engine), whose step rules (sweep.plan.plan) are calibrated on it."""
+error: the estimate of the relaxed-slip lanes (sweep.protocols.stop.engine), whose step rules (sweep.plan.plan) are
+calibrated on it."""
 def lane_control_tolerance(rtol: float, scale: float = 1.0) -> float:
     """Local tolerance of the adaptive lanes' first run for a scene's rtol (sweep/integrate/tolerance_ladder.py):
     rtol min(20, ``scale`` sqrt(1e-3 / rtol)); the sampled lanes take SAMPLED_TOL_SCALE.
@@ -248,7 +249,8 @@ ESTIMATE_RTOL = 1e-3
 117 points where it is trusted, estimate/true gap spans the same 0.946..1.106 at 1e-3 as at 1e-4, in half the steps
 (37 vs 74). In the lanes it is the tail test's tolerance; the steps are ESTIMATE_STEP."""
 ESTIMATE_STEP = H_MAX
-"""Fixed RK4 step in sigma of the lane run that carries the first-order correction (sweep/protocols/stop/model_choice.py). Against
+"""Fixed RK4 step in sigma of the lane run that carries the first-order correction
+(sweep/protocols/stop/model_choice.py). Against
 the correction at rtol 1e-7 (per-point RODAS3), |y/xi_inf| where it exceeds 1e-4: within 0.41 % on the default grid
 (9,329 points, 24 steps per point) and 0.88 % over chi/A 1e2..1e7 x V 1e-8..1e-3 (724 points; 42 steps); at half
 the step 0.25 % in twice the steps, at twice the step 12-26 %; the per-point RODAS3 at ESTIMATE_RTOL was within

@@ -109,7 +109,8 @@ def _png(args: argparse.Namespace) -> Path:
 
 
 def _check_run_targets(scene, args: argparse.Namespace) -> None:
-    """Before any work: the data file and the pictures ``sweep run`` will write (sweep/write/targets.py), none of them the
+    """Before any work: the data file and the pictures ``sweep run`` will write (sweep/write/targets.py), none of them
+    the
     scene file or one another; the data file's folder, free space and lock are checked by api.prepare_run."""
     from .write.targets import check_targets, picture_paths
 

@@ -61,7 +61,8 @@ def trace_chunks(monkeypatch) -> None:
     command, in this process)."""
     import sweep.protocols.stop.chunk as stop_chunks
 
-    monkeypatch.setattr(stop_chunks, "stop_chunk", _wrapped(stop_chunks.stop_chunk, lambda: sys.stderr.write(TRACE + "\n")))
+    monkeypatch.setattr(stop_chunks, "stop_chunk",
+                        _wrapped(stop_chunks.stop_chunk, lambda: sys.stderr.write(TRACE + "\n")))
 
 
 def truncate(path: Path, keep: float = 0.5) -> None:

@@ -8,7 +8,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import xarray as xr
 
 from sweep.assemble.construct import assemble
 from sweep.assemble.dataset import global_attrs, grid_coords, variable

@@ -72,7 +72,8 @@ L = k xi + a u + b u^2 (stop) and E = xi' psi = exp(-L).
    Linearised about z = u = 0 (w = k z - (a + 1) u): aging u' = -u - w, slip u' = -(w + u): the SAME
    u' = -k z + a u, z' = -k z + (a + 1) u, so s^2 + (k - a) s + k = 0, i.e. A s^2 + (chi - mu1) s + chi = 0 for
    both laws: same Hopf line chi_c = mu1, same growth rate and period near it (the laws differ at second order
-   in the amplitude only). Cycles are measured as the engine does (sweep/integrate/models/driven.py): the maxima of z are
+   in the amplitude only). Cycles are measured as the engine does (sweep/integrate/models/driven.py): the maxima of z
+   are
    the upward zero crossings of w (z' = 1 - e^w), located by solve_ivp's event root finding. Found here
    (sample2's A, m1, m2 at V0): m2 > 0 supercritical for the slip law too (a limit cycle below the line, amplitude
    1.02 at chi = 0.9 chi_c against 1.55 for aging; 0.69 vs 1.09 at 0.95 chi_c); m2 = 0 degenerate as for aging:

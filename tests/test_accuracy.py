@@ -26,7 +26,8 @@ def test_xi_inf_within_rtol_of_reference(case, rtol):
     ref = reference_stop(case.chi, case.A, case.mu1, case.m2)
     assert int(pt["status"]) == sweep.Status.OK
     err = abs(float(pt["xi_inf"]) - ref.xi_inf)
-    assert err <= rtol * abs(ref.xi_inf) + sweep.scene.scene.DEFAULT_ATOL["xi_inf"], (err / ref.xi_inf, int(pt["steps"]))
+    atol = sweep.scene.scene.DEFAULT_ATOL["xi_inf"]
+    assert err <= rtol * abs(ref.xi_inf) + atol, (err / ref.xi_inf, int(pt["steps"]))
 
 
 @pytest.mark.parametrize("rtol", (1e-4, 1e-7))

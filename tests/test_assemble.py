@@ -1,4 +1,5 @@
-"""sweep/assemble/construct.py: a sweep's Dataset built without xarray's merge is the one the public constructor builds, and
+"""sweep/assemble/construct.py: a sweep's Dataset built without xarray's merge is the one the public constructor
+builds, and
 anything else falls back to the public constructor."""
 
 import numpy as np

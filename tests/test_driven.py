@@ -1,4 +1,5 @@
-"""Driven scene, quasi-static model (sweep/integrate/models/driven.py) against the linear theory and the known behaviour of
+"""Driven scene, quasi-static model (sweep/integrate/models/driven.py) against the linear theory and the known
+behaviour of
 docs/physics.md 3b: growth rate and period of small oscillations vs the roots of A s^2 + (chi - mu1) s + chi, the
 square-root law of the supercritical (m2 > 0) Hopf bifurcation, neutral orbits and runaway for m2 = 0."""
 

@@ -436,7 +436,8 @@ def test_a_stop_scene_compiles_only_the_kernels_its_model_needs():
         inertial_batches = ("sweep.integrate.batch.relax_batch", "sweep.integrate.batch.relax_points")
         assert not {name for name in names if name in inertial_batches or "stop_inertial" in name
                     or "rosenbrock" in name}, names
-        assert not any(name.startswith(("sweep.integrate.driven", "sweep.integrate.models.driven")) or "driven_batch" in name
+        driven = ("sweep.integrate.driven", "sweep.integrate.models.driven")
+        assert not any(name.startswith(driven) or "driven_batch" in name
                        for name in names), names
     lanes = {model: sum(lane_kernel(name) for name in names) for model, names in used.items()}
     assert 1 <= lanes["auto"] <= lanes["quasistatic"] + 1, lanes

@@ -517,7 +517,8 @@ def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeyp
         assert "free some space on that disk, then run the same command with --resume" in line, line
         monkeypatch.undo()
         kept = len(list(journal_path(out).glob("chunk-*.npz")))
-        # with chunks computed side by side (sweep/run/concurrent_chunks.py), the other thread's chunk may reach the disk
+        # with chunks computed side by side (sweep/run/concurrent_chunks.py), the other thread's chunk may reach the
+        # disk
         # while the 6th fills it
         assert (5 <= kept < 15 if when == "chunks" else kept == 15) and not list(disk.glob("**/*.tmp"))
         assert not list(disk.glob("*.part"))

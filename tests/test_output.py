@@ -87,7 +87,8 @@ def test_netcdf_round_trip(small_ds, tmp_path):
 
 
 def test_only_the_variables_that_compress_are_stored_compressed(tmp_path):
-    """zlib where it pays (sweep/write/netcdf.py: a flag field of one value, a count field), none for full-precision float64
+    """zlib where it pays (sweep/write/netcdf.py: a flag field of one value, a count field), none for full-precision
+    float64
     (random mantissas shrink to ~0.95 at ~0.24 s a million values); the values come back either way."""
     import netCDF4
 

@@ -76,7 +76,8 @@ def grid_coords(scene: Scene) -> dict[str, xr.Variable]:
         "chi": variable(*on_grid(scene, ("K_over_M", "D0"), lambda K_over_M, D0: physics.reduced_stiffness(K_over_M, D0,
                                                                                                      p.g)),
                     "1", "reduced stiffness chi = K D0/(M g)"),
-        "mu1": variable(*on_grid(scene, ("V", "m1", "m2"), mu1), "1", "velocity-weakening slope mu1(V) = m1 - 2 m2 ln(V/V0)"),
+        "mu1": variable(*on_grid(scene, ("V", "m1", "m2"), mu1), "1",
+                        "velocity-weakening slope mu1(V) = m1 - 2 m2 ln(V/V0)"),
         "chi_c": variable(*on_grid(scene, ("V", "m1", "m2", "A", "D0"), lambda V, m1, m2, A, D0: physics.chi_c_inertial(
                           mu1(V, m1, m2), A, physics.inertia_number(V, D0, p.g) * line_model(V, m1, m2, A, D0))),
                       "1", "reduced stiffness on the Hopf line of the model used at this V, mu1 (1 + gamma/A) with "

@@ -1,10 +1,12 @@
 """Driven scene driver (docs/physics.md 3b): one point integrated from a perturbed steady sliding until its regime
 is decided; the batch loop over flat points.
 
-Model x stepper x controller x recorder: the right-hand side of :mod:`sweep.integrate.models.driven` (with the scene's state
+Model x stepper x controller x recorder: the right-hand side of :mod:`sweep.integrate.models.driven` (with the scene's
+state
 law), the explicit stage loop of :mod:`sweep.integrate.solvers.explicit` with the Dormand-Prince 5(4) tableau and the PI
 controller, or, where the inertial mode is stiff (h times its rate A/(gamma xi') > STIFF_SWITCH: stick phases),
-RODAS3 (:mod:`sweep.integrate.solvers.rosenbrock_step`) with the analytic Jacobian and the I controller; what is recorded is
+RODAS3 (:mod:`sweep.integrate.solvers.rosenbrock_step`) with the analytic Jacobian and the I controller; what is
+recorded is
 the cycle history below. Near steady sliding (xi' ~ 1, where the Hopf line is located) the explicit stepper stays
 in use. A slip velocity beyond RUNAWAY_XI_DOT ends the point as ``runaway`` (the quasi-static model breaks down:
 m2 = 0 below the Hopf line overflows in finite time), before any exponent can overflow.

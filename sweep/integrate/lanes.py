@@ -269,7 +269,8 @@ def make_lane_kernels(dtype, tableau, correction: bool = False):
 
 @functools.cache
 def lane_kernels(dtype: np.dtype, method: str, correction: bool = False):
-    """(relax_runs, relax_batch) for a float type and a fixed-step method of :data:`sweep.integrate.solvers.METHODS`, with
+    """(relax_runs, relax_batch) for a float type and a fixed-step method of :data:`sweep.integrate.solvers.METHODS`,
+    with
     or without the first-order inertial correction (built once per process; numba compiles on first call and
     caches on disk)."""
     return make_lane_kernels(np.dtype(dtype), METHODS[method], correction)

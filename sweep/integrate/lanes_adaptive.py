@@ -270,7 +270,8 @@ def _lane_source(tableau, correction: bool, fine=None, split: int = 2) -> str:
     both. Each step is a sequence of lane loops, one per stage (:func:`_stage_loops`). FSAL tableaux reuse their
     last stage as the next step's first; the others spend one evaluation at the step's end, which the tail test needs
     anyway. With ``correction`` the first-order inertial correction y
-    (:func:`sweep.integrate.models.stop_inertial.make_correction_rate`) is a third component of the coarse run's stages; it
+    (:func:`sweep.integrate.models.stop_inertial.make_correction_rate`) is a third component of the coarse run's
+    stages; it
     does not enter the error norm (it is needed to model_tol only, and rides on steps chosen for xi at rtol).
     Generated, not branched, for the reason of :func:`sweep.integrate.lanes._step_source`."""
     _, _, b, e = tableau.arrays()
@@ -318,7 +319,8 @@ def _lane_source(tableau, correction: bool, fine=None, split: int = 2) -> str:
 
 def _tail_lines(field) -> list[str]:
     """Generated lines, in the lane loop that closes an attempt: whether the closed-form tail may take over from the
-    accepted state (its error bound, :func:`sweep.integrate.models.stop.tail_bound`, below TAIL_SAFETY (atol + TAIL_RTOL |xi|)
+    accepted state (its error bound, :func:`sweep.integrate.models.stop.tail_bound`, below TAIL_SAFETY (atol +
+    TAIL_RTOL |xi|)
     or TAIL_SHARE |x_fine - x|), into the lane field _DONE. Tested here, in the vectorised loop, rather than in the
     scalar bookkeeping that follows every attempt: there its two divisions and branches cost ~10 % of an attempt."""
     x, E = field(_X), field(_E)
@@ -483,7 +485,8 @@ on the default scene."""
 
 @functools.cache
 def adaptive_lane_kernels(method: str, correction: bool = False):
-    """(relax_runs, relax_batch) of an embedded pair of :data:`sweep.integrate.solvers.EXPLICIT_METHODS` with its fine twin
+    """(relax_runs, relax_batch) of an embedded pair of :data:`sweep.integrate.solvers.EXPLICIT_METHODS` with its fine
+    twin
     (:data:`LANE_TWINS`), with or without the first-order inertial correction (built once per process; numba
     compiles on first call and caches on disk)."""
     fine, split = LANE_TWINS[method]

@@ -2,7 +2,8 @@
 
 The adaptive lanes of :mod:`sweep.integrate.lanes_adaptive` return the relaxed slip; here every run also records
 xi and u = ln psi at its point's own increasing reduced times tau (a row of ``targets``). The state carries tau = int
-e^u ds as a third component (docs/physics.md 3a, :mod:`sweep.integrate.models.stop`), tau is a component of the error norm,
+e^u ds as a third component (docs/physics.md 3a, :mod:`sweep.integrate.models.stop`), tau is a component of the error
+norm,
 relative, as on the per-point path (:func:`sweep.integrate.stop_point.error_norm`), where psi is wanted (the
 trajectory; :class:`SampledRuns` for slip_at alone), and the steps are the controller's alone: samples never
 shorten a step. Each accepted step carries DOP853's continuous extension of order 7
@@ -453,7 +454,8 @@ def make_sampled_lane_kernels(tableau, fine, split: int):
 
 @functools.cache
 def sampled_lane_kernels(method: str):
-    """(sample_runs, sample_batch) of an embedded pair of :data:`sweep.integrate.solvers.EXPLICIT_METHODS` with its fine twin
+    """(sample_runs, sample_batch) of an embedded pair of :data:`sweep.integrate.solvers.EXPLICIT_METHODS` with its
+    fine twin
     (:data:`sweep.integrate.lanes_adaptive.LANE_TWINS`), built once per process (numba compiles on first call and
     caches on disk): only scenes with sampled times in the adaptive lanes build it."""
     fine, split = LANE_TWINS[method]

@@ -37,7 +37,8 @@ H_FLOOR = 8.0 * 2.220446049250313e-16
 stops moving). Relative, not absolute: where a fast rebound (k/G large) drops xi' towards 0, ln(xi' psi) has a
 log singularity that the steps resolve down to ~1e-16 near s ~ 0.05, and then grow again."""
 CONTROLLER = I_CONTROLLER._replace(nonfinite_factor=MIN_FACTOR)
-"""The elementary controller of sweep/integrate/solvers/controllers.py (a stage that overflowed: the step is divided by 5)."""
+"""The elementary controller of sweep/integrate/solvers/controllers.py (a stage that overflowed: the step is divided
+by 5)."""
 ORDER = RODAS3.order_hat
 """Order of RODAS3's embedded error estimate (the controller's exponent is 1/(ORDER + 1))."""
 

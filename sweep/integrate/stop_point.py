@@ -6,7 +6,8 @@ with its FSAL flag and error order q. One step fills the stage derivatives K[i] 
 
 Step sequences (a *mesh* of step sizes in sigma):
 
-* ``ADAPTIVE``: the PI controller of :mod:`sweep.integrate.solvers.controllers` (Gustafsson) keeps the embedded local error
+* ``ADAPTIVE``: the PI controller of :mod:`sweep.integrate.solvers.controllers` (Gustafsson) keeps the embedded local
+error
   estimate below ``ctrl_tol`` (:func:`error_norm`: xi relative with the atol floor, u = ln psi, and tau when
   time-resolved observables are asked for), and records the accepted steps;
 * ``REPLAY``: steps mesh[i]/split, each mesh step taken as ``split`` equal substeps (the last size repeated if the
@@ -168,7 +169,8 @@ def erk_step(method, K, xi, s, tau, h, p):
     tau1, err_xi, err_s, err_tau): the new state and the embedded error estimate h sum_j e_j K[j] (zero for a method
     without one). For an FSAL method K[-1] is the derivative at the new state.
 
-    The stage loop of sweep/integrate/solvers/explicit.py written out in scalars for this three-component state: through the
+    The stage loop of sweep/integrate/solvers/explicit.py written out in scalars for this three-component state:
+    through the
     shared loop (state in arrays, the right-hand side writing into them) a dp5 run took 16.2 us instead of 12.3 us
     and time-resolved, dp5 and dop853 sweeps ran 1.2-1.25x slower (benchmarks/compare_commits.py), so this path keeps
     its own until the shared loop holds small states in registers."""
@@ -288,7 +290,8 @@ def error_norm(ex, es, et, xi, xi1, s1, tau1, ctrl_tol, atol, with_tau):
 def march(method, plan_mesh, p, tol, max_steps, samples):
     """Integrate one stop point along a mesh (module docstring).
 
-    ``method``: :class:`Method`; ``plan_mesh``: :class:`Mesh`; ``p``: :class:`sweep.integrate.models.stop.StopParams` (its
+    ``method``: :class:`Method`; ``plan_mesh``: :class:`Mesh`; ``p``: :class:`sweep.integrate.models.stop.StopParams`
+    (its
     with_tau is set here from the samples); ``tol``: :class:`Tolerances`. Records into ``samples``
     (:class:`Samples`) xi and u = ln psi where tau crosses each of its increasing times and tau and the slip rate
     dxi/dtau where xi crosses each of its increasing slips; tau targets
@@ -300,7 +303,8 @@ def march(method, plan_mesh, p, tol, max_steps, samples):
     at_mesh):
     xi_inf is NaN unless the tail was reached; in ADAPTIVE mode the returned mesh holds the n_mesh accepted steps;
     continuation = (first continued target, E, g = (mu1 + 2 m2 u)/A, u where it starts): targets from the first
-    continued one on carry the closed form's own error in u = ln psi (:func:`sweep.integrate.models.stop.continuation_error`);
+    continued one on carry the closed form's own error in u = ln psi
+    (:func:`sweep.integrate.models.stop.continuation_error`);
     track[:n_track] is (xi, s, E) at the end of each mesh step, at_mesh the mesh step in which each tau target was
     located (-1: continued).
     """
@@ -543,7 +547,8 @@ def solve_stop_point(method, h, p, tol, max_steps, finite, samples, times):
     are located on its meshes. Each run crosses the fraction of its own xi_inf (:func:`crossing_error`).
 
     ``method``: :class:`Method` (adaptive where it has an error estimate); ``h``: the fine step (fixed-step methods)
-    or the first trial step of the coarse run (adaptive); ``p``: :class:`sweep.integrate.models.stop.StopParams`; ``tol``:
+    or the first trial step of the coarse run (adaptive); ``p``: :class:`sweep.integrate.models.stop.StopParams`;
+    ``tol``:
     :class:`Tolerances` (rtol of the scene, atol, the controller's local tolerance); ``samples``:
     :class:`TimeSamples`, ``times``: :class:`FractionTimes` (filled here). Returns a :class:`PointResult`.
     """

@@ -1,8 +1,10 @@
 """Relaxed slip of the quasi-static stop with the slip law (docs/physics.md 7.3): the general two-state path.
 
-Model x stepper x controller: the phase-plane right-hand sides of :mod:`sweep.integrate.models.stop_slip`, dp5 with the PI
+Model x stepper x controller: the phase-plane right-hand sides of :mod:`sweep.integrate.models.stop_slip`, dp5 with
+the PI
 controller through the generic adaptive march (:mod:`sweep.integrate.adaptive`). Phase 1 integrates du/dxi = L
-from (0, 0) until u passes :func:`sweep.integrate.models.stop_slip.handover_u`; phase 2 integrates xi in t = 1/u to t = 0,
+from (0, 0) until u passes :func:`sweep.integrate.models.stop_slip.handover_u`; phase 2 integrates xi in t = 1/u to t
+= 0,
 where xi is xi_inf. Each point is solved at local tolerances rtol/TIGHTER, rtol/TIGHTER^2 and rtol/TIGHTER^3
 (sweep/accuracy.py): the middle value is returned with the estimate GENERAL_ESTIMATE_GAIN x the larger difference to
 its neighbours. (The pair alone, |x(rtol/10) - x(rtol/100)|, underestimated where the runs take a few tens of

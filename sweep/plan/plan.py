@@ -1,25 +1,30 @@
-"""Plan: what to model and how to step, decided once per scene ("model only what the scene requires").
+"""Plan: what to model and how to step, decided once per scene ("model only what the scene requires"); the Plan record
+of the stop and driven protocols, and the stop's method and step rules.
 
-For the stop scene the model is the quasi-static one (the paper's), the state is xi alone (plus the
-quadrature tau only when a time-resolved observable is asked for), the stepper is fixed-step RK4 in the
-scaled log time sigma of :mod:`sweep.integrate.models.stop`, and the step count is chosen per point:
+For the stop scene the model is the quasi-static one (the paper's; with model "auto" the stop protocol solves the
+points that need it with inertia, sweep/protocols/stop/model_choice.py), the state is xi alone (plus the quadrature
+tau only when a time-resolved observable is asked for), integrated in the scaled log time sigma of
+:mod:`sweep.integrate.models.stop`. The method (:func:`choose_method`): for the relaxed slip alone the adaptive
+LANES_METHOD (dop853) in lanes, its first trial step from the local tolerance; where a fixed step is asked for (method
+rk4, a step, float32), rk4 (ros4 at the stiff points); for values inside the transient the cheapest measured method
+of its rtol (sweep.accuracy.AUTO_METHOD). The fixed-step rules:
 
 * the time map is scaled to the point: s_c = 1/(1 + (chi + |mu1|)/A) (stiff start) and the late step follows
   the local rate (mu1 + 2 m2 u)/A (:mod:`sweep.integrate.models.stop`), so that the RK4 error constant is nearly the
   same at every point;
-* relaxed-slip sweeps (lanes) choose each point's step at run time, down a step ladder (sweep/integrate/ladder.py)
-  from the pilot step h0 = min(H_PILOT, PILOT_FACTOR (TARGET rtol / (SHARP_GAIN C))^(1/4)) given here;
-* otherwise (per-point path) the step h in sigma meets ``rtol`` at each point:
-  h = min(H_MAX, (rtol / (SAFETY * C))^(1/4)); in both rules C is the largest error constant err/h^4 measured
-  on a calibration set spanning chi/A 1e-2..1e3, mu1/A -3..3,
-  m2/A 0..3 (benchmarks/calibrate_rk4.py): C_STABLE where steady sliding is stable (chi > mu1; measured
+* in lanes each point's step is chosen at run time, down a step ladder (sweep/integrate/ladder.py) from the pilot
+  step h0 = min(H_PILOT, PILOT_FACTOR (TARGET rtol / (SHARP_GAIN C))^(1/4)) given here;
+* one point per thread, the step h in sigma meets ``rtol`` at each point: h = min(H_MAX, (rtol / (SAFETY * C))^(1/4));
+  in both rules C is the largest error constant err/h^4 measured on a calibration set spanning chi/A 1e-2..1e3,
+  mu1/A -3..3, m2/A 0..3 (benchmarks/calibrate_rk4.py): C_STABLE where steady sliding is stable (chi > mu1; measured
   max 4.4e-4 as h -> 0, 7.4e-4 at h = 0.7) and C_UNSTABLE on the stick-slip side, where the stop starts on an
   unstable fixed point and the error constant is ~3x larger (measured max 1.7e-3); C is multiplied by
-  TIME_RESOLVED_FACTOR when values inside the transient are asked for; tests/test_accuracy.py checks the
-  rule against an independent scipy reference;
-* each point stops when its closed-form tail is accurate to 0.1 * (rtol xi + atol), so its number of steps
-  (sigma_end / h) follows from its own dynamics: a few tens on most of the grid, thousands in the costly
-  corner (small chi/A with mu1 < 0 and small m2, where the slider creeps along a slow manifold).
+  TIME_RESOLVED_FACTOR when values inside the transient are asked for; tests/test_accuracy.py checks the rule
+  against an independent scipy reference.
+
+Every point stops when its closed-form tail is accurate to 0.1 * (rtol xi + atol), so its number of steps follows
+from its own dynamics: a few tens on most of the grid, thousands in the costly corner (small chi/A with mu1 < 0 and
+small m2, where the slider creeps along a slow manifold).
 """
 
 from __future__ import annotations
@@ -69,7 +74,8 @@ from ..integrate.models.state_laws import STATE_LAWS
 from ..integrate.solvers import METHODS
 from ..scene.scene import Scene
 
-__all__ = ["Plan", "PointParams", "chunk_size_for", "common_fields", "point_params", "make_plan", "choose_method", "line_uses_inertia",
+__all__ = ["Plan", "PointParams", "chunk_size_for", "common_fields", "point_params", "make_plan", "choose_method",
+           "line_uses_inertia",
            "samples_in_lanes", "stop_plan_for_points"]
 
 LANES_METHOD = "dop853"
@@ -190,7 +196,8 @@ class Plan:
 
     ``model`` is the scene's model policy and ``inertial`` its per-point part known before any run (driven scene: per
     V, inertial where gamma/A > model_tol with "auto"; stop scene: "inertial" forced); with "auto" a stop point's
-    model is decided from its measured error estimate (sweep/protocols/stop/model_choice.py), within the policy ``model_tol``.
+    model is decided from its measured error estimate (sweep/protocols/stop/model_choice.py), within the policy
+    ``model_tol``.
     """
 
     protocol: str

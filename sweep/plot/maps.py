@@ -109,7 +109,8 @@ def _hatch_unstable(ax, ds: xr.Dataset) -> None:
 def _hopf_lines(ax, ds: xr.Dataset, v_um: np.ndarray) -> None:
     """The quasi-static Hopf line eq. 3 from the file's parameters (dense in V, so that it runs into the edge of
     the V range without a line), the file's own line where inertia moves it (chi_c = mu1 (1 + gamma/A)), and the
-    line located by simulation (sweep.analysis.hopf.with_simulated_line) where the file has it; markers thinned to at most
+    line located by simulation (sweep.analysis.hopf.with_simulated_line) where the file has it; markers thinned to at
+    most
     ~25 on a dense V axis, so that they do not merge into a band hiding the theory."""
     v_dense, kc, _ = hopf_line_dense(ds)
     ax.plot(kc, v_dense, "w-", lw=2.6, zorder=3)  # a halo: the line stays visible on any colour

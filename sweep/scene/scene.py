@@ -124,7 +124,8 @@ class Scene:
     model : "auto" | "quasistatic" | "inertial"
         The paper's quasi-static model, the full Newton equation with the inertia number gamma = V^2/(g D0)
         (docs/physics.md 3a/3b), or (default) per point the quasi-static model where its estimated error is at most
-        ``model_tol`` and the inertial one elsewhere (sweep/protocols/stop/model_choice.py; the file records the choice per point
+        ``model_tol`` and the inertial one elsewhere (sweep/protocols/stop/model_choice.py; the file records the
+        choice per point
         in ``model`` and the estimate in ``model_error``). Stop scenes with the inertial model compute the relaxed
         slip only (observables = ("xi_inf",)); with "auto", a point that needs inertia while time-resolved
         observables are asked for keeps its quasi-static values with status model_error_above_tol.
@@ -226,7 +227,8 @@ class Scene:
         axes = {n: _axis(n, self.axes[n]) for n in EXTRA_AXES if n in self.axes}
         if axes and not protocols.get(self.protocol).extra_axes:
             offered = [name for name in protocols.names() if protocols.get(name).extra_axes]
-            raise InputError(f"axes {list(axes)}: extra axes are offered for protocol {' and '.join(map(repr, offered))} "
+            names = " and ".join(map(repr, offered))
+            raise InputError(f"axes {list(axes)}: extra axes are offered for protocol {names} "
                              f"only, got protocol {self.protocol!r}")
         if axes and self.simulated_hopf_line:
             raise InputError(f"simulated_hopf_line needs one parameter set (it is located per V); leave it false "

@@ -45,7 +45,8 @@ def save(ds: xr.Dataset, path: str | os.PathLike,
     block at a time: (first flat point, {name: Variable with dims ("point", ...)}) over consecutive points of the
     grid, in ascending order; the first block defines each variable (dtype, trailing dims, attributes).
 
-    ``path`` is checked first (sweep/write/targets.py): an existing file is replaced only with ``overwrite=True``; a folder
+    ``path`` is checked first (sweep/write/targets.py): an existing file is replaced only with ``overwrite=True``; a
+    folder
     or an unwritable place is an :class:`~sweep.errors.InputError`. The file is written beside its destination and
     renamed into place, so an interrupted write never leaves a truncated file under the final name; a write that
     fails (disk full...) is an :class:`~sweep.errors.OutputError` naming the file. Returns the path.

@@ -31,10 +31,10 @@ class Writer(ABC):
         """Take finished chunk ``index`` (its per-point arrays over ``layout[index]``, plus ``seconds``); the arrays
         are not changed afterwards, the dict may be."""
 
-    def close(self) -> None:
+    def close(self) -> None:  # noqa: B027 (a writer that stores at once has nothing to wait for)
         """Wait until every chunk put is stored; raise the first failure."""
 
-    def abort(self, error: BaseException) -> None:
+    def abort(self, error: BaseException) -> None:  # noqa: B027 (likewise)
         """Stop after ``error`` (raised by the loop or by another writer): keep what was stored, raise nothing."""
 
     def resume_hint(self, n_chunks: int) -> str | None:

@@ -45,7 +45,8 @@ class DrivenParams(NamedTuple):
 
 
 def make_driven_rhs(law, inertia: bool = False):
-    """rhs(y, p, dy) -> ln xi' of the driven equations with the state law ``law`` (sweep/integrate/models/state_laws.py).
+    """rhs(y, p, dy) -> ln xi' of the driven equations with the state law ``law``
+    (sweep/integrate/models/state_laws.py).
     Quasi-static (``inertia`` False, p.g = 0): the state is y = (z, u) and ln xi' is the force balance
     k z - a u - b u^2 - u itself. Inertial (p.g > 0): y = (z, u, w), w = ln xi' a state with
     w' = (balance - w) e^-w / g. Exponents are clamped at EXP_MAX (an overflowing stage is rejected by the driver's

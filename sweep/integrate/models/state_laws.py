@@ -7,7 +7,8 @@ E = xi' psi (so ln E = ln xi' + u):
     slip  (Ruina 1983):                      u' = -xi' ln E             (psi' = -xi' psi ln(xi' psi))
 
 The models compose a law into their right-hand sides at compile time (:mod:`sweep.integrate.models.stop`,
-:mod:`sweep.integrate.models.driven`). Both laws have the same steady state (E = 1) and the same linearisation about steady
+:mod:`sweep.integrate.models.driven`). Both laws have the same steady state (E = 1) and the same linearisation about
+steady
 sliding, so the same Hopf line. The aging law alone has the identity xi + u = s in contact-age time s, which the
 fast stop paths (one state, closed-form tail, lanes) rely on.
 

@@ -1,7 +1,8 @@
 """Stop scene with inertia (docs/physics.md 3a), and the first-order inertial correction of the quasi-static model.
 
 The Newton equation gamma xi'' = -chi xi - dmu(psi) - A ln(xi' psi) (' = d/dtau) is integrated in the
-contact-age time s = int dtau/psi of :mod:`sweep.integrate.models.stop`, where xi + u = s still holds exactly (u = ln psi),
+contact-age time s = int dtau/psi of :mod:`sweep.integrate.models.stop`, where xi + u = s still holds exactly (u = ln
+psi),
 with q = ln(xi' psi) = ln E as the second state (k = chi/A, a = mu1/A, b = m2/A, G = gamma/A):
 
     dxi/ds = e^q,    dq/ds = -P R + 1 - e^q,
@@ -9,7 +10,8 @@ with q = ln(xi' psi) = ln E as the second state (k = chi/A, a = mu1/A, b = m2/A,
 
 P being the inertial term: A P = -gamma xi'' exactly, q_qs the quasi-static ln E. R is the relaxation rate of P in
 s: 1/G at the start, growing without bound late in every stop (as psi/xi'). The system is integrated with the
-L-stable, stiffly accurate RODAS3 (:data:`sweep.integrate.solvers.RODAS3`) and the analytic 2x2 Jacobian, step size by the
+L-stable, stiffly accurate RODAS3 (:data:`sweep.integrate.solvers.RODAS3`) and the analytic 2x2 Jacobian, step size by
+the
 embedded error (controller below), and handed over to the quasi-static form (state xi alone, as in
 :mod:`sweep.integrate.models.stop`) once inertia is negligible now and later:
 
@@ -29,7 +31,8 @@ y = d xi (model error of the quasi-static model, to first order in G): perturbin
 :func:`relax` returns y at the end, propagated through the closed-form tail to first order in E. Measured against
 the inertial model: the true gap is 0.80..1.17x |y|/xi_inf where G (1 + k + |a|) <= 1, 0.70..1.33x where <= 2,
 and the expansion fails beyond a few (down to 1e-6 of it at k = 1e3, G = 1, where the slider rebounds and xi_inf ~
-sqrt(G/k), the pure-inertia slip of eq. 15). ``model="auto"`` uses it where it holds (sweep/protocols/stop/model_choice.py).
+sqrt(G/k), the pure-inertia slip of eq. 15). ``model="auto"`` uses it where it holds
+(sweep/protocols/stop/model_choice.py).
 """
 
 from __future__ import annotations
@@ -95,7 +98,8 @@ def quasistatic_system(s, y, p, f, J, ft, jacobian):
 
 
 def make_correction_rate(dtype):
-    """The first-order correction's equation in the lanes' time sigma (:mod:`sweep.integrate.models.stop`'s time map, ds/dsigma
+    """The first-order correction's equation in the lanes' time sigma (:mod:`sweep.integrate.models.stop`'s time map,
+    ds/dsigma
     = w), for one float type and vectorisable over lanes: correction_rate(xi, s, y, k, a, b, G, w, E, expo) ->
     dy/dsigma = w (E (g - k) y + S), S = G E^2 e^(-2u) (k E + (g + 1)(1 - E)) (module docstring), from the state
     (xi, s, y) and what the quasi-static rate already computed there (w, E and its exponent expo). E^2 e^(-2u) is

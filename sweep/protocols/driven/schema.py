@@ -69,7 +69,8 @@ def build_driven_dataset(scene: Scene, out: dict[str, np.ndarray], seconds: floa
     coords["V"].attrs["long_name"] = "driving velocity"
     coords["Omega_c"] = variable("V", physics.Omega_c(scene.V, mu1[0], p.A, p.D0),
                              "s-1", "critical pulsation on the Hopf line (V/D0) sqrt(mu1/A) (NaN: no line)")
-    attrs = global_attrs(scene, "Stability of steady sliding and stick-slip of the Baumberger-Gauthier spring-block model "
+    attrs = global_attrs(scene, "Stability of steady sliding and stick-slip of the Baumberger-Gauthier spring-block "
+                         "model "
                    "(driven scene)", "regime runaway is status quasistatic_breakdown", history, seconds)
     attrs["runaway_slip_velocity_over_V"] = RUNAWAY_XI_DOT
     attrs.update({f"plan_{k}": v for k, v in description.items()})

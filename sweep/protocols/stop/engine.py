@@ -1,13 +1,21 @@
-"""Engine: run a chunk of a plan's points through the compiled kernels, in parallel; the flat outputs.
+"""The stop protocol's kernels over one chunk: a plan's points through the compiled batch loops, in parallel; the flat
+outputs (:class:`RawResult`).
 
-The numba layer (the batch loops of integrate/batch.py) knows nothing of xarray: it fills
-preallocated flat arrays, one point written once by one thread. The costly points cluster in one corner of the grid
-(small K/M with mu1 < 0) and numba's prange splits a batch into equal contiguous shares, so the points of a chunk
-are visited in a fixed pseudo-random order: every thread's share of it then mixes cheap and costly points
-(2 threads: 1.2x -> 1.96x speed-up on the default scene). Results do not depend on the order. Sweeps of the
-relaxed slip alone go through the lane kernels instead (16 runs in flight per thread, integrate/lanes.py), each
-point down its own step ladder (integrate/ladder.py); time-resolved points of method "auto" through the sampled
-adaptive lanes (integrate/lanes_sampled.py, :func:`samples_in_lanes`), the rest one point per thread.
+The numba layer (integrate/batch.py, the lanes) knows nothing of xarray: it fills preallocated flat arrays, one point
+written once by one thread. Which kernel a point takes (:func:`run_points`):
+
+* the relaxed slip alone, method "auto": the adaptive lanes of LANES_METHOD (dop853, 32 runs in flight a thread,
+  integrate/lanes_adaptive.py), each run with a fine twin for its error estimate, tightened down a tolerance ladder
+  where the estimate exceeds the tolerance (integrate/tolerance_ladder.py);
+* the relaxed slip with a fixed step (method rk4, a step or float32 asked for): the fixed-step lanes (rk4, and the
+  Rosenbrock ros4 at stiff points), each point down its own step ladder (integrate/ladder.py);
+* values inside the transient: the sampled adaptive lanes (integrate/lanes_sampled.py) where
+  :func:`samples_in_lanes` takes them, else one point per thread (integrate/stop_point.py, a Richardson pair);
+* a state law without the aging identity: that law's own kernel (:data:`GENERAL_PATHS`).
+
+The costly points cluster in one corner of the grid (small K/M with mu1 < 0), so a chunk's points come in a fixed
+pseudo-random order (sweep.run.runner.chunk_points): every thread's share mixes cheap and costly points. Results do
+not depend on the order.
 """
 
 from __future__ import annotations
@@ -233,7 +241,8 @@ def _sampled_runner(plan: Plan, method: str, targets: np.ndarray, atol: float, r
 
 
 def samples_in_lanes(scene: Scene, plan: Plan | None = None) -> bool:
-    """Whether the time-resolved points of ``scene`` go through the sampled adaptive lanes (sweep.plan.plan.samples_in_lanes,
+    """Whether the time-resolved points of ``scene`` go through the sampled adaptive lanes
+    (sweep.plan.plan.samples_in_lanes,
     which the plan records and hashes; ``plan`` is accepted for the callers that hold one)."""
     return plan.sampled_lanes if plan is not None else plan_samples_in_lanes(scene)
 

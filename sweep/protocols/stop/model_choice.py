@@ -3,7 +3,8 @@
 The model error (of neglecting inertia) is kept apart from the numerical error (rtol). With model="auto":
 
 * stop scene, per point: the quasi-static model's relative error on xi_inf is estimated by its first-order
-  inertial correction, integrated along the point's own quasi-static solution (sweep/integrate/models/stop_inertial.py; in
+  inertial correction, integrated along the point's own quasi-static solution
+  (sweep/integrate/models/stop_inertial.py; in
   the RK4 lanes beside the quasi-static state, the per-point RODAS3 module only where a lane run fails): a
   measurement per point, not a coefficient (the gap per unit gamma/A ranges from ~1e-3 where mu1 < 0 to several
   where mu1/A is large). Where the expansion is trusted (tau = gamma/A (1 + (chi + |mu1|)/A) <= FIRST_ORDER_TRUST)

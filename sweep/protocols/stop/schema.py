@@ -87,14 +87,16 @@ def sampled_variables(scene: Scene, n_traj: int, dims: tuple[str, ...], xi_at: n
         errors["xi"] = xi_at_err[..., :n_traj]
         errors["psi"] = data["psi"].values * np.expm1(u_at_err[..., :n_traj])
     if "slip_at" in scene.observables:
-        data["slip_at"] = variable(dims + ("t_obs",), D0 * xi_at[..., n_traj:], "m", "slip since the stop at time t_obs")
+        data["slip_at"] = variable(dims + ("t_obs",), D0 * xi_at[..., n_traj:], "m",
+                                   "slip since the stop at time t_obs")
         errors["slip_at"] = D0 * xi_at_err[..., n_traj:]
     return {**data, **with_errors(data, errors)}
 
 
 def _model_variables(scene: Scene, choice: ModelChoice, grid, dims=DIMS) -> dict[str, xr.Variable]:
     """The per-point model flag and, with model="auto", the quasi-static model's estimated error."""
-    out = {"model": variable(dims, grid(choice.inertial.astype(np.int8)), "1", "model used for the point", **MODEL_FLAG)}
+    out = {"model": variable(dims, grid(choice.inertial.astype(np.int8)), "1", "model used for the point",
+                             **MODEL_FLAG)}
     if choice.model_error is not None:
         out["model_error"] = variable(
             dims, grid(choice.model_error), "1", "relative error of xi_inf with the quasi-static model",
