@@ -16,6 +16,7 @@ import sweep
 from sweep.fit import Curve, RelaxedSlips
 from sweep.fit.forward import ForwardPoints, forward
 from sweep.fit.uncertainty import LABELS
+from sweep.scene.plausibility import PlausibilityWarning
 
 SAMPLE2 = dict(A=0.007, m1=0.0125, m2=0.0033, D0=0.7e-6)
 SAMPLE1 = dict(A=0.012, m1=0.010, m2=0.0014, D0=1.0e-6)
@@ -201,9 +202,12 @@ def test_a_least_squares_cut_short_says_it_did_not_converge(monkeypatch):
     done = sweep.fit(curve, free=FREE, params=_params(SAMPLE2), profiles=False)
     assert int(done["least_squares_status"][0]) in (2, 3)
     monkeypatch.setattr(local, "FIT", levenberg.Tolerances(ftol=1e-10, xtol=1e-9, max_rounds=2))
-    short = sweep.fit(curve, free=FREE, params=_params(SAMPLE2), profiles=False)
+    with pytest.warns(PlausibilityWarning, match="not_converged: the least squares stopped after 2 rounds"):
+        short = sweep.fit(curve, free=FREE, params=_params(SAMPLE2), profiles=False)
     assert int(short["least_squares_status"][0]) == 0
     assert short["least_squares_status"].attrs["flag_meanings"].split()[0] == "max_rounds_reached"
+    assert int(done["fit_status"][0]) == 0
+    assert short["fit_status"].attrs["flag_meanings"].split()[int(short["fit_status"][0])] == "not_converged"
 
 
 # --- noise estimated, K/M factor and D0 free, labels, profile rounds ------------------------------------------
@@ -314,6 +318,10 @@ def test_an_interval_running_into_a_bound_is_labelled_not_identifiable():
     print({n: (float(ds[n][0]), float(ds[f"{n}_lower"][0]), float(ds[f"{n}_upper"][0])) for n in FREE})
     assert float(ds["m2_lower"][0]) == 0.0
     assert _label(ds, "m2") == NOT
+    # m2 = 0 is a limit of the model, not a bound the data push against: the fit did not fail (issue 37)
+    assert int(ds["fit_status"][0]) == 0
+    assert ds["m2_at_bound"].attrs["flag_meanings"].split()[int(ds["m2_at_bound"][0])] in ("inside",
+                                                                                              "at_physical_limit")
     for name in ("A", "m1"):
         assert _covers(ds, name, p[name]), name
         assert _label(ds, name) == WELL, name

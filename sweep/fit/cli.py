@@ -1,7 +1,9 @@
 """``sweep fit FILE.toml -o fit.nc [--png fit.png]``: the command-line face of :func:`sweep.fit` (docs/fit.md).
 
 sweep/cli.py registers it with :func:`add_fit_command`; user mistakes raise InputError, which sweep.cli.main turns
-into one line ``sweep: error: ...`` and exit code 2. Progress lines go to stderr once the fit has run 2 s.
+into one line ``sweep: error: ...`` and exit code 2. Progress lines go to stderr once the fit has run 2 s. A fit
+that failed for some sample (``fit_status`` not ok, sweep.fit.verdict: one warning line says why) still writes its
+files, and the command exits 1.
 """
 
 from __future__ import annotations
@@ -51,6 +53,8 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         raise InputError(f"fit file {args.config!r}: {exc}") from None
     save_fit(ds, args.output, overwrite=args.overwrite)
     plot_fit(ds, png)
+    status = ds["fit_status"].values
+    meanings = ds["fit_status"].attrs["flag_meanings"].split()
     if not args.quiet:
         for name in ds["parameter"].values.tolist():
             for i, sample in enumerate(ds["sample"].values.tolist()):
@@ -60,5 +64,8 @@ def _cmd_fit(args: argparse.Namespace) -> int:
                     if f"{name}_label" in ds else ""
                 print(f"{sample}: {name} = {float(ds[name][i]):.4g} (95 %: {lo:.4g} .. {hi:.4g}) "
                       f"{lab.replace('_', ' ')}")
+        for i, sample in enumerate(ds["sample"].values.tolist()):
+            if status[i]:
+                print(f"{sample}: the fit failed ({meanings[int(status[i])]})")
         print(f"wrote {args.output} and {png}")
-    return 0
+    return 1 if status.any() else 0

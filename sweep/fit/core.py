@@ -8,7 +8,10 @@ sweep.fit.stack merges their engine runs, sweep.fit.levenberg iterates every tas
    ``global_rtol``;
 3. least squares from the best grid point (sweep.fit.local), engine at ``rtol``;
 4. covariance from the Jacobian, profile likelihoods, 95 % intervals and labels (sweep.fit.profiles,
-   sweep.fit.uncertainty).
+   sweep.fit.uncertainty);
+5. a verdict per sample (sweep.fit.verdict): ``fit_status`` ok, or why the fit failed (failed forward solves at the
+   best point, infinite standard errors, a bound the data push against, no convergence), with one warning line per
+   call (a PlausibilityWarning) naming the failed samples and the advice that matches the cause.
 
 The optimisations' forward solves carry no error estimate (the engine's fine twins cost ~0.6x more, and an
 optimisation only needs values far more accurate than the noise): the best fits are solved once more with their
@@ -17,8 +20,10 @@ estimates, and ``engine_error`` reports the largest, in units of the noise, with
 
 from __future__ import annotations
 
+import difflib
 import logging
 import time
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
@@ -27,18 +32,21 @@ import xarray as xr
 from ..errors import InputError
 from ..run.compile_notice import announce_if_cold, compiled_aside
 from ..scene.params import FrictionParams
+from ..scene.plausibility import PlausibilityWarning
 from ..scene.presets import presets
+from . import local
 from .checks import check_problems
 from .data import Data
 from .globalstage import grid_axes, search_all
 from .local import refine_all
 from .outcome import FitOutcome
-from .problem import make_problems
+from .problem import MODEL_FAILED, make_problems
 from .profiles import profile_all
 from .result import build_fit_dataset
 from .space import make_space
 from .stack import ProblemStack
-from .uncertainty import covariance, interval, label, noise_variance, threshold
+from .uncertainty import NOT_COMPUTED, Interval, covariance, interval, label, noise_variance, threshold
+from .verdict import judge, summary, user_stacklevel
 
 __all__ = ["fit", "run_fit"]
 
@@ -53,8 +61,9 @@ misfit by ~2e-2 of one unit of chi^2 on 200 samples at most); above it the fit w
 def _params(params: FrictionParams | str) -> FrictionParams:
     if isinstance(params, str):
         if params not in presets:
+            close = difflib.get_close_matches(params, sorted(presets), n=1)
             raise InputError(f"params must be a sweep.FrictionParams or a preset name {sorted(presets)}, got "
-                             f"{params!r}")
+                             f"{params!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
         return presets[params]
     return params
 
@@ -101,10 +110,17 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
     stack = stack.with_settings(rtol, estimates=False)
     fits = refine_all(stack, [g.theta for g in globals_])
     rounds["least_squares"], seconds["least_squares"] = stack.rounds, time.perf_counter() - t1
-    engine_error = _check_engine_error(stack.with_settings(rtol, estimates=True), fits, progress)
+    unsolved = [f.residuals == MODEL_FAILED if f.failures else np.zeros(f.residuals.size, bool) for f in fits]
+    engine_error = _check_engine_error(stack.with_settings(rtol, estimates=True), fits, progress,
+                                       [u.any() for u in unsolved])
 
-    s2 = [noise_variance(f.rss, pr.n_residuals, space.p, pr.noise_given) for pr, f in zip(problems, fits)]
-    covs = [covariance(f.jac, s) for f, s in zip(fits, s2)]
+    # the noise variance over the data the model solved (all of them but where a fit failed its solves)
+    s2 = [noise_variance(f.rss, pr.n_residuals, space.p, pr.noise_given) if not u.any() else
+          _solved_noise_variance(f.residuals[~u], space.p, pr.noise_given)
+          for pr, f, u in zip(problems, fits, unsolved)]
+    covs = [covariance(f.jac, s) if not u.any() else np.full((space.p, space.p), np.nan)
+            for f, s, u in zip(fits, s2, unsolved)]
+    verdicts = [judge(f, c, s, space, MODEL_FAILED) for f, c, s in zip(fits, covs, s2)]
     crit = [threshold(pr.noise_given, pr.n_residuals - space.p) for pr in problems]
     profs = ivs = labels = None
     if profiles:
@@ -112,35 +128,64 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
             f"({time.perf_counter() - t0:.1f} s so far)")
         t2 = time.perf_counter()
         stack.rounds = 0
-        profs = profile_all(problems, [f.theta for f in fits], [f.rss for f in fits], covs, s2, crit, stack,
+        s2_profiles = [1.0 if u.any() else s for s, u in zip(s2, unsolved)]  # (a failed fit's profile is dropped)
+        profs = profile_all(problems, [f.theta for f in fits], [f.rss for f in fits], covs, s2_profiles, crit, stack,
                             [f.jac for f in fits])
         rounds["profiles"], seconds["profiles"] = stack.rounds, time.perf_counter() - t2
         ivs, labels = [], []
         for q, f in enumerate(fits):
+            if unsolved[q].any():  # no profile of a fit that failed its solves
+                profs[q] = [type(pf)(pf.values, np.full(pf.rss.shape, np.nan)) for pf in profs[q]]
+                ivs.append([Interval(np.nan, np.nan, False, False) for _ in range(space.p)])
+                labels.append([NOT_COMPUTED] * space.p)
+                continue
             row = [interval(f.theta[j], pf.values, (pf.rss - f.rss) / s2[q], crit[q]) for j, pf in enumerate(profs[q])]
             ivs.append(row)
             labels.append([label(f.theta[j], iv, poor) for j, iv in enumerate(row)])
     say(f"fit done in {time.perf_counter() - t0:.1f} s")
+    line = summary([pr.name for pr in problems], verdicts, local.FIT.max_rounds)
+    if line is not None:
+        warnings.warn(line, PlausibilityWarning, stacklevel=user_stacklevel())
     settings = {"free": list(space.names), "rtol": rtol, "global_rtol": global_rtol, "poor": poor,
                 "per_data_set": bool(per_data_set), "params": _params(params).as_dict()}
     return FitOutcome(problems, space, globals_, fits, s2, covs, crit, profs, ivs, labels, rounds, seconds, settings,
-                      engine_error)
+                      engine_error, verdicts)
 
 
-def _check_engine_error(check: ProblemStack, fits, progress: Callable[[str], None] | None) -> np.ndarray:
+def _solved_noise_variance(solved: np.ndarray, p: int, noise_given: bool) -> float:
+    """The noise variance of a fit that failed some solves, from the residuals it solved (NaN where they are too few
+    to estimate it from: the misfit map and the residuals of the output are then NaN)."""
+    if noise_given:
+        return 1.0
+    return float(np.sum(solved ** 2)) / (solved.size - p) if solved.size > p else float("nan")
+
+
+def _check_engine_error(check: ProblemStack, fits, progress: Callable[[str], None] | None,
+                        failed: list[bool] | None = None) -> np.ndarray:
     """A bound on the engine's error in the model values each best fit used, in units of the noise: one more
     forward solve each, with estimates, and the difference from the values used (ProblemStack.engine_errors); a
-    warning (the "sweep" logger, and ``progress``) where it exceeds ENGINE_ERROR_LIMIT."""
+    warning (the "sweep" logger, and ``progress``) where it exceeds ENGINE_ERROR_LIMIT, advising a smaller rtol, or
+    where a fit that solved all its data got no estimate. ``failed``: per fit, whether the model gave no number for
+    some of its data at the best fit (NaN there; the fit's verdict says so, sweep.fit.verdict: no rtol helps)."""
+    failed = failed or [False] * len(fits)
     used = np.zeros((len(fits), check.n_max))  # the residuals the fit used (no estimates), padded
     for q, f in enumerate(fits):
         used[q, :f.residuals.size] = f.residuals
     err = check.engine_errors(np.arange(len(check.problems)), np.array([f.theta for f in fits]), used)
-    over = [pr.name for pr, e in zip(check.problems, err) if not e <= ENGINE_ERROR_LIMIT]
+    err[np.array(failed, bool)] = np.nan
+    over = [pr.name for pr, e in zip(check.problems, err) if e > ENGINE_ERROR_LIMIT]
+    none = [pr.name for pr, e, bad in zip(check.problems, err, failed) if np.isnan(e) and not bad]
+    parts = []
     if over:
-        msg = (f"the engine's error at the best fit exceeds {ENGINE_ERROR_LIMIT:g} of the noise (or has no estimate) "
-               f"for {len(over)} sample(s) ({', '.join(over[:5])}{', ...' if len(over) > 5 else ''}): largest "
-               f"{np.nanmax(err) if np.isfinite(err).any() else float('nan'):.3g}; fit again with a smaller rtol "
-               f"(now {check.rtol:g})")
+        parts.append(f"the engine's error at the best fit exceeds {ENGINE_ERROR_LIMIT:g} of the noise for "
+                     f"{len(over)} sample(s) ({', '.join(over[:5])}{', ...' if len(over) > 5 else ''}): largest "
+                     f"{np.nanmax(err):.3g}; fit again with a smaller rtol (now {check.rtol:g})")
+    if none:
+        parts.append(f"the engine gave no error estimate at the best fit of {len(none)} sample(s) "
+                     f"({', '.join(none[:5])}{', ...' if len(none) > 5 else ''}): a solve with estimates failed "
+                     f"where the one without succeeded; their engine_error is NaN")
+    if parts:
+        msg = "; ".join(parts)
         log.warning(msg)
         if progress is not None:
             progress(msg)

@@ -10,9 +10,9 @@ and what it returns is the slip x(t) = D0 xi(tau) [m] at the point's own times a
 Dx_inf = D0 xi_inf [m] (eq. 10 when m2 = 0; the engine's closed-form tail otherwise: the limit, not a horizon).
 
 The plan comes from :func:`sweep.plan.plan.stop_plan_for_points` (the step rule, horizon and error estimates of a
-sweep, per point) and :func:`sweep.protocols.stop.engine.run_points` runs it: points with sampled times through the sampled adaptive
-lanes (sweep/integrate/lanes_sampled.py; the per-point kernel for the few they do not cover), each point with its own
-row of reduced times (``obs_tau``), relaxed-slip-only batches through the relaxed-slip lanes.
+sweep, per point) and :func:`sweep.protocols.stop.engine.run_points` runs it: points with sampled times through the
+sampled adaptive lanes (sweep/integrate/lanes_sampled.py; the per-point kernel for the few they do not cover), each
+point with its own row of reduced times (``obs_tau``), relaxed-slip-only batches through the relaxed-slip lanes.
 """
 
 from __future__ import annotations

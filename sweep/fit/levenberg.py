@@ -9,9 +9,10 @@ Then, per task, in scaled variables z = theta/scale (scale: ParamSpace.scale):
 
 * g = J^T r, H = J^T J; a moving parameter at a bound whose gradient points out of the box is frozen for the step;
 * the step solves (H + lambda diag(H)) dz = -g (Marquardt 1963), and the trial point is z + dz clipped to the box;
-* the trial is accepted where it lowers the misfit; lambda then shrinks by max(1/3, 1 - (2 rho - 1)^3) (rho: actual
-  over predicted decrease), else it grows by nu, and nu doubles (Nielsen 1999; Madsen, Nielsen & Tingleff, Methods
-  for non-linear least squares problems, 2004, sec. 3.2);
+* the trial is accepted where it solves more of the data (fewer residuals the model gave no number for: a failed
+  solve is never traded for a lower misfit, sweep.fit.stack) or as many and lowers the misfit; lambda then shrinks
+  by max(1/3, 1 - (2 rho - 1)^3) (rho: actual over predicted decrease, 0 at least), else it grows by nu, and nu
+  doubles (Nielsen 1999; Madsen, Nielsen & Tingleff, Methods for non-linear least squares problems, 2004, sec. 3.2);
 * a task stops when its predicted or actual decrease falls below ftol x the misfit, when the step falls below xtol
   (relative, scaled variables), or after max_rounds rounds (status 0).
 
@@ -75,7 +76,8 @@ STATUS_FLAGS = {0: "max_rounds_reached", 1: "nothing_to_move", 2: "misfit_conver
 class Solutions:
     """Per task: best parameter set (T, p) (held parameters at their values), its weighted residuals (T, n_max),
     misfit (T,), function evaluations (rounds in which the task posted sets), whether sliding was stable before every
-    stop, and the status (a key of STATUS)."""
+    stop, the status (a key of STATUS) and the number of residuals the model gave no number for at the best set
+    (MODEL_FAILED stands in for them in ``residuals`` and ``rss``)."""
 
     theta: np.ndarray
     residuals: np.ndarray
@@ -83,6 +85,7 @@ class Solutions:
     nfev: np.ndarray
     stable: np.ndarray
     status: np.ndarray
+    failures: np.ndarray
 
 
 def _neighbours(theta: np.ndarray, cols: np.ndarray, sp: ParamSpace, central: bool
@@ -195,6 +198,19 @@ def _within_bounds(z, dz, lo, hi, g, H) -> tuple[np.ndarray, np.ndarray]:
     return np.where(use_proj[:, None], proj, short), np.where(use_proj, p_proj, p_short)
 
 
+def _step(z, g, H, frozen, lam, lo, hi, eye) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(the damped step (T, m) with the ``frozen`` parameters held, that step kept inside the box, its predicted
+    decrease) (:func:`solve`)."""
+    free = ~frozen
+    Hf = np.where(free[:, :, None] & free[:, None, :], H, 0.0)
+    diag = np.diagonal(Hf, axis1=1, axis2=2)
+    floor = 1e-12 * np.maximum(np.max(diag, axis=1, keepdims=True), 1e-300)
+    damped = Hf + np.where(eye, (lam[:, None] * np.maximum(diag, floor))[:, :, None] + frozen[:, :, None], 0.0)
+    raw = np.linalg.solve(damped, -np.where(free, g, 0.0)[:, :, None])[:, :, 0]
+    dz, pred = _within_bounds(z, raw, lo, hi, g, H)
+    return raw, dz, pred
+
+
 def central_jacobian(stack: ProblemStack, problem: np.ndarray, theta: np.ndarray, residuals: np.ndarray
                      ) -> np.ndarray:
     """Central-difference Jacobian (T, n_max, p) of every task at ``theta`` (T, p) over every free parameter: one
@@ -203,7 +219,7 @@ def central_jacobian(stack: ProblemStack, problem: np.ndarray, theta: np.ndarray
     T, p = theta.shape
     cols = np.broadcast_to(np.arange(p), (T, p))
     sets, widths = _neighbours(theta, cols, stack.space, True)
-    r, _ = stack.residuals(problem, sets[:, 1:])
+    r, _, _ = stack.residuals(problem, sets[:, 1:])
     return _jacobian(np.concatenate((residuals[:, None, :], r), axis=1), widths, True)
 
 
@@ -236,18 +252,18 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
 
     def post(idx, th):
         if broyden:
-            r, ok = stack.residuals(problem[idx], th[:, None, :])
-            return r[:, 0], None, ok[:, 0]
+            r, ok, bad = stack.residuals(problem[idx], th[:, None, :])
+            return r[:, 0], None, ok[:, 0], bad[:, 0]
         sets, widths = _neighbours(th, cols[idx], sp, False)
-        r, ok = stack.residuals(problem[idx], sets)
-        return r[:, 0], _jacobian(r, widths, False) * scale[idx][:, None, :], ok[:, 0]
+        r, ok, bad = stack.residuals(problem[idx], sets)
+        return r[:, 0], _jacobian(r, widths, False) * scale[idx][:, None, :], ok[:, 0], bad[:, 0]
 
     nfev = np.ones(T, np.intp)
     if m == 0:  # nothing to move: the residuals at the start
-        r, ok = stack.residuals(problem, theta[:, None, :])
-        return Solutions(theta, r[:, 0], _sumsq(r[:, 0], n), nfev, ok[:, 0], np.ones(T, np.intp))
+        r, ok, bad = stack.residuals(problem, theta[:, None, :])
+        return Solutions(theta, r[:, 0], _sumsq(r[:, 0], n), nfev, ok[:, 0], np.ones(T, np.intp), bad[:, 0])
     status = np.zeros(T, np.intp)
-    r, J, stable = post(np.arange(T), theta)
+    r, J, stable, failures = post(np.arange(T), theta)
     if broyden:
         J = np.array(jac0, dtype=float) * scale[:, None, :]
     rss = _sumsq(r, n)
@@ -263,14 +279,19 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         z = theta[a[:, None], cols[a]] / scale[a]
         ga, Ha = g[a], H[a]
         frozen = ((z <= lo[a]) & (ga > 0)) | ((z >= hi[a]) & (ga < 0))
-        free = ~frozen
-        Hf = np.where(free[:, :, None] & free[:, None, :], Ha, 0.0)
-        diag = np.diagonal(Hf, axis1=1, axis2=2)
-        floor = 1e-12 * np.maximum(np.max(diag, axis=1, keepdims=True), 1e-300)
-        damped = Hf + np.where(eye, (lam[a, None] * np.maximum(diag, floor))[:, :, None] + frozen[:, :, None], 0.0)
-        dz = np.linalg.solve(damped, -np.where(free, ga, 0.0)[:, :, None])[:, :, 0]
-        dz, pred = _within_bounds(z, dz, lo[a], hi[a], ga, Ha)
+        raw, dz, pred = _step(z, ga, Ha, frozen, lam[a], lo[a], hi[a], eye)
         tiny = np.max(np.abs(dz) / (np.abs(z) + tol.xtol), axis=1) <= tol.xtol
+        # a step that a bound stopped (its projection onto the box no longer descends, and the step shortened to the
+        # bound is nil): the parameters on a bound that the step points out of are frozen too, and the step solved
+        # again (a projected Newton step need not descend where parameters are correlated; issue 37's A held by its
+        # bound stopped 100x above the misfit's minimum in m1, m2)
+        blocked = ((z >= hi[a]) & (raw > 0)) | ((z <= lo[a]) & (raw < 0))
+        again = tiny & np.any(blocked & ~frozen, axis=1)
+        if again.any():
+            _, dz2, pred2 = _step(z[again], ga[again], Ha[again], frozen[again] | blocked[again], lam[a[again]],
+                                  lo[a[again]], hi[a[again]], eye)
+            dz[again], pred[again] = dz2, pred2
+            tiny = np.max(np.abs(dz) / (np.abs(z) + tol.xtol), axis=1) <= tol.xtol
         flat = pred <= tol.ftol * rss[a]
         stop = tiny | flat
         status[a[stop]] = np.where(tiny[stop], 3, 2)
@@ -283,13 +304,15 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         ca, rows = cols[a], np.arange(a.size)[:, None]
         moved = np.clip((z + dz) * scale[a], sp.lower[ca], sp.upper[ca])
         trial[rows, ca] = np.where(dz == 0.0, trial[rows, ca], moved)  # z * scale may miss theta by an ulp
-        rt, Jt, st = post(a, trial)
+        rt, Jt, st, ft = post(a, trial)
         nfev[a] += 1
         rss_t = _sumsq(rt, n[a])
-        better = np.isfinite(rss_t) & (rss_t < rss[a])
-        rho = (rss[a] - rss_t) / np.where(pred > 0, pred, np.inf)
+        fewer = ft < failures[a]  # solves more of the data: better whatever the misfit
+        better = fewer | ((ft == failures[a]) & np.isfinite(rss_t) & (rss_t < rss[a]))
+        rho = np.maximum((rss[a] - rss_t) / np.where(pred > 0, pred, np.inf), 0.0)
         acc, rej = a[better], a[~better]
-        decrease = rss[acc] - rss_t[better]
+        decrease = np.where(fewer[better], np.inf, rss[acc] - rss_t[better])
+        failures[acc] = ft[better]
         if broyden:  # the secant through the trial, accepted or not
             Ja = J[a]
             _broyden_rows(Ja, rt - r[a], np.ascontiguousarray(dz), n[a])
@@ -307,4 +330,4 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         rss[acc] = rss_t[better]
         status[acc[done]] = 2
         active[acc[done]] = False
-    return Solutions(theta, r, rss, nfev, stable, status)
+    return Solutions(theta, r, rss, nfev, stable, status, failures)

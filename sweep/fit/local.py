@@ -27,7 +27,8 @@ __all__ = ["LocalFit", "refine_all"]
 class LocalFit:
     """Result of a least squares: the parameter set (all free parameters), its weighted residuals (n_residuals),
     the Jacobian of those over every free parameter, the sum of squares, function evaluations, whether steady
-    sliding was stable before every stop, and the status (sweep.fit.levenberg.STATUS) and its message."""
+    sliding was stable before every stop, the status (sweep.fit.levenberg.STATUS) and its message, and the number of
+    residuals the model gave no number for (MODEL_FAILED stands in for them: sweep.fit.verdict)."""
 
     theta: np.ndarray
     residuals: np.ndarray
@@ -37,6 +38,7 @@ class LocalFit:
     stable: bool
     status: int
     message: str
+    failures: int = 0
 
 
 def refine_all(stack: ProblemStack, theta0: list[np.ndarray]) -> list[LocalFit]:
@@ -49,5 +51,5 @@ def refine_all(stack: ProblemStack, theta0: list[np.ndarray]) -> list[LocalFit]:
     for q, n in enumerate(stack.n_res):
         out.append(LocalFit(sol.theta[q].copy(), sol.residuals[q, :n].copy(), jac[q, :n].copy(),
                             float(sol.rss[q]), int(sol.nfev[q]) + 1, bool(sol.stable[q]), int(sol.status[q]),
-                            STATUS[int(sol.status[q])]))
+                            STATUS[int(sol.status[q])], int(sol.failures[q])))
     return out

@@ -12,6 +12,7 @@ from .problem import Problem
 from .profiles import Profile
 from .space import ParamSpace
 from .uncertainty import Interval
+from .verdict import Verdict
 
 __all__ = ["FitOutcome"]
 
@@ -36,3 +37,5 @@ class FitOutcome:
     settings: dict[str, object]
     engine_error: np.ndarray
     """Per problem, the engine's largest error estimate at the best fit in units of the noise (sweep.fit.core)."""
+    verdicts: list[Verdict] | None = None
+    """Per problem, whether its fit can be trusted (sweep.fit.verdict); None: every fit taken as ok."""

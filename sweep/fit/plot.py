@@ -54,6 +54,9 @@ def _landscape_panel(fig, ax, ds: xr.Dataset) -> None:
         ax.set_yscale("log")
         ax.set_xlabel(dims[0])
         return
+    if not np.isfinite(land.values).any():  # no grid point solved every datum (a failed fit: fit_status)
+        ax.set_title("global stage (first sample): no grid point solved every datum")
+        return
     best = np.unravel_index(np.nanargmin(land.values), land.shape)  # the other axes at the best grid point
     sl = land.isel({d: int(best[k]) for k, d in enumerate(dims) if k >= 2})
     with np.errstate(divide="ignore", invalid="ignore"):

@@ -24,7 +24,10 @@ NOMINAL_NOISE = 1e-3
 least_squares' gradient tolerance is absolute, and residuals in metres (~1e-9) stopped it at its first point."""
 MODEL_FAILED = 1e3
 """Residual [noise units] put where the engine returns no number (a parameter set the model cannot solve, e.g. no
-finite relaxed slip): large enough that least squares steps away from it."""
+finite relaxed slip): large enough that the Jacobian steers least squares away from it. It never decides which
+parameter set wins: the global stage and the least squares rank sets by their number of failed residuals first
+(sweep.fit.globalstage, sweep.fit.levenberg), since with the noise estimated (residuals in units of 1e-3 x the
+data's RMS) or given small, a poor but solved set had a larger misfit than 1e3 a failure."""
 
 
 @dataclass(frozen=True, eq=False)

@@ -21,12 +21,14 @@ from .globalstage import grid_axes
 from .levenberg import STATUS, STATUS_FLAGS
 from .outcome import FitOutcome
 from .space import UNITS
-from .uncertainty import LABELS
+from .uncertainty import LABELS, NOT_COMPUTED
+from .verdict import BOUND_FLAGS, FIT_STATUS
 
 __all__ = ["build_fit_dataset", "save_fit", "LABEL_FLAGS"]
 
-LABEL_FLAGS = {"flag_values": np.arange(len(LABELS), dtype=np.int8),
-               "flag_meanings": " ".join(lab.replace(" ", "_") for lab in LABELS)}
+_LABELS = LABELS + (NOT_COMPUTED,)
+LABEL_FLAGS = {"flag_values": np.arange(len(_LABELS), dtype=np.int8),
+               "flag_meanings": " ".join(lab.replace(" ", "_") for lab in _LABELS)}
 LONG = {"A": "direct-effect coefficient A (eq. 1)", "m1": "slope m1 of mu_d at V0 (eq. 6)",
         "m2": "curvature m2 of mu_d (eq. 6)", "D0": "memory length D0", "K_over_M_factor": "factor on the nominal K/M"}
 
@@ -48,17 +50,22 @@ def _parameters(out: FitOutcome) -> dict[str, xr.Variable]:
                                  f"standard error of {name} from the covariance (s^2 (J^T J)^-1)")
         v[f"{name}_global"] = _v("sample", [g.theta[j] for g in out.global_results], u,
                                  f"{name} at the best point of the global stage")
+        v[f"{name}_at_bound"] = _v("sample", np.array([vd.bound[j] for vd in _verdicts(out)], np.int8), None,
+                                   f"whether {name} rests on a bound", flag_values=np.arange(4, dtype=np.int8),
+                                   flag_meanings=" ".join(BOUND_FLAGS[k] for k in range(4)),
+                                   comment="pushed_against_bound: the misfit would fall beyond it (the fit failed: "
+                                           "widen it); at_physical_limit: a limit of the model (m2 = 0), no failure")
         if out.intervals is None:
             continue
         v[f"{name}_lower"] = _v("sample", [iv[j].lower for iv in out.intervals], u,
                                 f"lower end of the 95 % profile-likelihood interval of {name}")
         v[f"{name}_upper"] = _v("sample", [iv[j].upper for iv in out.intervals], u,
                                 f"upper end of the 95 % profile-likelihood interval of {name}")
-        v[f"{name}_label"] = _v("sample", np.array([LABELS.index(lab[j]) for lab in out.labels], np.int8), None,
+        v[f"{name}_label"] = _v("sample", np.array([_LABELS.index(lab[j]) for lab in out.labels], np.int8), None,
                                 f"how well {name} is determined", **LABEL_FLAGS,
                                 comment=f"poorly constrained: 95 % interval wider than +-{out.settings['poor']:g} x "
                                         f"|best|; not identifiable: the profile stays below the threshold up to a "
-                                        f"bound")
+                                        f"bound; not computed: the fit failed its forward solves (fit_status)")
         n_pp = max(pf[j].values.size for pf in out.profiles)
         vals, delta = np.full((nq, n_pp), np.nan), np.full((nq, n_pp), np.nan)
         for q, pf in enumerate(out.profiles):
@@ -82,15 +89,33 @@ def _parameters(out: FitOutcome) -> dict[str, xr.Variable]:
     return v
 
 
+def _verdicts(out: FitOutcome):
+    """The verdicts of ``out`` (every fit ok, nothing at a bound, where it has none: an outcome built by hand)."""
+    if out.verdicts is not None:
+        return out.verdicts
+    from .verdict import Verdict
+
+    return [Verdict(0, np.zeros(out.space.p, np.int8), np.zeros(pr.n_residuals, bool), []) for pr in out.problems]
+
+
 def _per_sample(out: FitOutcome) -> dict[str, xr.Variable]:
     n = [pr.n_residuals for pr in out.problems]
+    vd = _verdicts(out)
+    solved = [not v.unsolved.any() for v in vd]
     return {
-        "misfit": _v("sample", [f.rss / s for f, s in zip(out.fits, out.s2)], "1",
-                     "sum of squared residuals over the noise variance at the best fit (chi^2)"),
+        "fit_status": _v("sample", np.array([v.status for v in vd], np.int8), None,
+                         "whether the fit can be trusted (sweep.fit.verdict; 0: ok, any other: the fit failed)",
+                         flag_values=np.array(sorted(FIT_STATUS), np.int8),
+                         flag_meanings=" ".join(FIT_STATUS[k] for k in sorted(FIT_STATUS)),
+                         comment="failed_solves: the model gives no number for some data at the best point; singular: "
+                                 "infinite standard errors; at_bound: the misfit would fall beyond a bound; "
+                                 "not_converged: the least squares ran out of rounds"),
+        "misfit": _v("sample", [f.rss / s if ok else np.nan for f, s, ok in zip(out.fits, out.s2, solved)], "1",
+                     "sum of squared residuals over the noise variance at the best fit (chi^2; NaN: failed solves)"),
         "degrees_of_freedom": _v("sample", np.array(n) - out.space.p, "1", "data values minus free parameters"),
-        "noise": _v("sample", [np.sqrt(s) * pr.noise[0] if not pr.noise_given else np.nan
-                               for pr, s in zip(out.problems, out.s2)],
-                    "m", "noise estimated from the residuals, sqrt(RSS/(n - p)) (NaN: noise given)"),
+        "noise": _v("sample", [np.sqrt(s) * pr.noise[0] if not pr.noise_given and ok else np.nan
+                               for pr, s, ok in zip(out.problems, out.s2, solved)],
+                    "m", "noise estimated from the residuals, sqrt(RSS/(n - p)) (NaN: noise given, or failed solves)"),
         "engine_error": _v("sample", out.engine_error, "1",
                           "bound on the engine's error in the model values of the best fit, in units of the noise "
                           "(largest over the sample's data)",
@@ -121,9 +146,9 @@ def _landscape(out: FitOutcome) -> tuple[dict[str, xr.Variable], dict[str, xr.Va
 def _data(out: FitOutcome) -> dict[str, xr.Variable]:
     cols: dict[str, list] = {k: [] for k in ("t", "K_over_M", "V", "observed", "fitted", "residual", "noise")}
     names, counts, owner = [], [], []  # per data set: its name, its number of data, its sample
-    for q, (pr, f) in enumerate(zip(out.problems, out.fits)):
+    for q, (pr, f, vd) in enumerate(zip(out.problems, out.fits, _verdicts(out))):
         noise = pr.noise * np.sqrt(out.s2[q])  # s2 = 1 where the noise is given
-        fitted = pr.observed + f.residuals / pr.weights
+        fitted = np.where(vd.unsolved, np.nan, pr.observed + f.residuals / pr.weights)  # NaN: the model gave none
         cols["observed"].append(pr.observed)
         cols["fitted"].append(fitted)
         cols["residual"].append((fitted - pr.observed) / noise)
@@ -151,7 +176,7 @@ def _data(out: FitOutcome) -> dict[str, xr.Variable]:
         "datum_K_over_M": _v("datum", c["K_over_M"], "s-2", "K/M of the datum (times the fitted factor if free)"),
         "datum_V": _v("datum", c["V"], "m s-1", "driving velocity before the stop"),
         "observed": _v("datum", c["observed"], "m", "measured slip x(t) or relaxed slip Dx_inf"),
-        "fitted": _v("datum", c["fitted"], "m", "the model at the best fit"),
+        "fitted": _v("datum", c["fitted"], "m", "the model at the best fit (NaN: the model gave no number)"),
         "residual": _v("datum", c["residual"], "1", "(fitted - observed)/noise"),
         "datum_noise": _v("datum", c["noise"], "m", "noise of the datum (given, or estimated per sample)"),
     }

@@ -30,38 +30,48 @@ from .problem import MODEL_FAILED, Problem
 __all__ = ["ProblemStack", "distinct_rows"]
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _weighted_residual(model, observed, weight, failed):  # pragma: no cover (compiled)
-    """(model - observed) weight, ``failed`` where that is not finite (the model gave no number)."""
-    r = (model - observed) * weight
-    return r if np.isfinite(r) else failed
-
-
 @numba.njit(cache=True, nogil=True, parallel=True)
-def _misfit_sums(model, block_of, observed, weights, n_res, failed, out):  # pragma: no cover (compiled)
-    """out[t, s] = sum over i < n_res[t] of the squared :func:`_weighted_residual` of model[block_of[t, s], i]: one
+def _misfit_sums(model, block_of, observed, weights, n_res, out, failures):  # pragma: no cover (compiled)
+    """out[t, s] = sum over i < n_res[t] of the squared weighted residual (model[block_of[t, s], i] - observed[t, i])
+    weights[t, i] over the residuals the model solved, failures[t, s] the number it did not (no finite value): one
     pass, no temporaries (numpy needed 6 passes over 100 curves x 730 grid sets x 200 samples, 85 % of the global
     stage), tasks split over the threads (each sum runs in order)."""
     for t in numba.prange(block_of.shape[0]):
         for s in range(block_of.shape[1]):
             row = model[block_of[t, s]]
             acc = 0.0
+            bad = 0
             for i in range(n_res[t]):
-                r = _weighted_residual(row[i], observed[t, i], weights[t, i], failed)
-                acc += r * r
+                r = (row[i] - observed[t, i]) * weights[t, i]
+                if np.isfinite(r):
+                    acc += r * r
+                else:
+                    bad += 1
             out[t, s] = acc
+            failures[t, s] = bad
 
 
 @numba.njit(cache=True, nogil=True)
-def _residual_rows(model, block_of, observed, weights, failed, out):  # pragma: no cover (compiled)
-    """out[t, s, i] = :func:`_weighted_residual` of model[block_of[t, s], i], 0 where the weight is 0 (beyond a
-    problem's residuals): one pass, no temporaries (as numpy: 4 passes and a gather)."""
+def _residual_rows(model, block_of, observed, weights, failed, out, failures):  # pragma: no cover (compiled)
+    """out[t, s, i] = (model[block_of[t, s], i] - observed[t, i]) weights[t, i], ``failed`` where that is not finite
+    (the model gave no number) and 0 where the weight is 0 (beyond a problem's residuals); and failures[t, s] the
+    number of residuals the model gave no number for: one pass, no temporaries (as numpy: 4 passes and a gather)."""
     for t in range(block_of.shape[0]):
         for s in range(block_of.shape[1]):
             row = model[block_of[t, s]]
+            bad = 0
             for i in range(row.size):
                 w = weights[t, i]
-                out[t, s, i] = _weighted_residual(row[i], observed[t, i], w, failed) if w > 0 else 0.0
+                if w > 0:
+                    r = (row[i] - observed[t, i]) * w
+                    if np.isfinite(r):
+                        out[t, s, i] = r
+                    else:
+                        out[t, s, i] = failed
+                        bad += 1
+                else:
+                    out[t, s, i] = 0.0
+            failures[t, s] = bad
 
 
 @numba.njit(cache=True, nogil=True)
@@ -143,22 +153,27 @@ class ProblemStack:
         other.rtol, other.estimates, other.rounds = rtol, estimates, 0
         return other
 
-    def residuals(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def residuals(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Weighted residuals (T, S, n_max) [noise units] of the parameter sets ``sets`` (T, S, p) of tasks of the
         problems ``problem`` (T,), MODEL_FAILED where the model gave no number and 0 beyond a problem's residuals;
-        and per set whether sliding was stable before every stop (T, S) (eq. 3)."""
+        per set whether sliding was stable before every stop (T, S) (eq. 3); and per set the number of residuals
+        the model gave no number for (T, S): a failed forward solve, which no misfit may outweigh (the callers
+        rank by it first)."""
         problem = np.asarray(problem, dtype=np.intp)
         model, stable, block_of = self._blocks(problem, sets)
         T, S = sets.shape[:2]
         r = np.empty((T, S, self.n_max))
-        _residual_rows(model, block_of.reshape(T, S), self.observed[problem], self.weights[problem], MODEL_FAILED, r)
-        return r, stable[block_of].reshape(T, S)
+        failures = np.empty((T, S), np.intp)
+        _residual_rows(model, block_of.reshape(T, S), self.observed[problem], self.weights[problem], MODEL_FAILED, r,
+                       failures)
+        return r, stable[block_of].reshape(T, S), failures
 
-    def misfits(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Sums of squared weighted residuals (T, S) of :meth:`residuals` for ``sets`` (T, S, p), or (S, p) the same
-        for every task (the global grid: its blocks are then the layouts times the sets, without sorting T S keys),
-        summed in order, not pairwise (the global stage's misfits only rank its grid), without holding the residuals
-        (100 curves x 730 sets x 200 samples would be a 117 MB temporary)."""
+    def misfits(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Sums of squared weighted residuals over the residuals the model solved (T, S), stability (T, S) and the
+        number of residuals it did not solve (T, S), for ``sets`` (T, S, p), or (S, p) the same for every task (the
+        global grid: its blocks are then the layouts times the sets, without sorting T S keys), summed in order, not
+        pairwise (the global stage's misfits only rank its grid), without holding the residuals (100 curves x 730
+        sets x 200 samples would be a 117 MB temporary)."""
         problem = np.asarray(problem, dtype=np.intp)
         T, S = problem.size, sets.shape[-2]
         if sets.ndim == 2:  # one row of sets for every task (the global grid): blocks per layout, no key sort
@@ -167,10 +182,10 @@ class ProblemStack:
             block_of = (which.reshape(-1)[:, None] * S + np.arange(S)).reshape(-1)
         else:
             model, stable, block_of = self._blocks(problem, sets)
-        rss = np.empty((T, S))
+        rss, failures = np.empty((T, S)), np.empty((T, S), np.intp)
         _misfit_sums(model, block_of.reshape(T, S), self.observed[problem], self.weights[problem],
-                     self.n_res[problem], MODEL_FAILED, rss)
-        return rss, stable[block_of].reshape(T, S)
+                     self.n_res[problem], rss, failures)
+        return rss, stable[block_of].reshape(T, S), failures
 
     def engine_errors(self, problem: np.ndarray, theta: np.ndarray, used: np.ndarray | None = None) -> np.ndarray:
         """Per task (``problem`` (T,), parameter set ``theta`` (T, p)): the largest error estimate of the engine's

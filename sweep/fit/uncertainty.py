@@ -19,9 +19,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-__all__ = ["LABELS", "Interval", "covariance", "interval", "label", "threshold"]
+__all__ = ["LABELS", "NOT_COMPUTED", "Interval", "covariance", "interval", "label", "threshold"]
 
 LABELS = ("well constrained", "poorly constrained", "not identifiable")
+NOT_COMPUTED = "not computed"
+"""The label (flag 3 of the output's ``<name>_label``) of a parameter of a sample whose fit failed its forward solves
+(sweep.fit.verdict): no interval was computed."""
 LEVEL = 0.95
 
 

@@ -1,0 +1,143 @@
+"""Whether each sample's fit can be trusted: a status per sample, a flag per parameter at a bound, and one warning
+line per call that names the failed samples and the advice that matches the cause (issue 37).
+
+A sample's ``fit_status`` is the most severe of (codes in :data:`FIT_STATUS`, in increasing severity):
+
+* ``not_converged``: the least squares stopped after their last round (sweep.fit.levenberg.STATUS 0);
+* ``at_bound``: a free parameter rests on a bound that the data push against: the misfit would fall by more than
+  :data:`PUSH` (units of the noise variance) beyond it, by the quadratic model of the Jacobian at the best fit with
+  the other parameters re-optimised (gradient g_j = sum_i J_ij r_i: a fall of g_j^2 C_jj/s^4, C the covariance
+  s^2 (J^T J)^-1; g_j^2/(H_jj s^2), H_jj = sum_i J_ij^2, where C_jj is not finite). A bound that is a
+  physical limit (:data:`PHYSICAL_LIMITS`: m2 = 0, below which there is no finite relaxed slip) is no failure: the
+  parameter is flagged ``at_physical_limit`` in ``<name>_at_bound`` and the sample stays ``ok``;
+* ``singular``: an infinite standard error (J^T J singular: the data do not determine some combination of the free
+  parameters);
+* ``failed_solves``: the forward model gave no number for some datum at the best fit (no finite relaxed slip there,
+  or a solve that failed). Its covariance, intervals, profiles, noise, misfit and the fitted values of those data
+  are not computed: NaN.
+
+``ok`` is 0; every other status is a failed fit (``sweep fit`` then exits 1).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+
+from .local import LocalFit
+from .space import ParamSpace
+
+__all__ = ["BOUND_FLAGS", "FIT_STATUS", "PHYSICAL_LIMITS", "PUSH", "Verdict", "judge", "summary", "user_stacklevel"]
+
+FIT_STATUS = {0: "ok", 1: "not_converged", 2: "at_bound", 3: "singular", 4: "failed_solves"}
+"""Per sample (CF flag_meanings), in increasing severity: the reported one is the most severe that applies."""
+BOUND_FLAGS = {0: "inside", 1: "at_physical_limit", 2: "pushed_against_bound", 3: "at_bound"}
+"""Per free parameter and sample: inside its bounds; resting on a physical limit (no failure); on a bound that the data
+push against (a failure: widen it); on a bound the data do not push against (the misfit rises beyond it too)."""
+PHYSICAL_LIMITS = {("m2", "lower"): 0.0}
+"""Bounds that are limits of the model, not choices: m2 < 0 has no finite relaxed slip (docs/physics.md 6)."""
+PUSH = 1.0
+"""Fall of the misfit beyond a bound [units of the noise variance] above which the data push against it (the
+unconstrained optimum lies about one standard error or more beyond the bound)."""
+BOUND_TOL = 1e-9
+"""A parameter within this fraction of its bound interval of a bound rests on it."""
+
+
+@dataclass
+class Verdict:
+    """One sample's verdict: ``status`` (key of FIT_STATUS), per free parameter its bound flag (key of BOUND_FLAGS),
+    per datum whether the model gave no number at the best fit (``unsolved``), and the parameters that the data push
+    beyond a bound as (name, value, side)."""
+
+    status: int
+    bound: np.ndarray
+    unsolved: np.ndarray
+    pushed: list[tuple[str, float, str]]
+
+    @property
+    def failed(self) -> bool:
+        return self.status != 0
+
+
+def judge(fit: LocalFit, cov: np.ndarray, s2: float, space: ParamSpace, model_failed: float) -> Verdict:
+    """The verdict of one sample (module docstring): ``fit`` its least squares (residuals where the model gave no
+    number hold ``model_failed``, sweep.fit.problem.MODEL_FAILED), ``cov`` its covariance, ``s2`` its noise variance
+    (1 with the noise given)."""
+    unsolved = fit.residuals == model_failed
+    if getattr(fit, "failures", 0) and not unsolved.any():  # a residual equal to the stand-in by chance: impossible
+        unsolved = np.ones_like(unsolved)
+    flags = np.zeros(space.p, np.int8)
+    pushed = []
+    width = space.upper - space.lower
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        g = fit.jac.T @ fit.residuals
+        H = np.einsum("ij,ij->j", fit.jac, fit.jac)
+        c = np.diagonal(cov)
+        # the others re-optimised (their gradient ~0 at the fit): g_j^2 (J^T J)^-1_jj; alone where that is not finite
+        fall = np.where(np.isfinite(c) & (c > 0), g ** 2 * c / s2 ** 2, g ** 2 / (H * s2))
+    for j, name in enumerate(space.names):
+        for side, bound, outward in (("lower", space.lower[j], g[j] > 0), ("upper", space.upper[j], g[j] < 0)):
+            if abs(fit.theta[j] - bound) > BOUND_TOL * width[j]:
+                continue
+            if PHYSICAL_LIMITS.get((name, side)) == bound:
+                flags[j] = 1
+            elif outward and (fall[j] > PUSH or not np.isfinite(fall[j])):
+                flags[j] = 2
+                pushed.append((name, float(fit.theta[j]), side))
+            else:
+                flags[j] = 3
+    status = 0
+    if fit.status == 0:
+        status = 1
+    if pushed:
+        status = 2
+    if not np.all(np.isfinite(np.diagonal(cov))):
+        status = 3
+    if unsolved.any():
+        status = 4
+    return Verdict(status, flags, unsolved, pushed)
+
+
+def _names(items: list[str]) -> str:
+    return ", ".join(items[:8]) + (f" and {len(items) - 8} more" if len(items) > 8 else "")
+
+
+def summary(names: list[str], verdicts: list[Verdict], max_rounds: int) -> str | None:
+    """One line naming the failed samples by cause, each cause with its advice; None when every fit is ok."""
+    failed = [(n, v) for n, v in zip(names, verdicts) if v.failed]
+    if not failed:
+        return None
+    parts = []
+    by = {code: [(n, v) for n, v in failed if v.status == code] for code in (4, 3, 2, 1)}
+    if by[4]:
+        which = _names([f"{n} ({int(v.unsolved.sum())} of {v.unsolved.size} data)" for n, v in by[4]])
+        parts.append(f"failed_solves: the model gives no number for some data at the best point ({which}), even "
+                     f"though the search ranked such points last: no parameter set inside the bounds solves them "
+                     f"(e.g. no finite relaxed slip where m2 = 0 and mu1 < 0); check the data's units, K_over_M and "
+                     f"V, and the bounds; their standard errors, intervals and fitted values are NaN")
+    if by[3]:
+        parts.append(f"singular: infinite standard errors ({_names([n for n, _ in by[3]])}): the data do not "
+                     f"determine every free parameter; fix one of them or add data at other K/M or V")
+    if by[2]:
+        which = _names([f"{n}: " + ", ".join(f"{p} = {x:.4g} at its {s} bound" for p, x, s in v.pushed)
+                        for n, v in by[2]])
+        parts.append(f"at_bound: the misfit would fall beyond a bound ({which}); widen those bounds (a parameter "
+                     f"outside any plausible range points to a unit mistake in the data)")
+    if by[1]:
+        parts.append(f"not_converged: the least squares stopped after {max_rounds} rounds "
+                     f"({_names([n for n, _ in by[1]])}); give a start nearer the data or narrower bounds")
+    return (f"the fit failed for {len(failed)} of {len(verdicts)} sample(s) ({_names([n for n, _ in failed])}): "
+            + "; ".join(parts) + " (fit_status in the output)")
+
+
+def user_stacklevel() -> int:
+    """The ``stacklevel`` of a warning issued by the caller that points at the first frame outside sweep/fit (the
+    user's call of sweep.fit, however it was reached)."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    frame, level = sys._getframe(1), 1
+    while frame is not None and os.path.dirname(os.path.abspath(frame.f_code.co_filename)) == here:
+        frame, level = frame.f_back, level + 1
+    return level
