@@ -5,6 +5,13 @@ The model holds for any positive K/M and V, so these are warnings, not errors (:
 a table-top slider (the paper's experiment: M ~ 0.1-10 kg, K ~ 1e3-1e6 N/m) slides at V of nm/s to mm/s, and its
 K/M lies far inside 1e-2..1e12 s^-2. Above V = 1 cm/s the creep the model describes is negligible and the inertial
 stop needs tiny steps (points end with status step_underflow or max_steps); the usual cause is V given in µm/s.
+
+The friction parameters and slips likewise (:func:`implausible_params`, :func:`implausible_slips`): measured memory
+lengths D0 lie within 1e-8..1e-3 m (:data:`D0_RANGE`; typically 0.1-10 µm), direct-effect coefficients A within
+1e-4..0.1 (:data:`A_RANGE`; the paper's 0.007-0.012), the slopes |m1|, |m2| below 0.5 (:data:`SLOPE_MAX`), and the
+slips after a stop (x, Dx_inf: a few D0) below 1 mm (:data:`SLIP_MAX`). A scene calls
+:func:`warn_implausible_params` with its parameters and its extra axes, a fit (sweep.fit.checks) checks its start,
+bounds and data; each gives ONE warning per call, however many samples or axes it names.
 """
 
 from __future__ import annotations
@@ -13,13 +20,22 @@ import warnings
 
 import numpy as np
 
-__all__ = ["K_OVER_M_RANGE", "NOT_FAILED", "PlausibilityWarning", "V_MAX", "implausible", "not_ok_summary",
-           "warn_implausible", "warn_not_ok"]
+__all__ = ["A_RANGE", "D0_RANGE", "K_OVER_M_RANGE", "NOT_FAILED", "PlausibilityWarning", "SLIP_MAX", "SLOPE_MAX",
+           "V_MAX", "implausible", "implausible_params", "implausible_slips", "not_ok_summary", "warn_implausible",
+           "warn_implausible_params", "warn_not_ok"]
 
 V_MAX = 1e-2
 """Largest plausible driving velocity [m s-1] (1 cm/s)."""
 K_OVER_M_RANGE = (1e-2, 1e12)
 """Plausible stiffness over mass of a table-top slider [s-2]."""
+D0_RANGE = (1e-8, 1e-3)
+"""Plausible memory length D0 [m] (measured: ~0.1-10 µm)."""
+A_RANGE = (1e-4, 0.1)
+"""Plausible direct-effect coefficient A [1] (measured: ~1e-3..5e-2)."""
+SLOPE_MAX = 0.5
+"""Largest plausible |m1| and |m2| [1] (measured: ~1e-3..5e-2)."""
+SLIP_MAX = 1e-3
+"""Largest plausible slip after a stop, x(t) or Dx_inf [m] (a few D0: ~0.1-100 µm)."""
 
 
 class PlausibilityWarning(UserWarning):
@@ -57,6 +73,77 @@ def warn_implausible(K_over_M: np.ndarray | None = None, V: np.ndarray | None = 
 
 
 _ISSUED: set[str] = set()
+
+
+def _span(values) -> tuple[float, float] | None:
+    v = np.asarray(values, dtype=float).reshape(-1)
+    v = v[np.isfinite(v)]
+    return (float(v.min()), float(v.max())) if v.size else None
+
+
+def implausible_params(A=None, m1=None, m2=None, D0=None) -> list[str]:
+    """One message per friction parameter with a value outside its plausible range (:data:`A_RANGE`,
+    :data:`SLOPE_MAX`, :data:`D0_RANGE`), naming the field and the likely unit mistake; empty if all are plausible.
+    Each argument: a value or values (a scene's parameter and its axis, a fit's start and bounds); None: not
+    checked. ``A``, ``m1``, ``m2`` [1], ``D0`` [m]."""
+    messages = []
+    span = _span(D0) if D0 is not None else None
+    if span and (span[0] < D0_RANGE[0] or span[1] > D0_RANGE[1]):
+        lo, hi = span
+        guess = ("did you give µm? D0 is in m, 1 µm = 1e-6 m" if hi > D0_RANGE[1] else
+                 "did you convert to m twice? D0 is in m, 1 µm = 1e-6 m")
+        messages.append(f"D0 {_range_text(lo, hi)} m is outside {D0_RANGE[0]:g}..{D0_RANGE[1]:g} m of measured "
+                        f"memory lengths (~0.1-10 µm): {guess}")
+    span = _span(A) if A is not None else None
+    if span and (span[0] < A_RANGE[0] or span[1] > A_RANGE[1]):
+        lo, hi = span
+        guess = ("did you give it in percent, or give mu0 instead? A is a number, e.g. 0.01" if hi > A_RANGE[1]
+                 else "did you divide it by 100 twice? A is a number, e.g. 0.01")
+        messages.append(f"A {_range_text(lo, hi)} is outside {A_RANGE[0]:g}..{A_RANGE[1]:g} of measured direct-effect "
+                        f"coefficients (~1e-3..5e-2): {guess}")
+    for name, values in (("m1", m1), ("m2", m2)):
+        span = _span(values) if values is not None else None
+        if span and max(abs(span[0]), abs(span[1])) > SLOPE_MAX:
+            messages.append(f"{name} {_range_text(*span)}: |{name}| above {SLOPE_MAX:g} (measured ~1e-3..5e-2: the "
+                            f"change of the dynamic friction per e-fold of V): did you give it in percent? {name} is "
+                            f"a number, e.g. 0.01")
+    return messages
+
+
+def implausible_slips(field: str, values) -> list[str]:
+    """A message if the slips ``values`` [m] (``field``: "x" or "dx_inf") exceed :data:`SLIP_MAX` (a unit
+    mistake: µm given as m, most often); empty otherwise."""
+    span = _span(np.abs(np.asarray(values, dtype=float)))
+    if span is None or span[1] <= SLIP_MAX:
+        return []
+    return [f"{field} up to {span[1]:.3g} m is above {SLIP_MAX:g} m (a slip after a stop is a few D0, ~0.1-100 µm): "
+            f"did you give µm? {field} is in m, 1 µm = 1e-6 m"]
+
+
+def _range_text(lo: float, hi: float) -> str:
+    return f"= {lo:g}" if lo == hi else f"{lo:g}..{hi:g}"
+
+
+def warn_implausible_params(params, axes=None) -> list[str]:
+    """ONE :class:`PlausibilityWarning` (once per process for the same text, as :func:`warn_implausible`) for the
+    friction parameters of a scene that lie outside their plausible ranges (:func:`implausible_params`): ``params`` a
+    :class:`sweep.FrictionParams` (or anything with attributes A, m1, m2, D0), ``axes`` the scene's extra axes
+    {name: values} (those named A, m1, m2 or D0 are checked with their values; the others are ignored). Returns the
+    messages (empty: all plausible)."""
+    axes = dict(axes or {})
+    values = {}
+    for name in ("A", "m1", "m2", "D0"):
+        v = [float(getattr(params, name))] if params is not None and hasattr(params, name) else []
+        if name in axes and axes[name] is not None:
+            v += np.asarray(axes[name], dtype=float).reshape(-1).tolist()
+        values[name] = v or None
+    messages = implausible_params(**values)
+    if messages:
+        text = "; ".join(messages)
+        if text not in _ISSUED:
+            _ISSUED.add(text)
+            warnings.warn(text, PlausibilityWarning, stacklevel=2)
+    return messages
 
 
 NOT_FAILED = ("ok", "no_finite_limit")
