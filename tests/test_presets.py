@@ -5,10 +5,10 @@ from __future__ import annotations
 import math
 
 import pytest
-from sweep.scene.params import FrictionParams
-from sweep.scene.presets import presets, provenance
 
 from sweep import physics as ph
+from sweep.scene.params import FrictionParams
+from sweep.scene.presets import presets, provenance
 
 
 def test_presets_exist_and_are_params():
