@@ -37,6 +37,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -51,6 +52,44 @@ AdaptiveRunner = Callable[[np.ndarray, np.ndarray, np.ndarray],
                           tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
 """run(points, control tolerances, first steps) -> (xi_inf, fine xi_inf, tail bounds, status, attempts), one run per
 entry."""
+
+
+class LadderRuns(NamedTuple):
+    """The runs of one pass of :func:`climb_tolerances`, per run r (inputs of :func:`_judge`)."""
+
+    entry: np.ndarray
+    """int64: the point run r solved (a row of the :class:`LadderArrays`)."""
+    xi: np.ndarray
+    """float64: relaxed slip of the run (the coarse one) [1]."""
+    fine: np.ndarray
+    """float64: relaxed slip of its fine twin [1]."""
+    tail_err: np.ndarray
+    """float64: the sum of both runs' closed-form tail bounds [1]."""
+    status: np.ndarray
+    """int8: the run's status."""
+    attempts: np.ndarray
+    """int32: its attempts (each a step and two half steps)."""
+    within: np.ndarray
+    """bool: whether its samples' estimates (2) are within their tolerances (all True without samples)."""
+
+
+class LadderArrays(NamedTuple):
+    """The arrays of a :class:`sweep.integrate.ladder.LadderResult`, per point (in and out of :func:`_judge`): the
+    returned run's value [1], error estimate (1) [1], status, attempts, control tolerance, runs taken, and the steps
+    of all of them."""
+
+    xi: np.ndarray
+    error: np.ndarray
+    status: np.ndarray
+    steps: np.ndarray
+    step: np.ndarray
+    runs: np.ndarray
+    work: np.ndarray
+
+    @classmethod
+    def of(cls, result: LadderResult) -> LadderArrays:
+        """The arrays of ``result`` themselves (no copy: :func:`_judge` writes into them)."""
+        return cls(result.xi, result.error, result.status, result.steps, result.step, result.runs, result.work)
 
 
 def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, tol0: float, rtol: float, atol: float,
@@ -81,46 +120,48 @@ def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, to
         return out
     entries = np.arange(n)
     again = np.empty(n, np.int64)
+    arrays = LadderArrays.of(out)
     while entries.size:
         # the first pass takes every point: slices (views) instead of gathers through an index array
         i = slice(None) if entries.size == n else entries
         x, fine, tail, status, attempts, *sampled = run(points[i], out.step[i], h0[i])
         within = (np.ones(entries.size, np.bool_) if samples is None
                   else samples.keep(entries, sampled[0], attempts, growth[i], tail))
-        n_again = _judge(entries, x, fine, tail, status, attempts, within, growth, roundoff, rtol, atol, out.xi,
-                         out.error, out.status, out.steps, out.step, out.runs, out.work, again)
+        n_again = _judge(LadderRuns(entries, x, fine, tail, status, attempts, within), growth, roundoff, rtol, atol,
+                         arrays, again)
         entries = again[:n_again].copy()
     out.error[out.status != OK] = np.nan
     return out
 
 
 @njit(cache=True, error_model="numpy")
-def _judge(entries, x, fine, tail, status, attempts, within, growth, roundoff, rtol, atol, xi, error, status_to,
-           steps, step, runs, work, again):
-    """One pass of :func:`climb_tolerances` over its runs (run r solved entry entries[r]): each run's estimate (1),
-    stored with its value, status and attempts into the entry's row of the LadderResult arrays (xi .. work); the
-    entries to run again, at step / TOL_RATIO, into ``again``; returns how many. ``within``: per run, whether its
-    samples' estimates are within their tolerances (all True without samples). In one pass: as numpy expressions
-    over a chunk's runs they cost ~0.2 ms of a default-scene chunk's ~3 ms. No fastmath: the same arithmetic as
-    :func:`sweep.integrate.ladder.rounding_error` and the estimate (1) written in numpy."""
+def _judge(runs, growth, roundoff, rtol, atol, out, again):
+    """One pass of :func:`climb_tolerances` over its runs ``runs`` (:class:`LadderRuns`): each run's estimate (1),
+    stored with its value, status and attempts into its entry's row of ``out`` (:class:`LadderArrays`); the entries
+    to run again, at step / TOL_RATIO, into ``again``; returns how many. ``growth``: per point, the growth factor of
+    :func:`sweep.integrate.ladder.rounding_error` [1]; ``roundoff``, ``rtol`` [1], ``atol`` [1] as in
+    :func:`climb_tolerances`. In one pass: as numpy expressions over a chunk's runs they cost ~0.2 ms of a
+    default-scene chunk's ~3 ms. No fastmath: the same arithmetic as :func:`sweep.integrate.ladder.rounding_error`
+    and the estimate (1) written in numpy."""
     n_again = 0
-    for r in range(entries.size):
-        e = entries[r]
-        v = x[r]
+    for r in range(runs.entry.size):
+        e = runs.entry[r]
+        v = runs.xi[r]
         size = abs(v)
-        rounding = roundoff * (2 * attempts[r] + math.exp(min(growth[e] * size, 700.0))) * size
-        estimate = COARSE_GAIN * abs(fine[r] - v) + 2.0 * tail[r] + rounding
+        rounding = roundoff * (2 * runs.attempts[r] + math.exp(min(growth[e] * size, 700.0))) * size
+        estimate = COARSE_GAIN * abs(runs.fine[r] - v) + 2.0 * runs.tail_err[r] + rounding
         finite = math.isfinite(estimate)
         if not finite:  # a run went non-finite: the next rung
             estimate = math.inf
         tol_x = rtol * size + atol
-        xi[e], error[e], steps[e] = v, estimate, attempts[r]
-        status_to[e] = status[r] if status[r] != OK else (OK if finite else NONFINITE)
-        runs[e] += 1
-        work[e] += 3 * np.int64(attempts[r])
-        if (status[r] != MAX_STEPS and not (estimate <= tol_x and within[r]) and rounding <= tol_x
-                and runs[e] < MAX_RUNS and step[e] / TOL_RATIO >= LANE_TOL_FLOOR):
-            step[e] /= TOL_RATIO
+        out.xi[e], out.error[e], out.steps[e] = v, estimate, runs.attempts[r]
+        status = runs.status[r]
+        out.status[e] = status if status != OK else (OK if finite else NONFINITE)
+        out.runs[e] += 1
+        out.work[e] += 3 * np.int64(runs.attempts[r])
+        if (status != MAX_STEPS and not (estimate <= tol_x and runs.within[r]) and rounding <= tol_x
+                and out.runs[e] < MAX_RUNS and out.step[e] / TOL_RATIO >= LANE_TOL_FLOOR):
+            out.step[e] /= TOL_RATIO
             again[n_again] = e
             n_again += 1
     return n_again
@@ -161,34 +202,59 @@ class SampleEstimates:
         """Store the samples of ``runs`` (SampledOutputs of the points ``entries``) with their estimates (2);
         returns, per entry, whether every estimate is within its tolerance."""
         within = np.empty(entries.size, np.bool_)
-        _sample_estimates(runs.xi_at, runs.xi_fine, runs.u_at, runs.u_fine, runs.cont_err, runs.first_continued,
-                          2 * attempts.astype(np.int64), np.ascontiguousarray(growth, dtype=float), tail,
-                          self.roundoff, self.rtol, self.atol, self.with_psi, entries, self.xi, self.u, self.xi_err,
-                          self.u_err, within)
+        _sample_estimates(runs, SampledPass(entries, 2 * attempts.astype(np.int64),
+                                            np.ascontiguousarray(growth, dtype=float), tail),
+                          self.roundoff, self.rtol, self.atol, self.with_psi,
+                          SampleArrays(self.xi, self.u, self.xi_err, self.u_err), within)
         return within
 
 
+class SampledPass(NamedTuple):
+    """Per run r of one pass of the sampled lanes, what the estimates (2) need beside its samples."""
+
+    entry: np.ndarray
+    """int64: the point run r solved (a row of the :class:`SampleArrays`)."""
+    steps: np.ndarray
+    """int64: the steps of the run and its twin, 2 x attempts (the rounding bound's count)."""
+    growth: np.ndarray
+    """float64: the growth factor of the run's point (:func:`sweep.integrate.ladder.rounding_error`) [1]."""
+    tail_err: np.ndarray
+    """float64: the sum of both runs' closed-form tail bounds [1]."""
+
+
+class SampleArrays(NamedTuple):
+    """The arrays of a :class:`SampleEstimates` (n points x n_t times, out of :func:`_sample_estimates`): xi and u =
+    ln psi at the samples, and their estimates (2) [1]."""
+
+    xi: np.ndarray
+    u: np.ndarray
+    xi_err: np.ndarray
+    u_err: np.ndarray
+
+
 @njit(cache=True, fastmath=FAST, error_model="numpy")
-def _sample_estimates(x, xf, u, uf, cont_err, first_continued, steps, growth, tail, roundoff, rtol, atol, with_psi,
-                      entries, x_to, u_to, x_err_to, u_err_to, within):
-    """Run r's samples and their estimates (2) into row entries[r] of x_to, u_to, x_err_to, u_err_to, and per run
-    whether all are within tolerance (one pass: as numpy expressions over the (runs x samples) arrays they cost 6 us
-    a 200-sample point, a quarter of its solve). The rounding of a sample is bounded with its row's largest |xi| in
-    the growth factor (:func:`sweep.integrate.ladder.rounding_error`: the exponential is monotonic in |xi|; one exp
-    a run)."""
+def _sample_estimates(samples, runs, roundoff, rtol, atol, with_psi, out, within):
+    """Run r's samples (``samples``: :class:`sweep.integrate.lanes_sampled.SampledOutputs`) and their estimates (2)
+    into row runs.entry[r] of ``out`` (:class:`SampleArrays`), and per run whether all are within tolerance into
+    ``within``; ``runs``: :class:`SampledPass`; ``roundoff``, ``rtol`` [1], ``atol`` [1], ``with_psi`` as in
+    :class:`SampleEstimates`. One pass: as numpy expressions over the (runs x samples) arrays they cost 6 us a
+    200-sample point, a quarter of its solve. The rounding of a sample is bounded with its row's largest |xi| in the
+    growth factor (:func:`sweep.integrate.ladder.rounding_error`: the exponential is monotonic in |xi|; one exp a
+    run)."""
+    x, xf, u, uf, cont_err = samples.xi_at, samples.xi_fine, samples.u_at, samples.u_fine, samples.cont_err
     for r in range(x.shape[0]):
         largest = 0.0
         for j in range(x.shape[1]):
             largest = max(largest, abs(x[r, j]))
-        amplified = steps[r] + math.exp(min(growth[r] * largest, 700.0))
+        amplified = runs.steps[r] + math.exp(min(runs.growth[r] * largest, 700.0))
         ok = True
-        e = entries[r]
+        e = runs.entry[r]
         for j in range(x.shape[1]):
-            continued = 2.0 * tail[r] if j >= first_continued[r] else 0.0
+            continued = 2.0 * runs.tail_err[r] if j >= samples.first_continued[r] else 0.0
             xi_err = COARSE_GAIN * abs(xf[r, j] - x[r, j]) + continued + roundoff * amplified * abs(x[r, j])
             u_err = (COARSE_GAIN * abs(uf[r, j] - u[r, j]) + cont_err[r, j]
-                     + roundoff * steps[r] * (abs(u[r, j]) + abs(x[r, j]))) if with_psi else math.nan
-            x_to[e, j], u_to[e, j], x_err_to[e, j], u_err_to[e, j] = x[r, j], u[r, j], xi_err, u_err
+                     + roundoff * runs.steps[r] * (abs(u[r, j]) + abs(x[r, j]))) if with_psi else math.nan
+            out.xi[e, j], out.u[e, j], out.xi_err[e, j], out.u_err[e, j] = x[r, j], u[r, j], xi_err, u_err
             ok = ok and xi_err <= rtol * abs(x[r, j]) + atol and (u_err <= rtol or not with_psi)
         within[r] = ok
 
