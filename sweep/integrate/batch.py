@@ -8,7 +8,7 @@ depend on the batch, its order or the number of threads.
 
 Two numba constraints shape the loops: the parallel loop itself can neither build named tuples nor write through
 a record's arrays (numba 0.6x loses such writes silently), so each point's work and writes happen in a per-point
-function called from the loop (:func:`_solve_into`, :func:`_store`).
+function called from the loop (:func:`_solve_into`, :func:`_relax_into`, :func:`_store`).
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ import concurrent.futures as cf
 import functools
 import math
 import threading
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -28,12 +29,12 @@ from ..status import Status
 from .driven import DrivenParams, cached, point_kernel
 from .models.stop import StopParams
 from .solvers.fastmath import FAST
-from .stop_inertial import RELAX_KEYS, relax
+from .stop_inertial import relax
 from .stop_point import FractionTimes, StopOutputs, TimeSamples, solve_stop_point
 from .stop_slip import relax_slip
 
-__all__ = ["StopOutputs", "driven_batch", "lanes_batch", "lanes_in_threads", "relax_batch", "relax_points",
-           "slip_batch", "stop_batch"]
+__all__ = ["RelaxOutputs", "RelaxPoints", "StopOutputs", "driven_batch", "lanes_batch", "lanes_in_threads",
+           "relax_batch", "relax_points", "slip_batch", "stop_batch"]
 
 OK, NO_FINITE_LIMIT = int(Status.OK), int(Status.NO_FINITE_LIMIT)
 
@@ -72,23 +73,51 @@ def stop_batch(method, points, finite, tol, max_steps, tau_samples, obs_tau, fra
         _solve_into(np.int64(i), method, points, finite, tol, max_steps, tau_samples, obs_tau, fractions, out)
 
 
+class RelaxPoints(NamedTuple):
+    """Flat per-point inputs of :func:`relax_batch`, float64: k = chi/A, a = mu1/A, b = m2/A, G = gamma/A."""
+
+    k: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    G: np.ndarray
+
+
+class RelaxOutputs(NamedTuple):
+    """Flat per-point outputs of :func:`relax_batch` (:func:`relax`'s; the fields are stop_inertial.RELAX_KEYS):
+    relaxed slip xi_inf [1], first-order inertial correction [1], status (int8), steps (int64), s_handover [1]."""
+
+    xi_inf: np.ndarray
+    correction: np.ndarray
+    status: np.ndarray
+    steps: np.ndarray
+    s_handover: np.ndarray
+
+
+@njit(cache=True)
+def _relax_into(i, points, inertial, rtol, atol, max_steps, out):
+    """Point i of :func:`relax_batch`, written into ``out`` (a function of its own, as :func:`_solve_into`)."""
+    out.xi_inf[i], out.correction[i], out.status[i], out.steps[i], out.s_handover[i] = relax(
+        points.k[i], points.a[i], points.b[i], points.G[i], inertial, rtol, atol, max_steps)
+
+
 @njit(parallel=True, nogil=True, cache=True)
-def relax_batch(k, a, b, G, inertial, rtol, atol, max_steps, xi_inf, correction, status, steps, s_handover):
-    """:func:`relax` over flat arrays of points (in parallel); results written into the output arrays."""
-    for i in prange(k.size):
-        xi_inf[i], correction[i], status[i], steps[i], s_handover[i] = relax(k[i], a[i], b[i], G[i], inertial,
-                                                                             rtol, atol, max_steps)
+def relax_batch(points, inertial, rtol, atol, max_steps, out):
+    """:func:`relax` over the flat arrays of ``points`` (:class:`RelaxPoints`), in parallel, into ``out``
+    (:class:`RelaxOutputs`)."""
+    n = points.k.size
+    for i in prange(n):  # np.int64(i): as in stop_batch
+        _relax_into(np.int64(i), points, inertial, rtol, atol, max_steps, out)
 
 
 def relax_points(k: np.ndarray, a: np.ndarray, b: np.ndarray, G: np.ndarray, inertial: bool, rtol: float,
                  atol: float, max_steps: int) -> dict[str, np.ndarray]:
     """:func:`relax_batch` with its output arrays: keys xi_inf, correction, status, steps, s_handover."""
     n = np.size(k)
-    out = dict(zip(RELAX_KEYS, (np.full(n, np.nan), np.full(n, np.nan), np.zeros(n, np.int8), np.zeros(n, np.int64),
-                                np.zeros(n))))
-    relax_batch(*(np.ascontiguousarray(x, dtype=float) for x in (k, a, b, G)), inertial, rtol, atol, max_steps,
-                *out.values())
-    return out
+    out = RelaxOutputs(np.full(n, np.nan), np.full(n, np.nan), np.zeros(n, np.int8), np.zeros(n, np.int64),
+                       np.zeros(n))
+    relax_batch(RelaxPoints(*(np.ascontiguousarray(x, dtype=float) for x in (k, a, b, G))), inertial, rtol, atol,
+                max_steps, out)
+    return out._asdict()
 
 
 @njit(parallel=True, nogil=True, cache=True)

@@ -151,8 +151,7 @@ def _make_advance(rhs, with_inertia: bool, variant: tuple[str, str]):
         """(done, FSAL): done False if the Rosenbrock matrix was singular; FSAL True when the rates at y_new are
         in K[-1] (the explicit FSAL stepper) and ln xi' there is the returned aux, NaN otherwise."""
         if with_inertia and stiff:
-            Kr, M, piv, f, ft, ysr = work
-            return _stiff_step(0.0, y, h, p, y_new, err, Kr, M, piv, f, ft, ysr), math.nan
+            return _stiff_step(0.0, y, h, p, y_new, err, work), math.nan
         return True, erk_step(K, ys, y, h, p, y_new, err)
 
     return pin(advance, *variant)

@@ -55,7 +55,7 @@ def relax(k, a, b, G, inertial, rtol, atol, max_steps):
     s_handover the contact-age time at which inertia was dropped (0 for the quasi-static model).
     """
     y, y_new, err_v = np.zeros(2), np.empty(2), np.empty(2)  # (xi, q) inertial, (xi, y) quasi-static
-    K, M, piv, f, ft, ys = scratch(2)
+    work = scratch(2)
     s = 0.0
     phase_inertial = inertial
     p_inertial, p_quasi = (k, a, b, G), (k, a, b, 0.0 if inertial else G)
@@ -66,10 +66,10 @@ def relax(k, a, b, G, inertial, rtol, atol, max_steps):
     while steps < max_steps:
         steps += 1
         if phase_inertial:
-            done = inertial_step(s, y, h, p_inertial, y_new, err_v, K, M, piv, f, ft, ys)
+            done = inertial_step(s, y, h, p_inertial, y_new, err_v, work)
             err2 = abs(err_v[1]) / rtol
         else:
-            done = quasistatic_step(s, y, h, p_quasi, y_new, err_v, K, M, piv, f, ft, ys)
+            done = quasistatic_step(s, y, h, p_quasi, y_new, err_v, work)
             err2 = abs(err_v[1]) / (rtol * max(abs(y[1]), abs(y_new[1])) + atol * G)
         err = max(abs(err_v[0]) / (rtol * max(abs(y[0]), abs(y_new[0])) + atol), err2)
         if not (done and math.isfinite(err) and math.isfinite(y_new[0]) and math.isfinite(y_new[1])):

@@ -3,8 +3,8 @@
 The system is a numba function ``system(s, y, p, f, J, ft, jacobian)`` that writes f = dy/ds into ``f`` and, when
 ``jacobian`` is True, J = df/dy into ``J`` (n x n) and df/ds into ``ft``; ``p`` is a tuple of parameters. The step
 solves the stages of HW IV.7.25' with the matrix I/(h gamma) - J, factorised once per step (LU with partial
-pivoting, n <= a few), and returns the embedded error estimate beside the new state. Every array is scratch space
-owned by the caller (:func:`scratch`), so a step allocates nothing.
+pivoting, n <= a few), and returns the embedded error estimate beside the new state. Every other array is scratch
+space owned by the caller (:class:`RodasWork`, from :func:`scratch`), so a step allocates nothing.
 
 Used by the inertial stop (sweep/integrate/models/stop_inertial.py, n = 2) and the inertial driven scene
 (sweep/integrate/models/driven.py, n = 3), both stiff where the slip velocity xi' is small (rate A/(gamma xi')).
@@ -12,13 +12,15 @@ Used by the inertial stop (sweep/integrate/models/stop_inertial.py, n = 2) and t
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
 from ...jitcache import pin, pin_module
 from .rosenbrock import RODAS3
 
-__all__ = ["make_rodas3_step", "scratch"]
+__all__ = ["RodasWork", "make_rodas3_step", "scratch"]
 
 _GAM = RODAS3.gamma
 (_, _, _, _), (_A21, _, _, _), (_A31, _A32, _, _), (_A41, _A42, _A43, _) = RODAS3.a
@@ -30,11 +32,27 @@ _E1, _E2, _E3, _E4 = RODAS3.e
 _SAME_F2 = _A21 == 0.0 and _AL2 == 0.0
 
 
+class RodasWork(NamedTuple):
+    """Scratch arrays of one RODAS3 step of a system of size n (:func:`make_rodas3_step`)."""
+
+    K: np.ndarray
+    """(4, n): the stages."""
+    M: np.ndarray
+    """(n, n): the Jacobian J, then the LU factors of I/(h gamma) - J."""
+    piv: np.ndarray
+    """(n,) int64: the pivots."""
+    f: np.ndarray
+    """(n,): the right-hand side at a stage."""
+    ft: np.ndarray
+    """(n,): df/ds."""
+    ys: np.ndarray
+    """(n,): a stage's state."""
+
+
 @njit(cache=True)
 def scratch(n):
-    """(K (4, n), M (n, n), pivots (n,), f, ft, y_stage) for :func:`make_rodas3_step`'s step (compiled, so that
-    kernels can call it)."""
-    return (np.empty((4, n)), np.empty((n, n)), np.empty(n, np.int64), np.empty(n), np.empty(n), np.empty(n))
+    """A :class:`RodasWork` for a system of size n (compiled, so that kernels can call it)."""
+    return RodasWork(np.empty((4, n)), np.empty((n, n)), np.empty(n, np.int64), np.empty(n), np.empty(n), np.empty(n))
 
 
 @njit(inline="always", fastmath={"contract": True}, error_model="numpy")
@@ -77,12 +95,13 @@ def _solve(M, piv, x):
 
 
 def make_rodas3_step(system):
-    """step(s, y, h, p, y_new, err, K, M, piv, f, ft, ys) -> bool: one RODAS3 step of ``system`` (module
-    docstring) from y at s; writes the new state and the embedded error estimate; False if the matrix was
-    singular or not finite (the caller retries with a smaller h)."""
+    """step(s, y, h, p, y_new, err, work) -> bool: one RODAS3 step of size h of ``system`` (module docstring) from
+    y at s, with the scratch arrays ``work`` (:class:`RodasWork`); writes the new state into y_new and the embedded
+    error estimate into err; False if the matrix was singular or not finite (the caller retries with a smaller h)."""
 
     @njit(fastmath={"contract": True}, error_model="numpy")
-    def step(s, y, h, p, y_new, err, K, M, piv, f, ft, ys):
+    def step(s, y, h, p, y_new, err, work):
+        K, M, piv, f, ft, ys = work
         n = y.size
         system(s, y, p, f, M, ft, True)
         d = 1.0 / (h * _GAM)
