@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -156,8 +157,8 @@ def choose_stop_models(scene: Scene, plan: Plan, raw: RawResult, idx: np.ndarray
     estimate = _estimate(scene, plan, pts, carried[finite], progress)
     model_error = np.full(n, np.nan)
     measure = np.zeros(n, bool)
-    _route(finite, pts, estimate["xi_inf"], raw.xi_inf, estimate["correction"], estimate["status"], plan.G, plan.k,
-           plan.a, scene.model_tol, model_error, measure)
+    _route(RouteEstimates(finite, pts, estimate["xi_inf"], estimate["correction"], estimate["status"]), raw.xi_inf,
+           LanePoints(plan.k, plan.a, plan.b, plan.s_c, plan.G), scene.model_tol, Routing(model_error, measure))
     rows = np.flatnonzero(measure)
     if rows.size == 0:  # every point keeps the quasi-static model (the default scene's chunks)
         return ModelChoice(measure, model_error)
@@ -202,21 +203,42 @@ def _margins(tau):
     return out
 
 
+class RouteEstimates(NamedTuple):
+    """Per estimated point r of :func:`_route` (:func:`_estimate`'s outputs): its chunk row, its plan point, the
+    estimate's own relaxed slip [1] (NaN where the chunk's run carried the correction), the first-order inertial
+    correction [1] and the status of the run that carried it."""
+
+    row: np.ndarray
+    point: np.ndarray
+    xi_inf: np.ndarray
+    correction: np.ndarray
+    status: np.ndarray
+
+
+class Routing(NamedTuple):
+    """Per chunk row, out of :func:`_route`: the quasi-static model's estimated relative error on xi_inf [1], and
+    whether the point is solved with inertia (bool)."""
+
+    model_error: np.ndarray
+    measure: np.ndarray
+
+
 @njit(cache=True)
-def _route(rows, pts, estimated_xi, xi_inf, correction, status, G, k, a, model_tol, model_error, measure):
-    """The model of the points ``pts`` (plan points, at the rows ``rows`` of a chunk): model_error = |correction /
-    xi| where the estimate is ok and xi finite (xi: the estimate's own run where it made one, else the chunk's
-    ``xi_inf``, whose run carried the correction), and ``measure`` (solve with inertia) where it is not, or where
-    routing_margin(tau) x model_error > model_tol. One pass (as numpy expressions over a chunk's points: ~0.1 ms of
-    a default-scene chunk's ~7 ms), the same arithmetic (tau = G (1 + k + |a|), as the numpy expression orders it)."""
-    for r in range(rows.size):
-        i, p = rows[r], pts[r]
-        xi = xi_inf[i] if math.isnan(estimated_xi[r]) else estimated_xi[r]
-        ok = status[r] == OK and math.isfinite(xi)
+def _route(est, xi_inf, points, model_tol, out):
+    """The model of the estimated points ``est`` (:class:`RouteEstimates`) into ``out`` (:class:`Routing`):
+    model_error = |correction / xi| where the estimate is ok and xi finite (xi: the estimate's own run where it made
+    one, else the chunk's ``xi_inf``, whose run carried the correction), and ``measure`` (solve with inertia) where it
+    is not, or where routing_margin(tau) x model_error > model_tol; ``points``: the plan's LanePoints (k, a, G). One
+    pass (as numpy expressions over a chunk's points: ~0.1 ms of a default-scene chunk's ~7 ms), the same arithmetic
+    (tau = G (1 + k + |a|), as the numpy expression orders it)."""
+    for r in range(est.row.size):
+        i, p = est.row[r], est.point[r]
+        xi = xi_inf[i] if math.isnan(est.xi_inf[r]) else est.xi_inf[r]
+        ok = est.status[r] == OK and math.isfinite(xi)
         if ok:
-            model_error[i] = abs(correction[r] / xi)
-        margin = _margin(G[p] * ((1.0 + k[p]) + abs(a[p])))
-        measure[i] = not ok or not (margin * model_error[i] <= model_tol)
+            out.model_error[i] = abs(est.correction[r] / xi)
+        margin = _margin(points.G[p] * ((1.0 + points.k[p]) + abs(points.a[p])))
+        out.measure[i] = not ok or not (margin * out.model_error[i] <= model_tol)
 
 
 def warm_up_models() -> None:
