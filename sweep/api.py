@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-import threading
 import time
 import warnings
 from collections.abc import Callable, Iterator, Sequence
@@ -28,7 +27,7 @@ from .run.size import check_fits, estimate_size
 from .scene.params import FrictionParams
 from .scene.plausibility import PlausibilityWarning, warn_implausible, warn_not_ok
 from .scene.scene import Scene
-from .write.netcdf import open_dataset, write
+from .write.netcdf import NetCDFWriter, open_dataset
 from .write.targets import check_targets, write_failed
 from .write.writer import FlatArrays
 
@@ -116,7 +115,8 @@ class PreparedRun:
         protocol = protocols.get(scene.protocol)
         # with a journal the arrays sampled in time stay there: written into the file chunk by chunk, never held
         kept = protocol.journal_keeps(scene, plan) if journal is not None else frozenset()
-        result = FlatArrays(plan.n_points, skip=kept)
+        result = (FlatArrays(plan.n_points, skip=kept) if journal is None
+                  else NetCDFWriter(self.output, plan.n_points, skip=kept))
         t0 = time.perf_counter()
         run_chunks(scene, plan, size, [result] if journal is None else [journal, result], progress, self.imap)
         self.compute_s = time.perf_counter() - t0
@@ -124,7 +124,8 @@ class PreparedRun:
         ds = protocol.dataset(scene, plan, result.flat, result.seconds, history, sampled=blocks is None)
         # the Dataset holds what it needs; the plan's and the unused outputs' per-point arrays (~100 bytes per point)
         # go before the netCDF write, whose copies are the peak of a large run's memory
-        del plan, result
+        del plan
+        result.flat.clear()
         self.plan = None
         if scene.simulated_hopf_line:  # asked for: the driven kernel is compiled only then
             ds = with_simulated_line(ds, scene.params, scene.model, scene.model_tol, scene.state_law)
@@ -137,7 +138,7 @@ class PreparedRun:
                               "run the same command with --resume --overwrite (resume=True, overwrite=True) to "
                               "replace it, or move it away and --resume")
         try:
-            _write_during(ds, self.output, blocks, picture if blocks is None else None, journal.remove)
+            result.write(ds, blocks, picture if blocks is None else None, journal.remove)
         except OSError as exc:
             raise write_failed(exc, self.output, journal.path, len(journal.done())) from None
         if blocks is None:
@@ -146,35 +147,6 @@ class PreparedRun:
         if picture is not None:
             picture(ds)
         return ds
-
-
-def _write_during(ds: xr.Dataset, output: Path, blocks, during: Callable[[xr.Dataset], None] | None,
-                  written: Callable[[], None]) -> None:
-    """io.write(ds, output, blocks), then ``written()`` once the file is in place; with ``during``, the write runs in a
-    helper thread while during(ds) runs in this one. The write is waited for even when ``during`` raises (Ctrl-C
-    while drawing), so the file is whole or absent afterwards; the write's error is raised first (OSError: the
-    caller's OutputError), then during's."""
-    if during is None:
-        write(ds, output, blocks=blocks)
-        written()
-        return
-    failed: list[BaseException] = []
-
-    def target() -> None:
-        try:
-            write(ds, output, blocks=blocks)  # (the module's name: a test's fault injected into api.write applies)
-        except BaseException as exc:  # noqa: BLE001 (raised in the caller's thread below)
-            failed.append(exc)
-
-    thread = threading.Thread(target=target, name="sweep-netcdf")
-    thread.start()
-    try:
-        during(ds)
-    finally:
-        thread.join()
-        if failed:
-            raise failed[0]
-        written()
 
 
 @contextmanager

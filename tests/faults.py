@@ -148,15 +148,15 @@ def _read_only(folder: Path) -> None:
 
 
 def _folder_in_the_way(path: Path) -> None:
-    import sweep.api as api
+    import sweep.write.netcdf as netcdf
 
-    real = api.write
+    real = netcdf.write
 
     def write(ds, output, *args, **kwargs):
         Path(path).mkdir(parents=True, exist_ok=True)
         return real(ds, output, *args, **kwargs)
 
-    api.write = write
+    netcdf.write = write
 
 
 def _wrapped(stop_chunk, action):

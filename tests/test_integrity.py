@@ -485,8 +485,8 @@ def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeyp
     (exit 3), and --resume finishes once the space is freed. Needs a tmpfs to mount (root on Linux); the same faults
     injected are test_a_chunk_write_failing_mid_run_keeps_the_journal_for_resume and
     test_a_netcdf_write_failing_at_the_end_keeps_the_journal_for_resume."""
-    import sweep.api as api
     import sweep.protocols.stop.chunk as stop_chunks
+    import sweep.write.netcdf as netcdf
     from sweep.cli import main
 
     disk = tmp_path / "disk"
@@ -507,8 +507,8 @@ def test_a_full_disk_on_a_real_file_system_then_resume(tmp_path, config, monkeyp
 
             monkeypatch.setattr(stop_chunks, "stop_chunk", filling)
         else:
-            real_write = api.write
-            monkeypatch.setattr(api, "write", lambda *a, **k: (fill(disk), real_write(*a, **k))[-1])
+            real_write = netcdf.write
+            monkeypatch.setattr(netcdf, "write", lambda *a, **k: (fill(disk), real_write(*a, **k))[-1])
         args = ["run", str(config), "-o", str(out), "--chunk-size", str(CHUNK), "-q"]
         capsys.readouterr()
         assert main(args) == 3

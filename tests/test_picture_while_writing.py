@@ -14,8 +14,8 @@ import pytest
 import xarray as xr
 
 import sweep
-import sweep.api as api
 import sweep.plot.files as plot
+import sweep.write.netcdf as netcdf
 from sweep.cli import main
 from sweep.run.journal import journal_path
 
@@ -35,7 +35,7 @@ def leftovers(folder: Path) -> list[str]:
 
 
 def test_the_picture_is_drawn_while_the_file_is_written(tmp_path, config, monkeypatch):
-    events, real_write, real_plot = [], api.write, plot.plot_file
+    events, real_write, real_plot = [], netcdf.write, plot.plot_file
 
     def write(*args, **kwargs):
         events.append(("write starts", threading.current_thread().name))
@@ -48,7 +48,7 @@ def test_the_picture_is_drawn_while_the_file_is_written(tmp_path, config, monkey
         events.append(("picture starts", threading.current_thread().name))
         return real_plot(*args, **kwargs)
 
-    monkeypatch.setattr(api, "write", write)
+    monkeypatch.setattr(netcdf, "write", write)
     monkeypatch.setattr(plot, "plot_file", plot_file)
     out = tmp_path / "s.nc"
     assert main(["run", str(config), "-o", str(out), "-q"]) == 0
@@ -63,7 +63,7 @@ def test_a_failed_write_leaves_no_new_picture_and_keeps_the_old_one(tmp_path, co
     def full_disk(ds, output, *args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device", str(output))
 
-    monkeypatch.setattr(api, "write", full_disk)
+    monkeypatch.setattr(netcdf, "write", full_disk)
     out, png = tmp_path / "s.nc", tmp_path / "s.png"
     png.write_bytes(b"the old picture")
     assert main(["run", str(config), "-o", str(out), "-q", "--overwrite"]) == 3

@@ -4,16 +4,18 @@ from __future__ import annotations
 
 import errno
 import os
+import threading
 import zlib
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from .targets import check_targets, free_bytes, remove_quietly, write_failed
+from .writer import FlatArrays
 
-__all__ = ["save", "open_dataset", "write"]
+__all__ = ["NetCDFWriter", "open_dataset", "save", "write"]
 
 COMPRESSION = {"zlib": True, "complevel": 1}
 """Filter of a variable that compresses (:func:`compresses`): level 1, because the variables that compress at all
@@ -189,3 +191,43 @@ def open_dataset(path: str | os.PathLike, load: bool = True) -> xr.Dataset:
         return xr.open_dataset(path, engine="netcdf4")
     with xr.open_dataset(path, engine="netcdf4") as ds:
         return ds.load()
+
+
+class NetCDFWriter(FlatArrays):
+    """The netCDF file of a run, a writer of its chunk loop (sweep/write/writer.py): the chunks consolidated into
+    per-point arrays as they are put (:class:`FlatArrays`; ``skip``: the arrays a journal keeps, written block by
+    block), and the Dataset built from them written whole by :meth:`write` (to ``<path>.part``, renamed into
+    place)."""
+
+    def __init__(self, path: str | os.PathLike, n: int, skip: Iterable[str] = ()) -> None:
+        super().__init__(n, skip)
+        self.path = Path(path)
+
+    def write(self, ds: xr.Dataset, blocks=None, during: Callable[[xr.Dataset], None] | None = None,
+              written: Callable[[], None] = lambda: None) -> None:
+        """The run's Dataset ``ds`` (its protocol's schema over the arrays put here) into the file, with the
+        ``blocks`` kept elsewhere (:func:`save`), then ``written()`` once the file is in place; with ``during``, the
+        write runs in a helper thread while during(ds) runs in this one. The write is waited for even when ``during``
+        raises (Ctrl-C while drawing), so the file is whole or absent afterwards; the write's error is raised first
+        (OSError: the caller's OutputError), then during's."""
+        if during is None:
+            write(ds, self.path, blocks=blocks)
+            written()
+            return
+        failed: list[BaseException] = []
+
+        def target() -> None:
+            try:
+                write(ds, self.path, blocks=blocks)  # (the module's function: a fault a test injects there applies)
+            except BaseException as exc:  # noqa: BLE001 (raised in the caller's thread below)
+                failed.append(exc)
+
+        thread = threading.Thread(target=target, name="sweep-netcdf")
+        thread.start()
+        try:
+            during(ds)
+        finally:
+            thread.join()
+            if failed:
+                raise failed[0]
+            written()

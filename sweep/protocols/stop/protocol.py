@@ -161,7 +161,8 @@ class StopProtocol(Protocol):
     # --- what the user sees -------------------------------------------------------------------------------------------
     def dry_run(self, scene: Scene) -> list[str]:
         from ...plan.plan import make_plan
-        from .estimate import estimate_seconds, plan_sample
+        from ...plan.sample import plan_sample
+        from .estimate import estimate_seconds
 
         planned, note = plan_sample(scene)
         lines = [f"{'plan of':>28}: {note}"] if note else []
