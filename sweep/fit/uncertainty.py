@@ -17,7 +17,6 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
 __all__ = ["LABELS", "NOT_COMPUTED", "Interval", "covariance", "interval", "label", "threshold"]
 
@@ -30,11 +29,15 @@ LEVEL = 0.95
 
 @functools.lru_cache(maxsize=256)
 def threshold(noise_given: bool, dof: int) -> float:
-    """Critical increase of the misfit (in units of the noise variance) for a 95 % interval of one parameter (cached:
-    a scipy.stats quantile costs ~0.1 ms, and a campaign asks once per sample with a few distinct arguments)."""
+    """Critical increase of the misfit (in units of the noise variance) for a 95 % interval of one parameter: the
+    chi^2(1) quantile, or the squared t quantile (scipy.special's chdtri and stdtrit, the functions behind
+    scipy.stats' chi2.ppf and t.ppf, bit for bit: importing scipy.stats cost ~1 s of a new process's first fit;
+    cached, a campaign asks once per sample with a few distinct arguments)."""
+    from scipy import special
+
     if noise_given:
-        return float(stats.chi2.ppf(LEVEL, 1))
-    return float(stats.t.ppf(0.5 + LEVEL / 2, max(dof, 1)) ** 2)
+        return float(special.chdtri(1, 1.0 - LEVEL))
+    return float(special.stdtrit(max(dof, 1), 0.5 + LEVEL / 2) ** 2)
 
 
 def noise_variance(rss: float, n: int, p: int, noise_given: bool) -> float:
