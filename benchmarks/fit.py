@@ -1,6 +1,11 @@
 """Cost of a fit (issue 21's benchmark): sweep.fit against scipy.optimize.least_squares driving solve_ivp.
 
     python benchmarks/fit.py [--quick] [--repeats 3] [--out benchmarks/results/fit.json] [--no-png]
+    python benchmarks/fit.py --first-call 5
+
+``--first-call N`` times instead the first fit of a new process with numba's cache warm (issue 37): N fresh
+processes each run ``import sweep``, then one sweep.fit of a 50-sample curve (3 free parameters, profiles), and
+print the seconds of each (wall and CPU); nothing is written. The cache is warmed first by one such process.
 
 * one relaxation curve of 200 samples (sample2 at K/M = 2.8e5 s-2, V = 1 um/s, t = 0.1 .. 3160 s, 0.5 % noise),
   3 free parameters (A, m1, m2), the global stage, least squares and the profile likelihoods: target < 10 s;
@@ -231,6 +236,45 @@ def print_table(result: dict) -> None:
             f"(z {row[n]['difference_over_combined_stderr']:.2g})" for n in FREE))
 
 
+FIRST_CALL = """
+import json, sys, time
+import numpy as np
+t0, c0 = time.perf_counter(), time.process_time()
+import sweep
+from sweep.fit import Curve
+t1, c1 = time.perf_counter(), time.process_time()
+d = np.load(sys.argv[1])
+sweep.fit(Curve(d["t"], d["x"], float(d["km"]), float(d["v"]), noise=float(d["s"])), free=("A", "m1", "m2"),
+          params="sample2")
+t2, c2 = time.perf_counter(), time.process_time()
+print(json.dumps({"import_s": t1 - t0, "first_fit_wall_s": t2 - t1, "first_fit_cpu_s": c2 - c1}))
+"""
+
+
+def first_call(n: int) -> None:
+    """``--first-call``: the first fit of n fresh processes, numba's cache warm (module docstring)."""
+    import subprocess
+    import tempfile
+
+    t = np.logspace(-1, 3.5, 50)
+    sigma = NOISE * relaxed_slip(SAMPLE2, KM, V)
+    x = slip_curve(SAMPLE2, KM, V, t) + sigma * np.random.default_rng(SEED).standard_normal(t.size)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "curve.npz"
+        np.savez(path, t=t, x=x, s=sigma, km=KM, v=V)
+        rows = []
+        for i in range(n + 1):  # the first warms the cache
+            out = subprocess.run([sys.executable, "-c", FIRST_CALL, str(path)], capture_output=True, text=True,
+                                 check=True)
+            row = json.loads(out.stdout.strip().splitlines()[-1])
+            print(("warm-up: " if i == 0 else f"{i}/{n}: ") + ", ".join(f"{k} {v:.2f}" for k, v in row.items()),
+                  flush=True)
+            rows += [row] if i else []
+    for key in rows[0]:
+        v = np.array([r[key] for r in rows])
+        print(f"{key}: min {v.min():.2f}, median {np.median(v):.2f}, max {v.max():.2f} (load {common.loadavg()})")
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help=f"{N_MANY_QUICK} curves in one call, scipy on "
@@ -239,7 +283,12 @@ def main(argv=None) -> None:
     ap.add_argument("--no-png", action="store_true")
     ap.add_argument("--repeats", type=int, default=None, help=f"fits of each kind, alternated, the best kept "
                                                                  f"(default {REPEATS}; --quick: 1)")
+    ap.add_argument("--first-call", type=int, default=None, metavar="N",
+                    help="time the first fit of N fresh processes (warm cache) instead; writes nothing")
     args = ap.parse_args(argv)
+    if args.first_call:
+        first_call(args.first_call)
+        return
     repeats = max(1, args.repeats or (1 if args.quick else REPEATS))
     t_start = time.perf_counter()
     load0, digest0 = common.loadavg(), common.sweep_digest()
