@@ -78,3 +78,22 @@ def test_a_file_that_is_not_netcdf_is_refused(tmp_path):
     with pytest.raises(sweep.InputError, match="not a readable netCDF file") as exc:
         read_data(path)
     assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("sep, decimal, bom, eol", [(";", ",", True, "\r\n"), ("\t", ".", False, "\n"),
+                                                     (" ", ".", False, "\r\n"), ("  ", ",", True, "\n")])
+def test_laboratory_csv_variants_are_read(tmp_path, sep, decimal, bom, eol):
+    """Semicolons with decimal commas, tabs, blanks; a byte-order mark; CR LF; irregular times; a noisy slip a
+    little below zero: the same curve in SI units."""
+    t = np.array([0.1, 0.13, 0.9, 7.0, 7.5, 60.0])  # s, irregular
+    x = np.array([-0.002, 0.004, 0.03, 0.08, 0.081, 0.11])  # um, the first noisy below zero
+    fmt = (lambda v: repr(float(v)).replace(".", decimal))
+    head = ["# K_over_M = 2.8e5 s-2", "# V = 1 um/s", "# t: s", "# x: um", "# noise: um", sep.join(["t", "x", "noise"])]
+    rows = [sep.join([fmt(a), fmt(b), fmt(0.002)]) for a, b in zip(t, x)]
+    path = tmp_path / "lab.csv"
+    path.write_bytes(("\ufeff" if bom else "").encode() + eol.join(head + rows).encode() + eol.encode())
+    c = read_data(path)
+    np.testing.assert_allclose(c.t, t, rtol=1e-15)
+    np.testing.assert_allclose(c.x, x * 1e-6, rtol=1e-15)
+    np.testing.assert_allclose(c.noise, 2e-9, rtol=1e-15)
+    assert (c.K_over_M, c.V) == (2.8e5, 1e-6)

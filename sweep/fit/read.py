@@ -19,6 +19,12 @@ CSV, relaxed slips (columns K_over_M, V, dx_inf and optionally noise, each with 
     K_over_M,V,dx_inf
     2e5,3,0.71
 
+Laboratory files vary: the columns may be separated by commas, semicolons, tabs or blanks (the header line decides:
+the first of ``,``, ``;``, tab found in it, else blanks), a semicolon-separated file may write decimal commas
+(``0,083``), the file may start with a byte-order mark and end its lines with CR LF, and the header's names may carry
+blanks around them. Rows may be irregular in time (any strictly increasing t) and slips noisy, a little below zero
+(sweep.fit.data).
+
 netCDF: the same names as variables with a ``units`` attribute (a curve: t and x along one dimension, K_over_M and
 V scalar variables; relaxed slips: K_over_M, V, dx_inf along one dimension). Units: :mod:`sweep.fit.units`.
 """
@@ -80,8 +86,12 @@ def _csv(path: Path, where: str):
     units: dict[str, str] = {}
     meta: dict[str, tuple[str, str | None]] = {}
     rows = []
-    with open(path, newline="") as fh:
-        lines = fh.read().splitlines()
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as fh:  # -sig: a byte-order mark is not part of the header
+            lines = fh.read().splitlines()
+    except UnicodeDecodeError:
+        with open(path, newline="", encoding="latin-1") as fh:  # a lab PC's export (µ in the units)
+            lines = fh.read().splitlines()
     body = []
     for line in lines:
         s = line.strip()
@@ -100,13 +110,14 @@ def _csv(path: Path, where: str):
         body.append(s)
     if not body:
         raise InputError(f"{where}: no column header and no data")
-    reader = csv.reader(body)
+    delimiter = next((d for d in (",", ";", "\t") if d in body[0]), None)  # None: blanks
+    reader = csv.reader(body, delimiter=delimiter) if delimiter else (line.split() for line in body)
     header = [h.strip() for h in next(reader)]
     for i, row in enumerate(reader, start=2):
         if len(row) != len(header):
             raise InputError(f"{where}: data row {i - 1} has {len(row)} values, the header {len(header)}")
         try:
-            rows.append([float(v) for v in row])
+            rows.append([_number(v, delimiter) for v in row])
         except ValueError:
             raise InputError(f"{where}: data row {i - 1} has a value that is not a number: {row!r}") from None
     data = np.array(rows, dtype=float).reshape(-1, len(header))
@@ -119,6 +130,14 @@ def _csv(path: Path, where: str):
             raise InputError(f"{where}: '# {key} = {meta[key][0]}' has no unit; write e.g. '# {key} = "
                              f"{meta[key][0]} {'s-2' if key == 'K_over_M' else 'm/s'}'")
     return columns, units, meta
+
+
+def _number(text: str, delimiter: str | None) -> float:
+    """A value of a data row; a decimal comma where the columns are not separated by commas (0,083 -> 0.083)."""
+    text = text.strip()
+    if delimiter != "," and text.count(",") == 1 and "." not in text:
+        text = text.replace(",", ".")
+    return float(text)
 
 
 def _netcdf(path: Path, where: str):
