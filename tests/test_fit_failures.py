@@ -173,3 +173,60 @@ def test_sweep_fit_exits_1_where_a_fit_failed(tmp_path, capsys):
     assert "bad: the fit failed (failed_solves)" in captured.out
     with xr.open_dataset(out) as ds:
         assert int(ds["fit_status"][0]) == FAILED
+
+
+# --- the verdict on its own (sweep.fit.verdict), on hand-made least-squares results ------------------------------
+
+def _local(theta, jac, residuals, status=2):
+    from sweep.fit.local import LocalFit
+
+    return LocalFit(np.array(theta, float), np.array(residuals, float), np.array(jac, float),
+                    float(np.sum(np.square(residuals))), 5, True, status, "")
+
+
+def _space(lower, upper, names=("A", "m2")):
+    from sweep.fit.space import make_space
+
+    start = {n: 0.5 * (lo + hi) for n, lo, hi in zip(names, lower, upper)}
+    return make_space(names, sweep.FrictionParams(A=0.01, m1=0.01, m2=0.001, D0=1e-6), dict(zip(names,
+                      zip(lower, upper))), start)
+
+
+def test_the_verdict_by_cause():
+    """A linear model r = J (theta - theta*) - noise: the status and flags the module docstring promises."""
+    from sweep.fit.problem import MODEL_FAILED
+    from sweep.fit.uncertainty import covariance
+    from sweep.fit.verdict import FIT_STATUS, judge, summary
+
+    sp = _space([0.005, 0.0], [0.02, 0.004])
+    jac = np.array([[1e3, 0.0], [0.0, 1e3], [1e3, 1e3]])
+
+    def verdict(theta, truth, status=2, failed=()):
+        r = jac @ (np.array(theta) - np.array(truth))
+        r[list(failed)] = MODEL_FAILED
+        fit = _local(theta, jac, r, status)
+        fit.failures = len(failed)
+        return judge(fit, covariance(jac, 1.0), 1.0, sp, MODEL_FAILED)
+
+    ok = verdict([0.01, 0.002], [0.01, 0.002])
+    assert (FIT_STATUS[ok.status], ok.bound.tolist()) == ("ok", [0, 0])
+    pushed = verdict([0.02, 0.002], [0.03, 0.002])  # A's optimum 0.01 beyond its upper bound: a fall of ~50
+    assert FIT_STATUS[pushed.status] == "at_bound" and pushed.bound.tolist() == [2, 0]
+    assert pushed.pushed == [("A", 0.02, "upper")]
+    resting = verdict([0.02, 0.002], [0.02 + 1e-4, 0.002])  # 1e-4 beyond: a fall of 0.005, within the noise
+    assert FIT_STATUS[resting.status] == "ok" and resting.bound.tolist() == [3, 0]
+    limit = verdict([0.01, 0.0], [0.01, -0.003])  # m2 = 0 pushed: a limit of the model, no failure
+    assert FIT_STATUS[limit.status] == "ok" and limit.bound.tolist() == [0, 1]
+    slow = verdict([0.01, 0.002], [0.01, 0.002], status=0)
+    assert FIT_STATUS[slow.status] == "not_converged"
+    broken = verdict([0.01, 0.002], [0.01, 0.002], failed=(1,))
+    assert FIT_STATUS[broken.status] == "failed_solves" and broken.unsolved.tolist() == [False, True, False]
+    fit = _local([0.01, 0.002], np.array([[1e3, 0.0], [1e3, 0.0], [1e3, 0.0]]), [0.1, -0.2, 0.1])
+    singular = judge(fit, covariance(fit.jac, 1.0), 1.0, sp, MODEL_FAILED)  # m2 moves nothing
+    assert FIT_STATUS[singular.status] == "singular"
+    line = summary(["a", "b", "c", "d", "e"], [ok, pushed, singular, broken, slow], 100)
+    assert line.startswith("the fit failed for 4 of 5 sample(s) (b, c, d, e)")
+    for w in ("failed_solves", "d (1 of 3 data)", "singular", "c)", "b: A = 0.02 at its upper bound", "widen",
+              "not_converged", "100 rounds"):
+        assert w in line, (w, line)
+    assert summary(["a"], [ok], 100) is None
