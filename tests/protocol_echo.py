@@ -1,5 +1,5 @@
-"""A third protocol for tests/test_protocols.py: each point's reduced stiffness chi = K D0/(M g), "computed" chunk by
-chunk. It lives outside the package, as a user's protocol would, and plugs in through sweep.protocols.register."""
+"""A third protocol for tests/test_protocols.py: each point's reduced stiffness chi = K D0/(M g) times its own scene
+field ``scale``, "computed" chunk by chunk. It lives outside the package, as a user's protocol would, and plugs in through sweep.protocols.register."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from sweep.assemble.construct import assemble
+from sweep.errors import InputError
 from sweep.assemble.dataset import global_attrs, grid_coords, variable
 from sweep.plan.plan import point_params
 from sweep.protocols.base import Protocol
@@ -32,7 +33,7 @@ class EchoPlan:
         return hashlib.sha256(self.chi.tobytes()).hexdigest()[:16]
 
     def describe(self) -> dict[str, str]:
-        return {"rule": "chi = K D0/(M g) per point"}
+        return {"rule": "scale x chi = K D0/(M g) per point"}
 
 
 class EchoProtocol(Protocol):
@@ -47,12 +48,19 @@ class EchoProtocol(Protocol):
     memory_per_point = 64
     file_per_point = 16
     core_seconds_per_point = 1e-7
+    option_fields = {"scale": 1.0}
+
+    def make_options(self, scene, given):
+        options = super().make_options(scene, given)
+        if not options.scale > 0:
+            raise InputError(f"scale must be > 0, got {options.scale!r}")
+        return options
 
     def check(self, scene):
         pass
 
     def make_plan(self, scene):
-        return EchoPlan(point_params(scene).chi, self.chunk_size(scene))
+        return EchoPlan(scene.options.scale * point_params(scene).chi, self.chunk_size(scene))
 
     def chunk(self, scene, plan, progress=False):
         def compute(rows):

@@ -74,6 +74,26 @@ def test_a_registered_protocol_owns_its_observables_and_its_refusals(echo):
     assert echo_scene().observables == ("echo",)
 
 
+def test_a_registered_protocol_has_its_own_scene_fields(echo, tmp_path):
+    """Its field ``scale`` is held in Scene.options (its default filled in), checked by the protocol, written into
+    the canonical TOML as a top-level key and read back from a scene file; a field it does not have is refused."""
+    assert echo_scene().options.scale == 1.0
+    scene = echo_scene(options={"scale": 2.5})
+    assert scene.options == {"scale": 2.5}
+    again = sweep.load_scene(scene.to_toml())
+    assert again.options == {"scale": 2.5} and again.to_toml() == scene.to_toml()
+    expected = 2.5 * physics.reduced_stiffness(scene.K_over_M, scene.params.D0, scene.params.g)[:, None] * np.ones(5)
+    np.testing.assert_allclose(sweep.run_sweep(again, progress=False)["echo"].values, expected, rtol=1e-15)
+    with pytest.raises(InputError, match="scale must be > 0, got -1"):
+        echo_scene(options={"scale": -1})
+    with pytest.raises(InputError, match=r"options \['speed'\] are not fields of protocol 'echo'; its fields: "
+                                         r"\['scale'\]"):
+        echo_scene(options={"speed": 1})
+    with pytest.raises(InputError, match=r"options \['scale'\] are not fields of protocol 'stop'"):
+        sweep.Scene(protocol="stop", params=sweep.presets["sample2"], K_over_M=[1e4], V=[1e-6],
+                    options={"scale": 2.0})
+
+
 def test_an_unknown_protocol_is_refused_with_the_catalogue():
     with pytest.raises(InputError, match=r"protocol must be one of \('stop', 'driven'\), got 'hold'"):
         sweep.Scene(protocol="hold", params=sweep.presets["sample2"], K_over_M=[1e4], V=[1e-6])

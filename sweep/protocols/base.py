@@ -8,11 +8,14 @@ loads no kernels.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, ClassVar
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
+
+from ..errors import InputError
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -20,10 +23,38 @@ if TYPE_CHECKING:
     from ..plan.plan import Plan
     from ..scene.scene import Scene
 
-__all__ = ["ChunkCompute", "Protocol"]
+__all__ = ["ChunkCompute", "Options", "Protocol"]
 
 ChunkCompute = Callable[[np.ndarray], dict[str, np.ndarray]]
 """compute(points) -> per-point arrays of one chunk (points: rows of the plan it was made with)."""
+
+
+class Options(Mapping):
+    """A protocol's own fields of a scene (Scene.options): read-only, by key or as attributes."""
+
+    def __init__(self, values: Mapping[str, Any]) -> None:
+        object.__setattr__(self, "_values", MappingProxyType(dict(values)))
+
+    def __getitem__(self, name: str) -> Any:
+        return self._values[name]
+
+    def __getattr__(self, name: str) -> Any:
+        try:
+            return self._values[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError("a scene's options cannot change (dataclasses.replace the scene)")
+
+    def __iter__(self):
+        return iter(self._values)
+
+    def __len__(self) -> int:
+        return len(self._values)
+
+    def __repr__(self) -> str:
+        return f"Options({dict(self._values)!r})"
 
 
 class Protocol(ABC):
@@ -57,7 +88,23 @@ class Protocol(ABC):
     warm_up_timed: ClassVar[bool] = True
     """Whether ``sweep run`` loads the kernels before the chunk loop and reports how long that took."""
 
+    option_fields: ClassVar[Mapping[str, Any]] = MappingProxyType({})
+    """The protocol's own scene fields beyond those every scene has: name -> default. A scene holds them in
+    ``Scene.options`` (given as ``options={...}`` in Python, as top-level keys in a scene file), checked by
+    :meth:`make_options`, written into the canonical TOML by :meth:`toml_lines`. (The stop's and the driven scene's
+    own fields, trajectory_tau, t_obs, step, precision, perturbation and max_cycles, are Scene fields of their own,
+    kept for the users' code and files that name them.)"""
+
     # --- the scene ------------------------------------------------------------------------------------------------
+    def make_options(self, scene: Scene, given: Mapping[str, Any]) -> Options:
+        """The scene's options: ``given`` over the defaults of :attr:`option_fields`; InputError for a name the
+        protocol does not have. A protocol with fields to check overrides this (and calls it first)."""
+        unknown = sorted(set(given) - set(self.option_fields))
+        if unknown:
+            raise InputError(f"options {unknown} are not fields of protocol {self.name!r}; its fields: "
+                             f"{sorted(self.option_fields) or 'none'}")
+        return Options({**self.option_fields, **given})
+
     def supports(self, model: str, state_law: str) -> bool:
         """Whether the protocol runs ``model`` ("auto": both models) with ``state_law``."""
         wanted = ("quasistatic", "inertial") if model == "auto" else (model,)
@@ -68,8 +115,8 @@ class Protocol(ABC):
         """InputError for settings this protocol does not use or cannot run (the common checks are made)."""
 
     def toml_lines(self, scene: Scene) -> list[str]:
-        """The protocol's own lines of the scene's canonical TOML (after max_steps)."""
-        return []
+        """The protocol's own lines of the scene's canonical TOML (after max_steps): its options."""
+        return [f"{name} = {toml_value(value)}" for name, value in scene.options.items()]
 
     def time_resolved(self, scene: Scene) -> bool:
         """Whether values inside the transient are asked for."""
@@ -141,3 +188,16 @@ class Protocol(ABC):
     @abstractmethod
     def draw(self, ds: xr.Dataset, path: str | Path, variable: str | None = None) -> list[Path]:
         """The pictures of a file of this protocol (``variable``: that variable alone); returns the paths written."""
+
+
+def toml_value(value: Any) -> str:
+    """``value`` (a bool, number, string or a list of them, nested) in TOML, numbers as Python's repr (exact)."""
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, (int, float, np.integer, np.floating)):
+        return repr(value.item() if isinstance(value, np.generic) else value)
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, Mapping):
+        return "{" + ", ".join(f"{k} = {toml_value(v)}" for k, v in value.items()) + "}"
+    return "[" + ", ".join(toml_value(v) for v in value) + "]"

@@ -76,7 +76,8 @@ def _axis(name: str, values: Any) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Scene:
-    """What to study: protocol, friction parameters, the (K/M, V) grid, observables and accuracy.
+    """What to study: protocol, friction parameters, the (K/M, V) grid, observables and accuracy, and the protocol's own
+    fields (``options``).
 
     Parameters
     ----------
@@ -147,6 +148,9 @@ class Scene:
         ``K_over_M_c_simulated``, drawn on the maps next to the analytic line; sweep.analysis.hopf.with_simulated_line).
         Default False: the analytic line ``chi_c`` answers where the line is, and the simulation compiles and runs
         the driven kernel (~7 s to compile on first use, ~2 ms per velocity); True checks the analytic line.
+    options : mapping, optional
+        The protocol's own fields beyond the ones above (sweep.protocols.base.Protocol.option_fields; in a scene
+        file, top-level keys), checked by the protocol; held as a read-only record (its defaults filled in).
     """
 
     protocol: str
@@ -169,6 +173,7 @@ class Scene:
     state_law: str = "aging"
     simulated_hopf_line: bool = False
     axes: Mapping[str, Any] = field(default_factory=dict)
+    options: Mapping[str, Any] | None = None
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen dataclass)
@@ -209,6 +214,10 @@ class Scene:
         self._check_driven()
         self._check_model()
         protocol.check(self)
+        if self.options is not None and not isinstance(self.options, Mapping):
+            raise InputError(f"options must be a mapping {{name: value}} of the fields of protocol {self.protocol!r}, "
+                             f"got {type(self.options).__name__}")
+        set_("options", protocol.make_options(self, self.options or {}))
         if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, (int, np.integer)) or self.max_steps < 1:
             raise InputError(f"max_steps must be an integer >= 1, got {_plain(self.max_steps)!r}")
         if not isinstance(self.simulated_hopf_line, (bool, np.bool_)):
@@ -422,14 +431,14 @@ def _axis_from_toml(name: str, spec: Any) -> np.ndarray:
     raise InputError(f'{name}.spacing must be "log" or "linear", got {spacing!r}')
 
 
-SCENE_KEYS = ({f.name for f in fields(Scene)} - {"axes"}) | {"preset"} | set(EXTRA_AXES)
+SCENE_KEYS = ({f.name for f in fields(Scene)} - {"axes", "options"}) | {"preset"} | set(EXTRA_AXES)
 """Keys of a scene TOML: the Scene's fields (its extra axes as tables [A], [m1], [m2], [D0]) and ``preset``."""
 
 
 def _check_keys(cfg: Mapping[str, Any], also: frozenset[str] = frozenset()) -> None:
     """InputError naming the keys of a scene file that no command knows (a misspelt ``rtoll`` is never ignored);
     ``also``: the keys of the command reading it (``sweep hopf``: :data:`HOPF_KEYS`)."""
-    allowed = SCENE_KEYS | also
+    allowed = SCENE_KEYS | also | option_keys()
     unknown = set(cfg) - allowed
     if unknown:
         raise InputError(f"unknown key(s) {sorted(unknown)} in scene; allowed: {sorted(allowed)}")
@@ -439,14 +448,23 @@ HOPF_KEYS = frozenset({"bistable_band"})
 """Keys of a scene file that only ``sweep hopf`` reads (sweep.locate_hopf's options)."""
 
 
+def option_keys() -> frozenset[str]:
+    """The keys of a scene file that are a protocol's own fields (Protocol.option_fields), of every protocol."""
+    return frozenset(name for p in protocols.names() for name in protocols.get(p).option_fields)
+
+
 def scene_from_mapping(cfg: Mapping[str, Any]) -> Scene:
-    """Build a Scene from a parsed TOML mapping (same fields as :class:`Scene`, plus ``preset``)."""
+    """Build a Scene from a parsed TOML mapping (same fields as :class:`Scene`, plus ``preset``; the fields of its
+    protocol's options as top-level keys)."""
     _check_keys(cfg)
     for required in ("K_over_M", "V"):
         if required not in cfg:
             raise InputError(f"scene is missing the [{required}] axis table")
     params = _params_from(cfg)
     kwargs = {k: v for k, v in cfg.items() if k not in ("preset", "params", "K_over_M", "V", *EXTRA_AXES)}
+    options = {k: kwargs.pop(k) for k in option_keys() & set(kwargs)}
+    if options:
+        kwargs["options"] = options
     axes = {n: _axis_from_toml(n, cfg[n]) for n in EXTRA_AXES if n in cfg}
     if axes:
         kwargs["axes"] = axes
