@@ -1,5 +1,6 @@
 """A third protocol for tests/test_protocols.py: each point's reduced stiffness chi = K D0/(M g) times its own scene
-field ``scale``, "computed" chunk by chunk. It lives outside the package, as a user's protocol would, and plugs in through sweep.protocols.register."""
+field ``scale``, "computed" chunk by chunk. It lives outside the package, as a user's protocol would, and plugs in
+through sweep.protocols.register."""
 
 from __future__ import annotations
 
@@ -10,8 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from sweep.assemble.construct import assemble
-from sweep.errors import InputError
 from sweep.assemble.dataset import global_attrs, grid_coords, variable
+from sweep.errors import InputError
 from sweep.plan.plan import point_params
 from sweep.protocols.base import Protocol
 from sweep.status import Status, flag_attrs
