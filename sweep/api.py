@@ -61,7 +61,7 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     with prepare_run(scene, output, resume=resume, overwrite=overwrite, chunk_size=chunk_size, backend=backend,
                      workers=workers, scheduler=scheduler) as run:
         if backend == "dask":
-            warm_up_kernels(scene, run.plan)  # once, before the fan-out: the workers load them from numba's cache
+            warm_up_kernels(scene, run.plan, fan_out=True)  # before the fan-out: the workers load them from the cache
         return run.finish(progress, history or "sweep.run_sweep")
 
 
@@ -189,10 +189,11 @@ def _bytes_in(folder: Path) -> int:
     return sum(p.stat().st_size for p in folder.iterdir() if p.is_file()) if folder.is_dir() else 0
 
 
-def warm_up_kernels(scene: Scene, plan) -> None:
-    """Compile (or load from numba's disk cache) every kernel the scene uses, on one point each (its protocol's
-    Protocol.warm_up), and the driven kernel of the simulated Hopf line only where the scene asks for that line."""
-    protocols.get(scene.protocol).warm_up(scene, plan)
+def warm_up_kernels(scene: Scene, plan, fan_out: bool = False) -> None:
+    """Compile (or load from numba's disk cache) the kernels the scene uses, on one point each (its protocol's
+    Protocol.warm_up; ``fan_out``: before a dask fan-out, also those only some points may need), and the driven
+    kernel of the simulated Hopf line only where the scene asks for that line."""
+    protocols.get(scene.protocol).warm_up(scene, plan, fan_out)
     if scene.simulated_hopf_line:
         with warnings.catch_warnings():  # the scene's axes were checked; this is one of its velocities
             warnings.simplefilter("ignore", PlausibilityWarning)

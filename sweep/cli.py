@@ -179,7 +179,7 @@ def _run_to_file(scene, args: argparse.Namespace, warm: bool, picture=None):
         t_warm = time.perf_counter()
         if warm or dask:
             with timed("kernels"):  # says so before a first compile (empty numba cache) and when it takes long
-                warm_up_kernels(scene, run.plan)
+                warm_up_kernels(scene, run.plan, fan_out=dask)
         compile_s = time.perf_counter() - t_warm
         t0 = time.perf_counter()
         ds = run.finish(progress=None if not args.quiet else False, history=_history(), picture=picture)

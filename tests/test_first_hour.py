@@ -278,9 +278,12 @@ def test_the_compile_notice_names_only_the_kernel_families_of_the_scene(monkeypa
     import sweep.run.compile_notice as notice
 
     quasistatic = dataclasses.replace(sweep.default_scene(), model="quasistatic")
+    inertial = sweep.Scene(protocol="stop", params=sweep.presets["sample2"], K_over_M=[1e4], V=[1e-6],
+                           model="inertial")
     monkeypatch.setattr(notice, "cache_is_cold", lambda: True)
-    for scene, families in ((quasistatic, ["relaxed-slip engine"]),
-                            (sweep.default_scene(), ["relaxed-slip engine", "inertial stop"])):
+    # model "auto" compiles the inertial stop only in a chunk whose points need it (none on the default scene)
+    for scene, families in ((quasistatic, ["relaxed-slip engine"]), (sweep.default_scene(), ["relaxed-slip engine"]),
+                            (inertial, ["inertial stop"])):
         monkeypatch.setattr(notice, "_checked", False)
         caplog.clear()
         with caplog.at_level(logging.INFO, logger="sweep"):
@@ -414,6 +417,33 @@ for d in gc.get_objects():
     if isinstance(d, Dispatcher) and d.overloads and d.py_func.__module__.startswith("sweep."):
         print(d.py_func.__module__ + "." + d.py_func.__qualname__)
 """
+
+
+WARMED_UP = """
+import gc, sys
+from numba.core.dispatcher import Dispatcher
+import sweep
+from sweep.api import warm_up_kernels
+scene = sweep.default_scene()
+warm_up_kernels(scene, sweep.make_plan(scene), fan_out=sys.argv[1] == "fan_out")
+for d in gc.get_objects():
+    if isinstance(d, Dispatcher) and d.overloads and d.py_func.__module__.startswith("sweep."):
+        print(d.py_func.__module__ + "." + d.py_func.__qualname__)
+"""
+
+
+def test_the_warm_up_of_sweep_run_loads_only_the_kernels_every_point_uses():
+    """``sweep run``'s warm-up of the default scene (model "auto") loads the relaxed-slip lanes and no inertial
+    kernel: those compile in the chunk whose points first need them (none here). Before a dask fan-out (the workers
+    should load every kernel from the cache) the inertial stop kernels are loaded too."""
+    inertial = ("stop_inertial", "rosenbrock", "relax_batch", "relax_points")
+    compiled = {}
+    for how in ("threads", "fan_out"):
+        proc = subprocess.run([sys.executable, "-c", WARMED_UP, how], capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stderr
+        compiled[how] = proc.stdout.split()
+    assert compiled["threads"] and not [n for n in compiled["threads"] if any(k in n for k in inertial)]
+    assert [n for n in compiled["fan_out"] if any(k in n for k in inertial)], compiled["fan_out"]
 
 
 def test_a_stop_scene_compiles_only_the_kernels_its_model_needs():

@@ -148,8 +148,10 @@ class Protocol(ABC):
         """The kernel families (sweep.run.compile_notice.COLD_COMPILE_S) the scene compiles on first use."""
 
     @abstractmethod
-    def warm_up(self, scene: Scene, plan: Plan) -> None:
-        """Compile (or load from numba's cache) every kernel the scene uses, on one point each."""
+    def warm_up(self, scene: Scene, plan: Plan, fan_out: bool = False) -> None:
+        """Compile (or load from numba's cache) the kernels the scene uses, on one point each: those every run of
+        the scene calls, and with ``fan_out`` (before the chunks go to dask workers, which should load every kernel
+        from the cache rather than each compile it) also those only some points may need."""
 
     # --- the output -------------------------------------------------------------------------------------------------
     def journal_keeps(self, scene: Scene, plan: Plan) -> frozenset[str]:

@@ -143,12 +143,12 @@ def compiled_aside(code: str, wanted: bool = True) -> Iterator[None]:
 
 
 @contextmanager
-def inertial_stop_compiled_aside(scene) -> Iterator[None]:
-    """:func:`compiled_aside` of the inertial stop kernels, where the scene needs them beside another family (the
-    default scene: lanes ~6 s beside inertial ~13 s, on 2 cores)."""
-    families = kernel_families(scene)
+def inertial_stop_compiled_aside(scene, wanted: bool = True) -> Iterator[None]:
+    """:func:`compiled_aside` of the inertial stop kernels, where they are ``wanted`` beside another family of the
+    scene (lanes ~6 s beside inertial ~13 s, on 2 cores)."""
+    others = [family for family in kernel_families(scene) if family != "inertial stop"]  # compiled in this process
     with compiled_aside("from sweep.protocols.stop.model_choice import warm_up_models; warm_up_models()",
-                        "inertial stop" in families and len(families) >= 2):
+                        wanted and scene.model != "quasistatic" and bool(others)):
         yield
 
 

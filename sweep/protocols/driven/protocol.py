@@ -72,7 +72,7 @@ class DrivenProtocol(Protocol):
 
         return driven_families(scene.model)
 
-    def warm_up(self, scene: Scene, plan: Plan) -> None:
+    def warm_up(self, scene: Scene, plan: Plan, fan_out: bool = False) -> None:
         """One point per variant of the driven kernel the plan uses (quasi-static, inertial)."""
         from ...run.runner import chunk_task
 

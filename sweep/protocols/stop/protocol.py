@@ -124,20 +124,23 @@ class StopProtocol(Protocol):
         elif scene.model != "inertial":
             families.append("relaxed-slip engine" if scene.observables == ("xi_inf",) else
                             "time-resolved lanes" if samples_in_lanes(scene) else "time-resolved stop")
-        if scene.model != "quasistatic":
+        if scene.model == "inertial":  # with "auto", compiled in the chunk whose points first need it (warm_up)
             families.append("inertial stop")
         return families
 
-    def warm_up(self, scene: Scene, plan: Plan) -> None:
-        """The stop chunks' kernels, the inertial stop kernels only where the model policy can use them (on a cold
-        cache the two families compile side by side on two cores)."""
+    def warm_up(self, scene: Scene, plan: Plan, fan_out: bool = False) -> None:
+        """The stop chunks' kernels. The inertial stop kernels with model "inertial", and with ``fan_out`` where the
+        model policy can use them (on a cold cache the two families compile side by side on two cores); with model
+        "auto" in this process they compile in the chunk whose points first need them: most scenes need none
+        (the default scene: 0 of 20,000 points), and a first run then compiles the relaxed-slip lanes alone."""
         from ...run.compile_notice import inertial_stop_compiled_aside
         from .chunk import warm_up
         from .model_choice import warm_up_models
 
-        with inertial_stop_compiled_aside(scene):
+        inertial = scene.model == "inertial" or (fan_out and scene.model != "quasistatic")
+        with inertial_stop_compiled_aside(scene, inertial):
             warm_up(scene, plan)
-        if scene.model != "quasistatic":
+        if inertial:
             warm_up_models()
 
     # --- the output -------------------------------------------------------------------------------------------------
