@@ -159,6 +159,9 @@ def prepare_run(scene: Scene, output: str | os.PathLike | None = None, resume: b
     free space); the plan; the output's lock; the backend (a bad scheduler fails here, in seconds, before any
     journal exists); then the journal, created or, with ``resume``, checked chunk by chunk. The lock is held, and a
     dask cluster started here kept, until the ``with`` block ends. Arguments as in :func:`run_sweep`."""
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a sweep.Scene (sweep.Scene(protocol=..., params=..., K_over_M=..., V=...), "
+                        f"sweep.load_scene(path) or sweep.default_scene()), got {type(scene).__name__}")
     check_run_arguments(output, resume, overwrite, chunk_size, backend, workers, scheduler)
     warn_implausible(scene.K_over_M, scene.V)  # likely unit mistakes, before any work
     announce_if_cold(scene)  # logs (logger "sweep") that the kernels compile now, on a machine without numba's cache

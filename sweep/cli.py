@@ -365,6 +365,7 @@ def main(argv: list[str] | None = None) -> int:
     previous_sigint = _exit_on_ctrl_c_while_compiling()
     try:
         args = build_parser().parse_args(argv)
+        _check_numba_settings()
         with logging_configured(verbose=args.verbose, quiet=args.quiet):
             return args.func(args)
     except InputError as exc:
@@ -410,6 +411,15 @@ def _fail(message: str, code: int) -> int:
     """Print ``sweep: message`` on one line of stderr; return the exit code."""
     print(f"sweep: {message}", file=sys.stderr)
     return code
+
+
+def _check_numba_settings() -> None:
+    """InputError for a NUMBA_NUM_THREADS that numba would refuse when sweep's kernels load (with a traceback from
+    inside its import): it must be a whole number >= 1."""
+    threads = os.environ.get("NUMBA_NUM_THREADS")
+    if threads is not None and not (threads.strip().isdigit() and int(threads) >= 1):
+        raise InputError(f"NUMBA_NUM_THREADS must be a whole number >= 1 (the threads of the kernels; this machine "
+                         f"has {os.cpu_count()} cores), got {threads!r}: unset it or set e.g. NUMBA_NUM_THREADS=2")
 
 
 def entry_point() -> None:

@@ -87,3 +87,18 @@ def test_rosenbrock_is_for_the_relaxed_slip_only():
     with pytest.raises(InputError, match="relaxed slip only"):
         sweep.Scene(protocol="stop", params=sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0033, D0=0.7e-6),
                     K_over_M=[1e4], V=[1e-6], method="ros4", observables=("xi_inf", "t50"))
+
+
+def test_run_sweep_of_something_else_than_a_scene_names_scene():
+    with pytest.raises(TypeError, match=r"scene must be a sweep.Scene .* got dict"):
+        sweep.run_sweep({"protocol": "stop"})
+
+
+@pytest.mark.parametrize("threads", ["0", "-1", "two"])
+def test_a_bad_numba_thread_count_is_one_line_and_exit_2(threads, monkeypatch, capsys):
+    from sweep.cli import main
+
+    monkeypatch.setenv("NUMBA_NUM_THREADS", threads)
+    assert main(["run", "--dry-run"]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert "NUMBA_NUM_THREADS must be a whole number >= 1" in line and repr(threads) in line
