@@ -25,7 +25,7 @@ from .run.lock import output_lock
 from .run.runner import chunk_ranges, run_chunks
 from .run.size import check_fits, estimate_size
 from .scene.params import FrictionParams
-from .scene.plausibility import PlausibilityWarning, warn_implausible, warn_not_ok
+from .scene.plausibility import PlausibilityWarning, warn_implausible, warn_implausible_params, warn_not_ok
 from .scene.scene import Scene
 from .write.netcdf import NetCDFWriter, open_dataset
 from .write.targets import check_targets, write_failed
@@ -164,6 +164,7 @@ def prepare_run(scene: Scene, output: str | os.PathLike | None = None, resume: b
                         f"sweep.load_scene(path) or sweep.default_scene()), got {type(scene).__name__}")
     check_run_arguments(output, resume, overwrite, chunk_size, backend, workers, scheduler)
     warn_implausible(scene.K_over_M, scene.V)  # likely unit mistakes, before any work
+    warn_implausible_params(scene.params, scene.axes)
     announce_if_cold(scene)  # logs (logger "sweep") that the kernels compile now, on a machine without numba's cache
     size = estimate_size(scene, journaled=output is not None)
     check_fits(scene, size)

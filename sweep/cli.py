@@ -29,11 +29,12 @@ FIGURE_NAMES = ("fig2", "fig3a", "fig3b", "fig4a", "fig4b")
 def _cmd_run(args: argparse.Namespace) -> int:
     from .run.compile_notice import announce_if_cold
     from .run.size import check_fits, estimate_size
-    from .scene.plausibility import warn_implausible
+    from .scene.plausibility import warn_implausible, warn_implausible_params
     from .scene.scene import default_scene, load_scene
 
     scene = load_scene(args.config) if args.config else default_scene()
     warn_implausible(scene.K_over_M, scene.V)  # before any work, the dry run included
+    warn_implausible_params(scene.params, scene.axes)
     size = estimate_size(scene, journaled=True)
     if args.dry_run:
         return _dry_run(scene, size)

@@ -479,7 +479,11 @@ def _params_from(cfg: Mapping[str, Any]) -> FrictionParams:
     """FrictionParams from ``preset`` and/or a ``[params]`` table of a parsed TOML mapping."""
     if "preset" in cfg:
         if cfg["preset"] not in presets:
-            raise InputError(f"preset must be one of {sorted(presets)}, got {cfg['preset']!r}")
+            import difflib
+
+            close = difflib.get_close_matches(str(cfg["preset"]), list(presets), n=1)
+            raise InputError(f"preset must be one of {sorted(presets)}, got {cfg['preset']!r}"
+                             + (f": did you mean {close[0]!r}?" if close else ""))
         return presets[cfg["preset"]].replace(**cfg.get("params", {}))
     if "params" in cfg:
         try:
