@@ -11,8 +11,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
-USER_DOCS = [README, *(ROOT / "docs" / name for name in ("index.md", "user-guide.md", "cli.md", "physics.md", "design.md",
-                                                        "hopf-type.md", "gallery/index.md"))]
+USER_DOCS = [README, *(ROOT / "docs" / name for name in ("index.md", "user-guide.md", "cli.md", "physics.md",
+                                                        "design.md", "fit.md", "hopf-type.md", "gallery/index.md"))]
 """Pages for users: no dates, commit hashes or load averages (docs/benchmarks.md is where those belong)."""
 
 DATE = re.compile(r"\b20\d\d-\d\d-\d\d\b")
