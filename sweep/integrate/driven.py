@@ -142,8 +142,9 @@ _stiff_step = make_rodas3_step(inertial_system)
 def _make_advance(rhs, with_inertia: bool, variant: tuple[str, str]):
     """advance(stiff, y, h, p, K, ys, y_new, err, work) -> (done, ln xi' at y_new or NaN): one step of size h from
     y (rates in K[0]): Dormand-Prince (FSAL: its last stage is the rates at y_new, kept in K[-1]), or RODAS3 where
-    ``stiff`` (inertial variant only). Every kernel a factory builds is pinned to its ``variant`` (state law,
-    model): one whose closure holds an unpinned dispatcher misses numba's disk cache in every new process."""
+    ``stiff`` (inertial variant only) with its scratch ``work`` (a :class:`RodasWork` from ``scratch``). Every kernel
+    a factory builds is pinned to its ``variant`` (state law, model): one whose closure holds an unpinned dispatcher
+    misses numba's disk cache in every new process."""
     erk_step = make_erk_step(rhs, _size(with_inertia), DP5)
 
     @njit(inline="always", fastmath=FAST, error_model="numpy")
