@@ -65,10 +65,13 @@ import sweep  # noqa: E402
 import sweep.api  # noqa: E402
 import sweep.cli  # noqa: E402
 import sweep.plot.files  # noqa: E402
+import sweep.protocols.stop.chunk  # noqa: E402
 import sweep.protocols.stop.engine  # noqa: E402
 import sweep.protocols.stop.model_choice  # noqa: E402
+import sweep.protocols.stop.schema  # noqa: E402
 import sweep.run.journal  # noqa: E402
 import sweep.run.runner  # noqa: E402
+import sweep.write.netcdf  # noqa: E402
 
 DEFAULT_OUT = HERE / "results" / "end_to_end.json"
 CHUNK_THREAD = "sweep-chunk"
@@ -135,15 +138,15 @@ def instrumented(watch: Stopwatch):
         (sweep.protocols.stop.engine, "stop_batch", "kernel"),
         (sweep.protocols.stop.engine, "slip_batch", "kernel"),
         (sweep.protocols.stop.model_choice, "relax_points", "kernel"),
-        (sweep.run.runner, "choose_stop_models", "model_choice"),
-        (sweep.run.runner, "run_points", "chunk_other"),
+        (sweep.protocols.stop.chunk, "choose_stop_models", "model_choice"),
+        (sweep.protocols.stop.chunk, "run_points", "chunk_other"),
         (sweep.run.journal.Journal, "write", "journal"),
         (sweep.api, "run_chunks", "consolidate"),
         (sweep.api, "make_plan", "planning"),
         (sweep.api, "prepare_run", "prepare_other"),
         (sweep.api, "warm_up_kernels", "warm_up"),
-        (sweep.api, "build_dataset", "dataset"),
-        (sweep.api, "write", "netcdf"),
+        (sweep.protocols.stop.schema, "build_dataset", "dataset"),
+        (sweep.write.netcdf, "write", "netcdf"),
         (sweep.plot.files, "plot_file", "png"),
     ]
     engine = sweep.protocols.stop.engine
@@ -160,7 +163,7 @@ def instrumented(watch: Stopwatch):
                 setattr(owner, name, _timed_background(watch, original, key))
             else:
                 setattr(owner, name, watch.wrap(original, key))
-        sweep.protocols.stop.engine.lane_kernels = lambda *a, **k: _lane_kernels_timed(watch, lane_kernels, *a, **k)
+        engine.lane_kernels = lambda *a, **k: _lane_kernels_timed(watch, lane_kernels, *a, **k)
         engine.adaptive_lane_kernels = lambda *a, **k: _lane_kernels_timed(watch, adaptive_kernels, *a, **k)
         yield
     finally:

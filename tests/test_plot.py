@@ -138,7 +138,7 @@ def test_hopf_picture_both_ways(hopf_file):
     ds = sweep.open(hopf_file)
     fig, ax = plt.subplots()
     draw_hopf(ax, ds)
-    assert "linear theory (eq. 3)" in labels(ax)
+    assert "linear theory, direct (l1 < 0)" in labels(ax)  # sample2's line is direct wherever it exists (l1 < 0)
     assert "located by simulation: supercritical" in labels(ax)
     assert any(t.startswith("no Hopf line") for t in labels(ax))
     patch = [p for p in ax.patches if p.get_label().startswith("no Hopf line")][0]

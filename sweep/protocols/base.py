@@ -39,10 +39,15 @@ class Options(Mapping):
         return self._values[name]
 
     def __getattr__(self, name: str) -> Any:
+        if name.startswith("_"):  # (not a field: also keeps a half-built copy from recursing)
+            raise AttributeError(name)
         try:
             return self._values[name]
         except KeyError:
             raise AttributeError(name) from None
+
+    def __reduce__(self):  # pickled (a dask worker's scene) by its values
+        return Options, (dict(self._values),)
 
     def __setattr__(self, name: str, value: Any) -> None:
         raise AttributeError("a scene's options cannot change (dataclasses.replace the scene)")
