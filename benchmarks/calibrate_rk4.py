@@ -14,7 +14,7 @@ the true
 error (the plan assumes it is ~ERROR_GAIN).
 Points: 400 random (chi/A 1e-2..1e3; m2/A = 0 with m1/A 0.3..3, or m2/A 1e-3..3 with mu1/A -3..3) plus a
 structured set of corners (--quick: 40 random, two steps). Reference per point: the same engine at h = 0.008
-(error ~1e-12, i.e. far below the errors measured; tests/test_accuracy.py checks the rule against the
+(error ~1e-12, i.e. far below the errors measured; tests/plan/test_accuracy.py checks the rule against the
 independent scipy reference).
 
 Changed in the port to the current engine: the old script called the scalar per-point kernel with rtol 1e-12

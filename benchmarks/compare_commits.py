@@ -21,7 +21,7 @@ this script is run from (the same case parameters go to both trees). The parent 
             Trees whose Scene has ``simulated_hopf_line`` (off by default there) run with it on, as the older trees
             always did, so that both compile and run the same work.
 2. numbers  xi_inf (and status, steps) at rtol 1e-6 on the default scene (model quasistatic and auto) and on
-            every case of tests/cases.py (solve_point as tests/test_accuracy.py calls it, model auto and
+            every case of tests/cases.py (solve_point as tests/plan/test_accuracy.py calls it, model auto and
             quasistatic; and quasi-static with t50/t90, the per-point path), saved per tree as .npz and
             compared: max relative difference (NaN == NaN), statuses that differ (PASS: <= 1e-12, none), steps
             that differ (reported only).

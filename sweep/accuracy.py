@@ -51,7 +51,7 @@ HANDOVER_FRACTION = 0.1
 """The inertial term is handed over to the quasi-static form once below this fraction of rtol, now and (by the
 slaved bound) later (docs/physics.md 3a): the neglected term then shifts xi_inf by <= HANDOVER_FRACTION rtol times
 the slip still to come. Moving the threshold x100 either way moves xi_inf by < 6e-15 on the reference's cases
-(tests/test_reference_inertial.py)."""
+(tests/integrate/test_reference_inertial.py)."""
 
 # ---------------------------------------------------------------------------------------------------------------
 # Adaptive per-point solutions whose error is estimated from a pair of tolerances (inertial stop, slip-law stop)
@@ -65,7 +65,7 @@ tolerance.)"""
 GENERAL_ESTIMATE_GAIN = 2.0
 """Estimate of the general (slip-law) stop path = GENERAL_ESTIMATE_GAIN x max(|x1 - x2|, |x2 - x3|) of its runs at
 rtol/TIGHTER^(1, 2, 3), x2 returned (sweep/integrate/stop_slip.py): as the step ladder's non-asymptotic estimate
-(CONSERVATIVE_GAIN below). On tests/test_slip_law.py's cases at rtol 1e-6 and 1e-9 it bounds the true error and
+(CONSERVATIVE_GAIN below). On tests/integrate/test_slip_law.py's cases at rtol 1e-6 and 1e-9 it bounds the true error and
 stays within 100x of it."""
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -97,12 +97,12 @@ C_UNSTABLE = 2.0e-3
 """Bound on the RK4 error constant where steady sliding is unstable (chi <= mu1)."""
 TIME_RESOLVED_FACTOR = 30.0
 """Time-resolved observables (values inside the transient, not only its limit) have error constants up to
-~6x those of xi_inf (tests/test_accuracy.py); when they are asked for, C is multiplied by this factor."""
+~6x those of xi_inf (tests/plan/test_accuracy.py); when they are asked for, C is multiplied by this factor."""
 H_MAX = 0.7
 """Upper bound on the (coarse) step in sigma (keeps RK4 stable along the slow creep manifold)."""
 CTRL_TOL_FACTOR = {"dp5": 0.05, "dop853": 0.5}
 """Local tolerance of the adaptive controller per unit rtol, such that the error estimate of the returned (coarse)
-solution stays below rtol: at most 0.4 rtol on tests/test_error_estimates.py's table at rtol 1e-3..1e-9, relaxed slip
+solution stays below rtol: at most 0.4 rtol on tests/integrate/test_error_estimates.py's table at rtol 1e-3..1e-9, relaxed slip
 and time-resolved observables (dp5 was 0.2 while the fine solution was returned; dop853's embedded fifth-order
 estimate overstates its eighth-order error increasingly as rtol falls: 0.4 rtol at 1e-3, 0.003 rtol at 1e-9)."""
 AUTO_METHOD = (("rk4", 2e-4), ("dp5", 0.0))
@@ -185,7 +185,7 @@ def lane_control_tolerance(rtol: float, scale: float = 1.0) -> float:
 SAMPLED_TOL_SCALE = 0.5
 """``scale`` of :func:`lane_control_tolerance` for the sampled lanes (sweep/integrate/lanes_sampled.py): the rule
 before the relaxed-slip lanes' was loosened, as calibrated for samples. With the looser one, one slip_at sample's
-estimate fell below its true error at rtol 1e-3 (tests/test_lanes_sampled.py: 3.98e-11 against 4.69e-11, case
+estimate fell below its true error at rtol 1e-3 (tests/integrate/test_lanes_sampled.py: 3.98e-11 against 4.69e-11, case
 g_chiA100_mA1), and the samples' speed was not measured."""
 
 
@@ -221,7 +221,7 @@ bound at TAIL_RTOL: default scene (model "quasistatic", 1 thread, ``execute``) 1
 1.52 -> 1.35 us at rtol 1e-3, 41.0 -> 39.9 and 4.16 -> 4.02 us at 1e-9; its costly corner 23.0 -> 21.1 and 2.65 ->
 2.34 us at 1e-3. A tail bound tied to the tolerance instead (TAIL_SAFETY rtol |xi|, as in the fixed-step lanes) saves
 a step more but dominates the estimate where the true error is far below the tolerance (it is then no longer within
-100x of the true error: tests/test_error_estimates.py)."""
+100x of the true error: tests/integrate/test_error_estimates.py)."""
 TAIL_TIGHTENING = 0.01
 """Samples beyond the transient come from the closed-form continuation once E < TAIL_SAFETY TAIL_TIGHTENING rtol."""
 TAU_INTEGRATED = 1e12
@@ -267,7 +267,7 @@ FIRST_ORDER_TRUST = 4.0
 time gamma/A short against the fastest time of the quasi-static stop, its stiff start A/(chi + |mu1|). Measured
 against the inertial model over chi/A 0.1..1e3, mu1/A -4..10, m2/A 0..2 (true gap / estimate; both at rtol 1e-9):
 0.81..1.33 at tau = 2, 0.75..1.49 at 3, 0.70..1.66 at 4, 0.66..1.83 at 5 (47 points per value,
-tests/test_stop_inertial.py); an earlier sweep of 230 points per value gave 0.80..1.17 at 1, 0.70..1.33 at 2,
+tests/protocols/test_stop_inertial.py); an earlier sweep of 230 points per value gave 0.80..1.17 at 1, 0.70..1.33 at 2,
 0.63..1.49 at 3, 0.58..1.66 at 4. The expansion fails outright far beyond (down to 1e-6 at chi/A = 1e3,
 gamma/A = 1, tau = 1e3, where the slider rebounds inertially); there the gap is measured by solving the point with
 inertia. (Trusted only up to tau = 2 before, the default scene solved 27 points with inertia, tau 2.03..2.86, all

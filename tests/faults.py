@@ -1,4 +1,4 @@
-"""Fault injection for the integrity tests (tests/test_integrity.py): damage a journal on disk, or make a run's writes
+"""Fault injection for the integrity tests (tests/run/test_integrity.py): damage a journal on disk, or make a run's writes
 fail the way a full disk, a read-only folder or a folder put in the way make them fail.
 
 In this process: :func:`interrupt_after` (a journaled run stopped by Ctrl-C after some chunks, as a killed run

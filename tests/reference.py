@@ -40,8 +40,8 @@ dmu(u) = mu1 u + m2 u^2, so the slip still to come after the horizon is
 the bound is not met at the end. The remaining tail is then *added* to xi_end (it is the leading-order
 correction; its own error is relative O(xi' psi, psi/tau - 1), i.e. utterly negligible) and reported in
 ``tail``: it is < 1e-14 relative in every case we run, so xi_inf carries the integrator's error only
-(< 1e-13 relative: against the m2 = 0 closed form in tests/test_reference.py and, over chi/A 1e-5..1e4 and
-m1/A 0.1..10, in tests/test_extremes.py; DOP853 and Radau agree to 1e-13 on the case table. The engine's error
+(< 1e-13 relative: against the m2 = 0 closed form in tests/integrate/test_reference.py and, over chi/A 1e-5..1e4 and
+m1/A 0.1..10, in tests/protocols/test_extremes.py; DOP853 and Radau agree to 1e-13 on the case table. The engine's error
 estimates are checked down to rtol 1e-9 with an atol floor of 1e-12, so the reference must be well below both).
 
 No finite limit (docs/physics.md 6: m2 < 0, or m2 = 0 with mu1 <= 0): ``finite`` is False, ``xi_inf`` is NaN and

@@ -43,7 +43,7 @@ and then |p| <= eps (1 + O(eps)) for ever after (the value alone would not do: p
 initial layer of thickness gamma/A and can oscillate when gamma/A is large). After the hand-over the quasi-static
 reference continues from (xi, u) at that S (``reference_stop_from``), including its closed-form tail. Neglecting
 p changes the velocity by a factor e^p, so the hand-over moves xi_inf by at most ~eps times the slip still to
-come (tests/test_reference_inertial.py checks that moving eps by 100x either way changes xi_inf by < 1e-12).
+come (tests/integrate/test_reference_inertial.py checks that moving eps by 100x either way changes xi_inf by < 1e-12).
 
 Accuracy: xi_inf moves by < 4e-14 relative between rtol 1e-11, 1e-12 and 1e-13 and by < 6e-15 with eps x100 or
 /100 (gamma/A 1e-3..10, sample2 at 1 and 100 um/s, chi/A = 2 mu1/A = 1.5). Cost: 3000-8000 Radau steps, 0.5-1.5 s.

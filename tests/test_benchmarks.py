@@ -96,6 +96,7 @@ def test_every_script_has_a_smoke_run():
     assert scripts() == sorted(KEYS)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", [n for n in sorted(KEYS) if n != "peers"])
 def test_script_runs(name, tmp_path):
     result = run_script(name, tmp_path)

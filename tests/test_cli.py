@@ -37,6 +37,7 @@ def config(tmp_path):
     return path
 
 
+@pytest.mark.slow
 def test_run_plot_info(config, tmp_path):
     out = tmp_path / "res" / "out.nc"
     proc = sweep_cli("run", str(config), "-o", str(out), cwd=tmp_path)

@@ -21,6 +21,7 @@ COMMIT = re.compile(r"\b(?=[0-9a-f]*[a-f])(?=[0-9a-f]*\d)[0-9a-f]{7,40}\b")
 LOAD = re.compile(r"\bload(avg|[ _]average|\s*~?\s*\d)", re.IGNORECASE)
 
 
+@pytest.mark.slow
 def test_whole_documentation_builds_without_warnings(tmp_path):
     pytest.importorskip("sphinx", reason="the [docs] (and [test]) extra installs sphinx")
     pytest.importorskip("myst_parser", reason="the [docs] (and [test]) extra installs myst-parser")

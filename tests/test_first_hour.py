@@ -66,6 +66,7 @@ def _write_kind(kind: str, folder: Path) -> Path:
     return sweep.save(sweep.run_sweep(scene, progress=False), folder / f"{kind}.nc")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["stop", "driven", "hopf", "figure"])
 def test_info_and_plot_handle_every_file_sweep_writes(tmp_path, kind):
     path = _write_kind(kind, tmp_path)
@@ -144,6 +145,7 @@ def test_a_journal_without_chunks_does_not_block_a_new_run(tmp_path):
     assert journal_path(tmp_path / "o.nc").is_dir()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("delay", [4.0, 8.0])
 def test_ctrl_c_while_compiling_is_one_line_and_exit_130(tmp_path, delay):
     """An empty numba cache (NUMBA_CACHE_DIR): the kernels compile for tens of seconds; Ctrl-C in that time (an
@@ -179,6 +181,7 @@ def test_api_messages_print_plain_numbers():
 UM_AS_M = "preset = \"sample2\"\n[K_over_M]\nstart = 1e3\nstop = 1e6\nnum = 4\n[V]\nstart = 0.1\nstop = 100\nnum = 3\n"
 
 
+@pytest.mark.slow
 def test_v_in_um_per_s_is_warned_before_any_work_and_a_failed_run_exits_1(tmp_path):
     (tmp_path / "um.toml").write_text(UM_AS_M)
     proc = sweep_cli("run", "um.toml", "--dry-run", "-o", "um.nc", cwd=tmp_path)
@@ -235,6 +238,7 @@ def test_first_run_on_an_empty_cache_says_it_compiles_before_anything_else(tmp_p
     assert waited < 10  # ~0.3 s when idle; the machine is shared
 
 
+@pytest.mark.slow
 def test_verbose_goes_through_the_sweep_logger(tmp_path):
     """(-q, warnings and errors only: test_v_in_um_per_s_is_warned_before_any_work_and_a_failed_run_exits_1.)"""
     (tmp_path / "s.toml").write_text(SMALL)
@@ -446,6 +450,7 @@ def test_the_warm_up_of_sweep_run_loads_only_the_kernels_every_point_uses():
     assert [n for n in compiled["fan_out"] if any(k in n for k in inertial)], compiled["fan_out"]
 
 
+@pytest.mark.slow
 def test_a_stop_scene_compiles_only_the_kernels_its_model_needs():
     """Every kernel compiled (or loaded from numba's cache) in a fresh process after a stop scene: the quasi-static
     model uses the relaxed-slip lanes and none of the driven or inertial kernels; "auto" at most one lane kernel
@@ -499,6 +504,7 @@ print(" ".join(sorted(set(compiled))))
 """
 
 
+@pytest.mark.slow
 def test_a_second_process_loads_every_kernel_from_numba_cache():
     """A kernel whose cache key changes from process to process (a factory-built kernel holding a dispatcher of
     random identity, sweep/jitcache.py) compiles again in every new process: seconds lost on every run. The first

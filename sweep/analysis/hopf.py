@@ -19,7 +19,7 @@ The bifurcation type is decided from simulations, never assumed:
   line, not at 0.4 %);
 * degenerate: no limit cycle on either side: just below the line a small start runs away, just above it a large
   start decays (quasi-static m2 = 0, whose orbits at the line are neutral; the located line is a bracket, so the
-  neutral orbits themselves are tested at the exact line in tests/test_driven.py);
+  neutral orbits themselves are tested at the exact line in tests/integrate/test_driven.py);
 * undetermined: none of these (e.g. a slow transient left undecided); the type is not guessed.
 
 Next to it, the type from the normal form (sweep/analysis/lyapunov.py, docs/hopf-type.md): the first Lyapunov

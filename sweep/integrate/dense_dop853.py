@@ -10,7 +10,7 @@ With K[0..11] the step's stages, K[12] the derivative at its end and K[13..15] t
 
 with F0 = y1 - y0, F1 = h K[0] - F0, F2 = 2 F0 - h (K[12] + K[0]) and F[3 + r] = h sum_j D[r][j] K[j].
 The coefficients are those of scipy.integrate._ivp.dop853_coefficients (copied: that module is private);
-tests/test_lanes_sampled.py checks the stages 0..11 against the tableau of sweep.integrate.solvers.
+tests/integrate/test_lanes_sampled.py checks the stages 0..11 against the tableau of sweep.integrate.solvers.
 """
 
 EXTRA_A = {  # stage -> {j: a_sj}

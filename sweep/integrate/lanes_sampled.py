@@ -251,7 +251,7 @@ class SampledRuns(NamedTuple):
     iterations, sweep.fit.stack) the run costs ~0.6x and everything of the twin (its relaxed slip and samples) is
     NaN: no estimate can be formed. The run's numbers are those it has beside its twin, except where the twin's
     exponent rejected an attempt (the attempt's largest exponent spans both) or the twin's E delayed the switch to
-    the closed-form continuation (tests/test_lanes_sampled.py)."""
+    the closed-form continuation (tests/integrate/test_lanes_sampled.py)."""
 
     point: np.ndarray
     row: np.ndarray

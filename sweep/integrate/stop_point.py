@@ -27,7 +27,7 @@ instead, its error need not exceed the fine run's; a bound on the fine run's err
 |contributions| is added (:func:`cancelled`, and :func:`crossing_error` for t50/t90). Each run's closed-form tail
 error bound is added (negligible: the per-point path integrates until it is below TAIL_SAFETY (atol + TAIL_RTOL
 |xi|)), and for samples taken from the closed-form continuation its bound
-(:func:`sweep.integrate.models.stop.continuation_error`). On tests/test_error_estimates.py's table the estimate is
+(:func:`sweep.integrate.models.stop.continuation_error`). On tests/integrate/test_error_estimates.py's table the estimate is
 1.2x..50x the true error for every method at rtol 1e-3..1e-9 (t50/t90 up to 130x where the two shares of their
 error cancel). The price is accuracy: the returned solution is the less accurate of the two, so the step rules must
 make the coarse run meet rtol (``CTRL_TOL_FACTOR`` of :mod:`sweep.plan.plan` for the adaptive methods; rk4 per point,
@@ -271,7 +271,7 @@ def error_norm(ex, es, et, xi, xi1, s1, tau1, ctrl_tol, atol, with_tau):
     to |s| (as before; still so early on, s < 1) let u drift by ctrl_tol |s| per step where s >> u: in the costly
     corner (chi/A = 1e-5, mu1/A = -1, m2/A = 0.05, s ~ xi ~ 5e5, u ~ 10) dop853 crossed the fold of the creep
     manifold and the whole fall-off in one step of 10 in sigma, 1.35e-6 off at rtol 1e-6 with status ok and an
-    estimate 28x too small, and 0.76 off at rtol 1e-4 (tests/test_extremes.py); with u weighted by max(1, |u|)
+    estimate 28x too small, and 0.76 off at rtol 1e-4 (tests/protocols/test_extremes.py); with u weighted by max(1, |u|)
     dp5 and dop853 are within 1e-3 rtol there at rtol 1e-4..1e-8 (at up to 2x the steps in the corners at
     rtol 1e-9, where the creep manifold's stability limits the steps).
     When time-resolved observables are asked for, tau is a third component, relative: the error of psi at a given

@@ -9,7 +9,7 @@ where xi is xi_inf. Each point is solved at local tolerances rtol/TIGHTER, rtol/
 (sweep/accuracy.py): the middle value is returned with the estimate GENERAL_ESTIMATE_GAIN x the larger difference to
 its neighbours. (The pair alone, |x(rtol/10) - x(rtol/100)|, underestimated where the runs take a few tens of
 steps and their errors are not yet proportional to the tolerance: 0.43x the true error at chi/A = 8.5,
-mu1/A = -0.24, m2/A = 0.12, rtol 1e-6; tests/test_slip_law.py.) None of the aging law's fast paths (one
+mu1/A = -0.24, m2/A = 0.12, rtol 1e-6; tests/integrate/test_slip_law.py.) None of the aging law's fast paths (one
 state, closed-form tail, lanes, step ladder) applies.
 """
 

@@ -19,7 +19,7 @@ of its rtol (sweep.accuracy.AUTO_METHOD). The fixed-step rules:
   mu1/A -3..3, m2/A 0..3 (benchmarks/calibrate_rk4.py): C_STABLE where steady sliding is stable (chi > mu1; measured
   max 4.4e-4 as h -> 0, 7.4e-4 at h = 0.7) and C_UNSTABLE on the stick-slip side, where the stop starts on an
   unstable fixed point and the error constant is ~3x larger (measured max 1.7e-3); C is multiplied by
-  TIME_RESOLVED_FACTOR when values inside the transient are asked for; tests/test_accuracy.py checks the rule
+  TIME_RESOLVED_FACTOR when values inside the transient are asked for; tests/plan/test_accuracy.py checks the rule
   against an independent scipy reference.
 
 Every point stops when its closed-form tail is accurate to 0.1 * (rtol xi + atol), so its number of steps follows

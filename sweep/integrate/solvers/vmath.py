@@ -6,7 +6,7 @@ a Taylor polynomial in r (degree 13 / 7: truncation below 2e-16 / 5e-9 relative,
 built from its bits. The polynomial is 1 + r (1 + r q(r)) with q in Estrin's scheme (powers r^2, r^4, r^8):
 about 6 dependent operations instead of Horner's 13, which matters because a stage of the lane kernels is
 latency-bound (3.55 -> 2.84 ns per stage evaluation of RK4 in lanes), and the O(1) terms are added last so
-that the result stays within one ulp (tests/test_vmath.py). A loop over lanes calling them compiles to
+that the result stays within one ulp (tests/integrate/test_vmath.py). A loop over lanes calling them compiles to
 AVX2/AVX-512 code (12x libm per value, measured on a loop of 1e6 values; benchmarks/work_precision.py measures
 the kernels).
 

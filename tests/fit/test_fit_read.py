@@ -1,5 +1,5 @@
 """sweep.fit.read_data: netCDF (units in attributes) and CSV (units in a '#' header) in SI units; refusals in one
-line naming the file and the variable. No engine run here (the fits from files are in tests/test_fit_cli.py)."""
+line naming the file and the variable. No engine run here (the fits from files are in tests/fit/test_fit_cli.py)."""
 
 from __future__ import annotations
 

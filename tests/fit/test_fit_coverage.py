@@ -1,5 +1,5 @@
 """Coverage of the 95 % intervals with the noise estimated (noise=None, issue 37), over noise draws of data made by
-the independent scipy reference (tests/fit_reference.py), as tests/test_fit.py does with the noise given: relaxed
+the independent scipy reference (tests/fit_reference.py), as tests/fit/test_fit.py does with the noise given: relaxed
 slips and relaxation curves, each draw its own sample, all fitted in one call.
 
 With N draws the coverage of a 95 % interval is binomial: sd sqrt(0.95 x 0.05/N) = 0.034 for N = 40, so 0.85 is

@@ -52,6 +52,7 @@ def test_a_4d_sweep_over_A_and_m1_is_the_2d_sweeps_bit_for_bit():
     assert_slices_are_the_2d_sweeps(ds, axes)
 
 
+@pytest.mark.slow
 def test_the_relaxed_slip_of_an_nd_sweep_matches_the_scipy_reference():
     """Points of a (K/M, V, A, m1, m2, D0) sweep against tests/reference.py (rtol 1e-13), within 2 x the sweep's
     rtol."""

@@ -93,6 +93,7 @@ def test_inertial_oscillations_follow_the_cubic(gamma_over_A, chi_over_chi_c):
     assert out["growth_rate"] == pytest.approx(pair.real, rel=2e-3, abs=1e-6)
 
 
+@pytest.mark.slow
 def test_inertial_stick_slip_with_stiff_stick_phases_matches_scipy_radau():
     """Deep stick-slip with inertia at gamma/A = 1e-2 (chi = mu1/2, m2 > 0): the stick phases are stiff (rate
     A/(gamma xi'), xi' down to ~e^-10), where the kernel switches to RODAS3. The limit cycle's amplitude and period

@@ -7,7 +7,7 @@ easy and stiff points; every method (rk4, dp5, dop853) at rtol 1e-4, 1e-6, 1e-8.
 The acceptance rule, for every point:
 
 * status ok: xi_inf is finite, |xi_inf - ref| <= rtol |ref| + atol, and the error estimate bounds the true error,
-  |xi_inf - ref| <= max(xi_inf_error, atol) (the contract of tests/test_error_estimates.py);
+  |xi_inf - ref| <= max(xi_inf_error, atol) (the contract of tests/integrate/test_error_estimates.py);
 * any other status is an answer too (max_steps, step_underflow, nonfinite, no_finite_limit, error_above_tol):
   it says why there is no trusted value; the statuses met are recorded (pytest -s prints them);
 * never NaN or inf with status ok, never an exception that stops the sweep, and no floating-point exception in
@@ -270,6 +270,7 @@ MATRICES = {"m2zero": m2zero_points, "m2pos": m2pos_points}
 """The two matrices: m2 = 0 against the closed form, m2 > 0 (mu1 of both signs) against the scipy reference."""
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rtol", RTOLS)
 @pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("matrix", MATRICES)
@@ -330,6 +331,7 @@ def test_no_finite_limit_is_a_status_with_nan(method, m1_over_A, m2_over_A):
 
 # --- grids mixing easy and stiff points -----------------------------------------------------------------------
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ("auto",) + METHODS)
 def test_mixed_grid_every_point(method):
     """One scene whose grid spans K/M over 8 decades (chi/A 3e-5..3e3) and mu1(V)/A from 6 to -4.7 (sample2's

@@ -179,7 +179,7 @@ def test_no_line_where_mu1_is_not_positive():
 
 def test_inertial_m2_zero_line_changes_type_and_tends_to_zero_without_inertia():
     """Inverted (l1 > 0) at small gamma/A, direct at large, l1 -> 0 like gamma/A as gamma/A -> 0 (the quasi-static
-    centre): the sign the simulations of tests/test_hopf.py found at gamma/A = 0.01 and 1."""
+    centre): the sign the simulations of tests/analysis/test_hopf.py found at gamma/A = 0.01 and 1."""
     g = np.array([1e-4, 1e-3, 1e-2, 1.0])
     l1, err, _ = reduced_l1(A_RED, 0.0, g)
     assert np.all(l1[:3] > 1e3 * err[:3]) and l1[3] < -1e3 * err[3]
@@ -195,6 +195,7 @@ def _stationary_amplitude(a, b, g, d, law="aging"):
 
 @pytest.mark.parametrize("a, b, g, law", [(1.7, 0.4, 0.0, "aging"), (1.7, 0.4, 0.0, "slip"),
                                           (A_RED, 0.0, 1.0, "inertial")])
+@pytest.mark.slow
 def test_limit_cycle_amplitude_follows_the_normal_form_on_the_direct_side(a, b, g, law):
     """Just below a direct line the driven simulation's stationary stretch amplitude is sqrt(c d), c the normal
     form's coefficient (lyapunov_line.amplitude_coefficient), within 10 % at d = 1e-3 and 4e-3."""

@@ -87,6 +87,7 @@ np.savez(sys.argv[1], **{name: ds[name].values for name in ("xi_inf", "xi_inf_er
 """
 
 
+@pytest.mark.slow
 def test_a_kernel_compiled_in_the_process_gives_the_bits_of_one_loaded_from_the_cache(tmp_path):
     """A first run on an empty numba cache (compiling) and a second one (loading what the first cached) give the same
     bits: a kernel whose callees ran as compiled on their own in the first process and as optimised into their caller
@@ -94,7 +95,7 @@ def test_a_kernel_compiled_in_the_process_gives_the_bits_of_one_loaded_from_the_
     disagreed with the run they continue."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
     for name in ("cold", "warm"):
-        subprocess.run([sys.executable, "-c", COLD_WARM, str(tmp_path / f"{name}.npz"), str(Path(__file__).parent)],
+        subprocess.run([sys.executable, "-c", COLD_WARM, str(tmp_path / f"{name}.npz"), str(Path(__file__).parents[1])],
                        env=env, check=True, timeout=600)
     cold, warm = np.load(tmp_path / "cold.npz"), np.load(tmp_path / "warm.npz")
     for name in cold.files:
@@ -205,6 +206,7 @@ def _wait_for_chunks(out: Path, count: int, proc, timeout: float = 120.0) -> Non
         time.sleep(0.05)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT], ids=["SIGKILL", "Ctrl-C"])
 def test_killed_or_interrupted_cli_run_resumes_to_the_uninterrupted_file(tmp_path, sig, driven_40_reference):
     """`sweep run` killed (SIGKILL) or interrupted (Ctrl-C: exit 130, a clear message) mid-sweep keeps its
@@ -240,6 +242,7 @@ def test_killed_or_interrupted_cli_run_resumes_to_the_uninterrupted_file(tmp_pat
 
 @pytest.mark.parametrize("make, workers, size", [(stop_scene, 2, 29), (driven_scene, 2, 29), (stop_scene, 1, 50)],
                          ids=["stop", "driven", "stop-1-worker"])
+@pytest.mark.slow
 def test_dask_backend_gives_bitwise_the_same_numbers(make, workers, size):
     """A LocalCluster of one-thread workers, another chunking: the same numbers as the threads backend."""
     scene = make()
@@ -262,6 +265,7 @@ def test_dask_workers_run_one_numba_thread_each():
         assert {w["nthreads"] for w in client.scheduler_info()["workers"].values()} == {1}
 
 
+@pytest.mark.slow
 def test_sweep_run_on_an_existing_cluster_started_elsewhere(tmp_path):
     """`sweep run --scheduler ADDRESS` on a cluster of separate processes (`dask scheduler`, `dask worker` with one
     thread and NUMBA_NUM_THREADS=1, as a user would start them): the same file as the threads backend."""
@@ -293,6 +297,7 @@ def test_sweep_run_on_an_existing_cluster_started_elsewhere(tmp_path):
             proc.wait(timeout=60)
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_sweep_is_retried_and_the_run_completes(tmp_path, driven_40_reference):
     """SIGKILL of one dask worker process while chunks are in flight: the nanny restarts it, dask reruns its
     chunks, and the journaled run completes to the same numbers."""

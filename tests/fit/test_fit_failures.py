@@ -75,6 +75,7 @@ def issue_case():
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ["estimated", "given small"])
 def test_the_issue_case_converges_near_the_truth_from_sample2s_start(issue_case, case):
     ds, caught = issue_case[case]

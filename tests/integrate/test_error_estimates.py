@@ -23,7 +23,7 @@ ATOL = sweep.scene.scene.DEFAULT_ATOL["xi_inf"]
 SHARPNESS = 100.0
 REFERENCE_REL = 1e-12
 """Relative accuracy trusted of the reference's xi_inf (DOP853 and Radau agree to 1e-13 on the table, and both are
-within 1e-13 of the m2 = 0 closed form: tests/test_reference.py, tests/test_extremes.py)."""
+within 1e-13 of the m2 = 0 closed form: tests/integrate/test_reference.py, tests/protocols/test_extremes.py)."""
 REFERENCE_FLOOR = 1e-9
 """Relative accuracy trusted of the reference's interpolated trajectory and crossing times (dense output between its
 steps is less accurate than its xi_inf)."""

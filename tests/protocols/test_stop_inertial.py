@@ -39,6 +39,7 @@ def stop(params, K_over_M, V, **kw) -> sweep.Scene:
     return sweep.Scene(protocol="stop", params=params, K_over_M=K_over_M, V=V, **kw)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(PARAM_SETS))
 @pytest.mark.parametrize("rtol", [1e-5, 1e-8])
 def test_inertial_stop_matches_the_radau_reference_for_gamma_over_A_1e3_to_10(name, rtol):
@@ -74,6 +75,7 @@ def test_inertial_stop_tends_to_the_quasistatic_one_as_gamma_goes_to_zero():
             assert float(ds["xi_inf"][i, j]) == pytest.approx(ref, rel=1e-7)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, model_tol", [("m2zero", 1e-2), ("sample2", 3e-4)])
 def test_auto_model_choice_bounds_the_true_model_error(name, model_tol):
     """model="auto": each quasi-static point's true model error (vs the inertial reference) is within model_tol

@@ -1,7 +1,7 @@
 """Chunks journaled in a helper thread (sweep.run.journal.Journal.background): every chunk handed over is on disk, whole
 and verified, when the block ends (also when it ends by Ctrl-C), in the order handed over; a failed write is raised
 in the caller's thread and leaves no partial file. (A run interrupted, resumed and compared bit for bit with an
-uninterrupted one goes through the same path: tests/test_integrity.py, tests/test_resume.py.)"""
+uninterrupted one goes through the same path: tests/run/test_integrity.py, tests/run/test_resume.py.)"""
 
 from __future__ import annotations
 

@@ -95,6 +95,7 @@ def test_a_consumer_that_stops_leaves_no_chunk_running():
     assert running == []
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs 2 numba threads (2 cores)")
 @pytest.mark.parametrize("observables", [("xi_inf",), ("xi_inf", "trajectory", "t50")], ids=["relaxed", "transients"])
 def test_side_by_side_gives_the_same_bits_as_one_chunk_at_a_time(observables):

@@ -79,6 +79,7 @@ def test_closed_form_m2zero_table(case):
     assert abs(r.xi_inf - exact) < 1e-10 * exact
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", FINITE_M2POS, ids=lambda c: c.name)
 def test_m2_positive_against_contact_age_time_form(case):
     r = reference_stop(case.chi, case.A, case.mu1, case.m2)

@@ -21,7 +21,7 @@ FINITE_CASES = [c for c in STOP_CASES if c.expect_finite]
 RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9)
 ATOL = sweep.scene.scene.DEFAULT_ATOL["trajectory"]
 REFERENCE_FLOOR = 1e-9
-"""Relative accuracy trusted of the reference's interpolated trajectory (tests/test_error_estimates.py)."""
+"""Relative accuracy trusted of the reference's interpolated trajectory (tests/integrate/test_error_estimates.py)."""
 TAUS = np.logspace(-2, 6, 17)
 """Sample times: from inside the first steps to far past the transient (closed-form continuation)."""
 

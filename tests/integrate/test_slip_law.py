@@ -1,5 +1,5 @@
 """The engine's slip state law (Scene(state_law="slip")) against the independent scipy reference
-tests/reference_slip.py (whose own checks are tests/test_reference_slip.py).
+tests/reference_slip.py (whose own checks are tests/integrate/test_reference_slip.py).
 
 Slip law (Ruina 1983): dphi/dt = -(xdot phi/D0) ln(xdot phi/D0); reduced psi' = -xi' psi ln(xi' psi). The force
 balance is the aging law's. What the engine must reproduce (derivations: reference_slip.py's docstring):
@@ -34,9 +34,9 @@ from sweep.integrate.driven import Regime
 ATOL = sweep.scene.scene.DEFAULT_ATOL["xi_inf"]
 REFERENCE_REL = 1e-12
 """Relative accuracy trusted of the reference's xi_inf (Airy closed form, DOP853/Radau and the tail checks agree to
-< 3e-13 on the table: tests/test_reference_slip.py)."""
+< 3e-13 on the table: tests/integrate/test_reference_slip.py)."""
 SHARPNESS = 100.0
-"""The estimate may overstate the true error by at most this factor (the contract of tests/test_error_estimates.py)."""
+"""The estimate may overstate the true error by at most this factor (the contract of tests/integrate/test_error_estimates.py)."""
 
 FINITE = [c for c in STOP_CASES if c.m2 > 0.0]
 """The slip law has a finite xi_inf iff m2 > 0."""

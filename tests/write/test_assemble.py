@@ -25,6 +25,7 @@ def same(a: xr.Dataset, b: xr.Dataset) -> None:
         assert type(a[name].variable) is type(b[name].variable), name  # IndexVariable for each axis
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["stop", "driven"])
 def test_a_sweeps_dataset_is_the_public_constructors(kind):
     if kind == "stop":

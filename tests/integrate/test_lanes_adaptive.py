@@ -19,7 +19,7 @@ from sweep.status import Status
 
 FINITE_CASES = [c for c in STOP_CASES if c.expect_finite]
 REFERENCE_REL = 1e-12
-"""Relative accuracy trusted of the reference's xi_inf (tests/test_error_estimates.py)."""
+"""Relative accuracy trusted of the reference's xi_inf (tests/integrate/test_error_estimates.py)."""
 
 
 @functools.cache
@@ -109,7 +109,7 @@ def test_auto_leaves_the_quasistatic_points_bit_for_bit_as_the_quasistatic_model
     """model="auto" carries the first-order inertial correction in the same lanes (its own stage loops after each
     stage's (x, s) loop, docs/design.md "Adaptive lanes"): the (x, s) arithmetic, and so xi_inf, its estimate and the
     steps of every point that auto leaves quasi-static, are those of model="quasistatic" bit for bit; the correction
-    itself is checked against the inertial solution in tests/test_stop_inertial.py."""
+    itself is checked against the inertial solution in tests/protocols/test_stop_inertial.py."""
     base = sweep.default_scene()
     scene = sweep.Scene(protocol="stop", params=base.params, K_over_M=np.geomspace(1e3, 1e6, 9),
                         V=np.geomspace(1e-7, 1e-4, 7), model="auto", rtol=1e-6)

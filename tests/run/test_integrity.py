@@ -31,7 +31,7 @@ from sweep.errors import InputError, JournalWarning, OutputError
 from sweep.run.journal import journal_path, rejected_path
 from sweep.run.lock import lock_path
 
-sys.path.insert(0, str(Path(__file__).parent))
+sys.path.insert(0, str(Path(__file__).parents[1]))
 import faults  # noqa: E402
 
 CHUNK = 4
@@ -339,6 +339,7 @@ def test_an_output_equal_to_an_input_or_to_the_picture_is_refused(tmp_path, conf
     assert config.read_bytes() == before and sorted(os.listdir(tmp_path)) == ["scene.toml"]
 
 
+@pytest.mark.slow
 def test_an_existing_output_is_replaced_only_with_overwrite(tmp_path, config, monkeypatch, capsys, reference):
     out = tmp_path / "s.nc"
     out.write_text("precious")
