@@ -95,7 +95,7 @@ def test_a_kernel_compiled_in_the_process_gives_the_bits_of_one_loaded_from_the_
     disagreed with the run they continue."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
     for name in ("cold", "warm"):
-        subprocess.run([sys.executable, "-c", COLD_WARM, str(tmp_path / f"{name}.npz"), str(Path(__file__).parents[1])],
+        subprocess.run([sys.executable, "-c", COLD_WARM, str(tmp_path / f"{name}.npz"), str(Path(__file__).parent)],
                        env=env, check=True, timeout=600)
     cold, warm = np.load(tmp_path / "cold.npz"), np.load(tmp_path / "warm.npz")
     for name in cold.files:
