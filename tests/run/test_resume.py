@@ -78,8 +78,9 @@ def test_default_chunks_grow_with_the_grid_and_leave_enough_chunks(side, observa
 
 COLD_WARM = """
 import sys
+from pathlib import Path
 import numpy as np
-sys.path.insert(0, sys.argv[2])
+sys.path[:0] = [sys.argv[2], str(Path(sys.argv[2]).parent)]  # this test's folder, and tests/ (its support modules)
 from test_resume import stop_scene
 import sweep
 ds = sweep.run_sweep(stop_scene(model="quasistatic"), progress=False)  # (no inertial kernels to compile)
