@@ -96,9 +96,9 @@ class Protocol(ABC):
     option_fields: ClassVar[Mapping[str, Any]] = MappingProxyType({})
     """The protocol's own scene fields beyond those every scene has: name -> default. A scene holds them in
     ``Scene.options`` (given as ``options={...}`` in Python, as top-level keys in a scene file), checked by
-    :meth:`make_options`, written into the canonical TOML by :meth:`toml_lines`. (The stop's and the driven scene's
-    own fields, trajectory_tau, t_obs, step, precision, perturbation and max_cycles, are Scene fields of their own,
-    kept for the users' code and files that name them.)"""
+    :meth:`make_options`, written into the canonical TOML by :meth:`toml_lines`. The stop's and the driven scene's
+    fields (trajectory_tau, t_obs, step, precision; perturbation, max_cycles) are theirs the same way, and are also
+    Scene keywords and attributes (sweep.scene.scene.PROTOCOL_FIELDS), for the code and files that name them."""
 
     # --- the scene ------------------------------------------------------------------------------------------------
     def make_options(self, scene: Scene, given: Mapping[str, Any]) -> Options:

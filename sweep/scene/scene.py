@@ -19,6 +19,7 @@ from .. import protocols
 from ..errors import InputError
 from ..integrate.models.state_laws import STATE_LAWS as _LAWS
 from ..integrate.solvers import METHODS
+from ..protocols.base import Options
 from .params import FrictionParams, require_finite, require_positive
 from .presets import presets
 
@@ -149,8 +150,10 @@ class Scene:
         Default False: the analytic line ``chi_c`` answers where the line is, and the simulation compiles and runs
         the driven kernel (~7 s to compile on first use, ~2 ms per velocity); True checks the analytic line.
     options : mapping, optional
-        The protocol's own fields beyond the ones above (sweep.protocols.base.Protocol.option_fields; in a scene
-        file, top-level keys), checked by the protocol; held as a read-only record (its defaults filled in).
+        The protocol's own fields (sweep.protocols.base.Protocol.option_fields; in a scene file, top-level keys),
+        checked by the protocol; held as a read-only record with its defaults filled in. The stop's and the driven
+        scene's fields above (trajectory_tau, t_obs, step, precision; perturbation, max_cycles) are in it too; a
+        protocol that does not use one of them refuses a value other than its default.
     """
 
     protocol: str
@@ -205,19 +208,21 @@ class Scene:
             if require_finite(f"atol[{name!r}]", value) < 0:
                 raise InputError(f"atol[{name!r}] must be >= 0 (allowed range: 0 <= atol < inf), got {value!r}")
         set_("atol", {**DEFAULT_ATOL, **{k: float(v) for k, v in atol.items()}})
-        self._check_trajectory_tau()
-        t_obs = _times("t_obs", self.t_obs)
-        if "slip_at" in self.observables and t_obs.size == 0:
-            raise InputError("observable 'slip_at' needs t_obs: the times after the stop [s], e.g. [0.1, 1, 10]")
-        set_("t_obs", tuple(t_obs.tolist()))
-        self._check_method()
-        self._check_driven()
+        if self.method != "auto" and self.method not in METHODS:
+            raise InputError(f"method must be 'auto' or one of {sorted(METHODS)}, got {self.method!r}")
         self._check_model()
-        protocol.check(self)
         if self.options is not None and not isinstance(self.options, Mapping):
             raise InputError(f"options must be a mapping {{name: value}} of the fields of protocol {self.protocol!r}, "
                              f"got {type(self.options).__name__}")
-        set_("options", protocol.make_options(self, self.options or {}))
+        given = dict(self.options or {})
+        if isinstance(self.options, Options):  # a scene's own record (dataclasses.replace): its keywords decide
+            given = {name: value for name, value in given.items() if name not in PROTOCOL_FIELDS}
+        options = self._protocol_fields(protocol, given)
+        set_("options", protocol.make_options(self, options))
+        for name in PROTOCOL_FIELDS:  # the protocol's own fields, as checked, also where they always were
+            if name in self.options:
+                set_(name, self.options[name])
+        protocol.check(self)
         if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, (int, np.integer)) or self.max_steps < 1:
             raise InputError(f"max_steps must be an integer >= 1, got {_plain(self.max_steps)!r}")
         if not isinstance(self.simulated_hopf_line, (bool, np.bool_)):
@@ -244,43 +249,21 @@ class Scene:
                              f"with axes {list(axes)}")
         object.__setattr__(self, "axes", axes)
 
-    def _check_method(self) -> None:
-        if self.method != "auto" and self.method not in METHODS:
-            raise InputError(f"method must be 'auto' or one of {sorted(METHODS)}, got {self.method!r}")
-        if self.step is not None:
-            step = require_positive("step", self.step)
-            if step > 2.0:
-                raise InputError(f"step must be in (0, 2] (explicit RK stability in sigma), got {step!r}")
-            if self.method != "auto" and METHODS[self.method].adaptive:
-                raise InputError(f"step is for fixed-step methods; method {self.method!r} chooses its own steps "
-                                 "(leave step unset, or use method='rk4')")
-            object.__setattr__(self, "step", step)
-        if self.method != "auto" and METHODS[self.method].implicit and self.time_resolved:
-            raise InputError(f"method {self.method!r} computes the relaxed slip only (observables = ['xi_inf']), "
-                             f"got observables={list(self.observables)}; use rk4, dp5 or dop853")
-        if self.precision not in PRECISIONS:
-            raise InputError(f"precision must be one of {PRECISIONS}, got {self.precision!r}")
-        if self.precision == "float32":
-            if self.rtol < FLOAT32_RTOL_MIN:
-                raise InputError(f"precision 'float32' needs rtol >= {FLOAT32_RTOL_MIN:g} (float32 keeps ~7 "
-                                 f"digits and rounding accumulates over the steps), got rtol={self.rtol!r}")
-            if self.time_resolved:
-                raise InputError("precision 'float32' is offered for relaxed-slip sweeps only (observables = "
-                                 f"['xi_inf']), got observables={list(self.observables)}")
-            if self.method != "auto" and METHODS[self.method].adaptive:
-                raise InputError(f"precision 'float32' runs fixed-step methods only (rk4), got method "
-                                 f"{self.method!r}")
-
-    def _check_driven(self) -> None:
-        """The driven scene's fields, checked for every protocol (a scene file may carry them unused)."""
-        pert = require_positive("perturbation", self.perturbation)
-        if not PERTURBATION_RANGE[0] <= pert <= PERTURBATION_RANGE[1]:
-            raise InputError(f"perturbation must be in [{PERTURBATION_RANGE[0]:g}, {PERTURBATION_RANGE[1]:g}] "
-                             f"(reduced spring stretch), got {pert!r}")
-        object.__setattr__(self, "perturbation", pert)
-        if isinstance(self.max_cycles, bool) or not isinstance(self.max_cycles, (int, np.integer)) \
-                or self.max_cycles < 4:
-            raise InputError(f"max_cycles must be an integer >= 4, got {_plain(self.max_cycles)!r}")
+    def _protocol_fields(self, protocol, given: dict[str, Any]) -> dict[str, Any]:
+        """``given`` (the options) with the protocol's own fields given as Scene keywords (PROTOCOL_FIELDS: the stop's
+        and the driven scene's, kept as keywords for the code and files that name them); InputError for such a field
+        given both ways, or given a value to a protocol that does not use it."""
+        for name in PROTOCOL_FIELDS:
+            value, default = getattr(self, name), SCENE_DEFAULTS[name]
+            if name in protocol.option_fields:
+                if _differs(value, default):
+                    if name in given and _differs(given[name], value):
+                        raise InputError(f"{name} is given twice, as {value!r} and in options as {given[name]!r}")
+                    given.setdefault(name, value)
+            elif _differs(value, default):
+                raise InputError(f"{name} is not used by protocol {self.protocol!r} (leave it at {default!r}), got "
+                                 f"{_plain(value)!r}")
+        return given
 
     def _check_model(self) -> None:
         if self.model not in MODELS:
@@ -304,18 +287,6 @@ class Scene:
                                  f"supported: {laws}")
             raise InputError(f"state_law {self.state_law!r} runs with model {' or '.join(map(repr, have))} only on "
                              f"protocol {self.protocol!r}, got model={self.model!r}")
-
-    def _check_trajectory_tau(self) -> None:
-        try:
-            lo, hi, num = self.trajectory_tau
-        except (TypeError, ValueError):
-            raise InputError("trajectory_tau must be (min, max, num)") from None
-        lo, hi = require_positive("trajectory_tau min", lo), require_positive("trajectory_tau max", hi)
-        if not lo < hi <= TAU_MAX:
-            raise InputError(f"trajectory_tau needs 0 < min < max <= {TAU_MAX:g}, got ({lo!r}, {hi!r})")
-        if isinstance(num, bool) or int(num) != num or num < 2:
-            raise InputError(f"trajectory_tau num must be an integer >= 2, got {_plain(num)!r}")
-        object.__setattr__(self, "trajectory_tau", (lo, hi, int(num)))
 
     @property
     def dims(self) -> tuple[str, ...]:
@@ -396,6 +367,21 @@ class Scene:
         return "\n".join(lines) + "\n"
 
 
+PROTOCOL_FIELDS = ("trajectory_tau", "t_obs", "step", "precision", "perturbation", "max_cycles")
+"""Fields of :class:`Scene` that belong to one protocol (the stop's, the driven scene's: each its option_fields):
+checked by that protocol, refused by the others unless left at their defaults."""
+SCENE_DEFAULTS = {f.name: f.default for f in fields(Scene)}
+
+
+def _differs(value: Any, default: Any) -> bool:
+    """Whether a field's value is not its default (tuples and lists of the same numbers are the same)."""
+    try:
+        return bool(np.any(np.asarray(value, dtype=object) != np.asarray(default, dtype=object))) or \
+            np.shape(value) != np.shape(default)
+    except (TypeError, ValueError):
+        return True
+
+
 def _times(name: str, values: Sequence[float]) -> np.ndarray:
     arr = np.array(values, dtype=float).reshape(-1)
     if arr.size and (not np.all(np.isfinite(arr)) or np.any(arr < 0) or np.any(np.diff(arr) <= 0)):
@@ -462,7 +448,7 @@ def scene_from_mapping(cfg: Mapping[str, Any]) -> Scene:
             raise InputError(f"scene is missing the [{required}] axis table")
     params = _params_from(cfg)
     kwargs = {k: v for k, v in cfg.items() if k not in ("preset", "params", "K_over_M", "V", *EXTRA_AXES)}
-    options = {k: kwargs.pop(k) for k in option_keys() & set(kwargs)}
+    options = {k: kwargs.pop(k) for k in (option_keys() - set(SCENE_DEFAULTS)) & set(kwargs)}
     if options:
         kwargs["options"] = options
     axes = {n: _axis_from_toml(n, cfg[n]) for n in EXTRA_AXES if n in cfg}

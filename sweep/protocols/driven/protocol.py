@@ -3,13 +3,15 @@ its regime is decided: steady, stick-slip, runaway (docs/physics.md 3b)."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ...errors import InputError
-from ..base import ChunkCompute, Protocol
+from ..base import ChunkCompute, Options, Protocol
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -30,6 +32,7 @@ class DrivenProtocol(Protocol):
     observables = ("regime", "growth_rate", "period", "amplitude")
     always = "regime"
     default_observables = observables
+    option_fields = MappingProxyType({"perturbation": 1e-3, "max_cycles": 2000})
     default_chunk = 1024  # a driven point costs ~10-100x a stop point
     memory_per_point = 300
     file_per_point = 80
@@ -45,17 +48,29 @@ class DrivenProtocol(Protocol):
         return frozenset({("quasistatic", n) for n in STATE_LAWS} | {("inertial", n) for n, law in STATE_LAWS.items()
                                                                      if law.inertial})
 
+    def make_options(self, scene: Scene, given: Mapping[str, Any]) -> Options:
+        """The driven scene's own fields: the initial spring stretch ``perturbation`` away from steady sliding
+        (reduced, z = tau - xi) and the budget of oscillation cycles ``max_cycles``."""
+        from ...scene.params import require_positive
+        from ...scene.scene import PERTURBATION_RANGE, _plain
+
+        options = dict(super().make_options(scene, given))
+        pert = require_positive("perturbation", options["perturbation"])
+        if not PERTURBATION_RANGE[0] <= pert <= PERTURBATION_RANGE[1]:
+            raise InputError(f"perturbation must be in [{PERTURBATION_RANGE[0]:g}, {PERTURBATION_RANGE[1]:g}] "
+                             f"(reduced spring stretch), got {pert!r}")
+        cycles = options["max_cycles"]
+        if isinstance(cycles, bool) or not isinstance(cycles, (int, np.integer)) or cycles < 4:
+            raise InputError(f"max_cycles must be an integer >= 4, got {_plain(cycles)!r}")
+        return Options({"perturbation": pert, "max_cycles": cycles})
+
     def check(self, scene: Scene) -> None:
         if scene.method not in DRIVEN_METHODS:
             raise InputError(f"protocol 'driven' runs the adaptive dp5 stepper: method must be one of "
                              f"{list(DRIVEN_METHODS)}, got {scene.method!r}")
-        for name, value, default in (("step", scene.step, None), ("precision", scene.precision, "float64"),
-                                     ("t_obs", scene.t_obs, ())):
-            if value != default:
-                raise InputError(f"{name} is not used by protocol 'driven' (leave it at {default!r}), got {value!r}")
 
     def toml_lines(self, scene: Scene) -> list[str]:
-        return [f"perturbation = {scene.perturbation!r}", f"max_cycles = {int(scene.max_cycles)}"]
+        return [f"perturbation = {scene.options.perturbation!r}", f"max_cycles = {int(scene.options.max_cycles)}"]
 
     def make_plan(self, scene: Scene) -> Plan:
         from .plan import driven_plan

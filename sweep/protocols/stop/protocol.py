@@ -4,13 +4,15 @@ stop scene may sweep friction parameters beside (K/M, V)."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ...errors import InputError
-from ..base import ChunkCompute, Protocol
+from ..base import ChunkCompute, Options, Protocol
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -46,6 +48,8 @@ class StopProtocol(Protocol):
     always = "xi_inf"
     default_observables = ("xi_inf",)
     extra_axes = True
+    option_fields = MappingProxyType({"trajectory_tau": (1e-3, 1e6, 61), "t_obs": (), "step": None,
+                                      "precision": "float64"})
     default_chunk = 4096
     memory_per_point = 180
     file_per_point = 80
@@ -60,6 +64,58 @@ class StopProtocol(Protocol):
 
         return frozenset({("quasistatic", n) for n, law in STATE_LAWS.items() if law.stop_family}
                          | {("inertial", n) for n, law in STATE_LAWS.items() if law.inertial and law.aging_identity})
+
+    def make_options(self, scene: Scene, given: Mapping[str, Any]) -> Options:
+        """The stop's own fields: trajectory_tau (min, max, num) of the sampled reduced times, t_obs [s] of slip_at,
+        the fixed step and the precision of the lanes, each checked against the scene's method, rtol and
+        observables."""
+        from ...integrate.solvers import METHODS
+        from ...scene.params import require_positive
+        from ...scene.scene import FLOAT32_RTOL_MIN, PRECISIONS, TAU_MAX, _plain, _times
+
+        options = dict(super().make_options(scene, given))
+        try:
+            lo, hi, num = options["trajectory_tau"]
+        except (TypeError, ValueError):
+            raise InputError("trajectory_tau must be (min, max, num)") from None
+        lo, hi = require_positive("trajectory_tau min", lo), require_positive("trajectory_tau max", hi)
+        if not lo < hi <= TAU_MAX:
+            raise InputError(f"trajectory_tau needs 0 < min < max <= {TAU_MAX:g}, got ({lo!r}, {hi!r})")
+        if isinstance(num, bool) or int(num) != num or num < 2:
+            raise InputError(f"trajectory_tau num must be an integer >= 2, got {_plain(num)!r}")
+        options["trajectory_tau"] = (lo, hi, int(num))
+        t_obs = _times("t_obs", options["t_obs"])
+        if "slip_at" in scene.observables and t_obs.size == 0:
+            raise InputError("observable 'slip_at' needs t_obs: the times after the stop [s], e.g. [0.1, 1, 10]")
+        options["t_obs"] = tuple(t_obs.tolist())
+        method, step, precision = scene.method, options["step"], options["precision"]
+        if step is not None:
+            step = require_positive("step", step)
+            if step > 2.0:
+                raise InputError(f"step must be in (0, 2] (explicit RK stability in sigma), got {step!r}")
+            if method != "auto" and METHODS[method].adaptive:
+                raise InputError(f"step is for fixed-step methods; method {method!r} chooses its own steps "
+                                 "(leave step unset, or use method='rk4')")
+            options["step"] = step
+        if method != "auto" and METHODS[method].implicit and self.time_resolved(scene):
+            raise InputError(f"method {method!r} computes the relaxed slip only (observables = ['xi_inf']), "
+                             f"got observables={list(scene.observables)}; use rk4, dp5 or dop853")
+        if precision not in PRECISIONS:
+            raise InputError(f"precision must be one of {PRECISIONS}, got {precision!r}")
+        if precision == "float32":
+            if scene.rtol < FLOAT32_RTOL_MIN:
+                raise InputError(f"precision 'float32' needs rtol >= {FLOAT32_RTOL_MIN:g} (float32 keeps ~7 "
+                                 f"digits and rounding accumulates over the steps), got rtol={scene.rtol!r}")
+            if self.time_resolved(scene):
+                raise InputError("precision 'float32' is offered for relaxed-slip sweeps only (observables = "
+                                 f"['xi_inf']), got observables={list(scene.observables)}")
+            if method != "auto" and METHODS[method].adaptive:
+                raise InputError(f"precision 'float32' runs fixed-step methods only (rk4), got method {method!r}")
+        return Options(options)
+
+    def toml_lines(self, scene: Scene) -> list[str]:
+        """None: the stop's fields are written by Scene.to_toml where they always were (before ``method``)."""
+        return []
 
     def check(self, scene: Scene) -> None:
         from ...integrate.models.state_laws import STATE_LAWS
