@@ -41,7 +41,8 @@ import sweep  # noqa: E402
 
 DEFAULT_OUT = HERE / "results" / "error_coverage.json"
 REFERENCE_RESOLVES = 1e-13
-"""Relative accuracy of the reference's xi_inf (tests/integrate/test_error_estimates.py: REFERENCE_REL 1e-12 is what the tests
+"""Relative accuracy of the reference's xi_inf (tests/integrate/test_error_estimates.py: REFERENCE_REL 1e-12 is what
+the tests
 trust; DOP853 and Radau agree to 1e-13 on the case table)."""
 FALSE_ALARM = 0.1
 """A flag error_above_tol is a false alarm where the true error is at most this fraction of the tolerance."""

@@ -65,7 +65,8 @@ tolerance.)"""
 GENERAL_ESTIMATE_GAIN = 2.0
 """Estimate of the general (slip-law) stop path = GENERAL_ESTIMATE_GAIN x max(|x1 - x2|, |x2 - x3|) of its runs at
 rtol/TIGHTER^(1, 2, 3), x2 returned (sweep/integrate/stop_slip.py): as the step ladder's non-asymptotic estimate
-(CONSERVATIVE_GAIN below). On tests/integrate/test_slip_law.py's cases at rtol 1e-6 and 1e-9 it bounds the true error and
+(CONSERVATIVE_GAIN below). On tests/integrate/test_slip_law.py's cases at rtol 1e-6 and 1e-9 it bounds the true error
+and
 stays within 100x of it."""
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -102,13 +103,14 @@ H_MAX = 0.7
 """Upper bound on the (coarse) step in sigma (keeps RK4 stable along the slow creep manifold)."""
 CTRL_TOL_FACTOR = {"dp5": 0.05, "dop853": 0.5}
 """Local tolerance of the adaptive controller per unit rtol, such that the error estimate of the returned (coarse)
-solution stays below rtol: at most 0.4 rtol on tests/integrate/test_error_estimates.py's table at rtol 1e-3..1e-9, relaxed slip
+solution stays below rtol: at most 0.4 rtol on tests/integrate/test_error_estimates.py's table at rtol 1e-3..1e-9,
+relaxed slip
 and time-resolved observables (dp5 was 0.2 while the fine solution was returned; dop853's embedded fifth-order
 estimate overstates its eighth-order error increasingly as rtol falls: 0.4 rtol at 1e-3, 0.003 rtol at 1e-9)."""
 AUTO_METHOD = (("rk4", 2e-4), ("dp5", 0.0))
 """Time-resolved scenes (one point per thread): (method, smallest rtol it is chosen for), by decreasing rtol, the
 cheaper per point of rk4 (fixed step) and dp5 (adaptive), measured on a 40 x 25 default-scene grid with a 200-sample
-trajectory (1 thread, load ~1, us a point rk4 / dp5): 272 / 323 at rtol 1e-2 and 288 / 324 at 1e-3 (dp5 flagging
+trajectory (1 thread, us a point rk4 / dp5): 272 / 323 at rtol 1e-2 and 288 / 324 at 1e-3 (dp5 flagging
 3-32 points error_above_tol there), 373 / 337 at 1e-4, 539 / 349 at 1e-5, 851 / 379 at 1e-6, 2617 / 504 at 1e-8.
 Relaxed-slip scenes take the adaptive lanes instead (sweep.plan.plan.LANES_METHOD)."""
 STEP_SAFETY = 2.0

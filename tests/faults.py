@@ -1,5 +1,5 @@
-"""Fault injection for the integrity tests (tests/run/test_integrity.py): damage a journal on disk, or make a run's writes
-fail the way a full disk, a read-only folder or a folder put in the way make them fail.
+"""Fault injection for the integrity tests (tests/run/test_integrity.py): damage a journal on disk, or make a run's
+writes fail the way a full disk, a read-only folder or a folder put in the way make them fail.
 
 In this process: :func:`interrupt_after` (a journaled run stopped by Ctrl-C after some chunks, as a killed run
 leaves it), :func:`truncate`, :func:`flip_byte`, :func:`writes_blocked_by_chmod`.

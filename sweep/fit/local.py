@@ -3,7 +3,7 @@
 One Levenberg-Marquardt over every task at once (one engine round an iteration, sweep.fit.levenberg) with
 forward-difference Jacobians (p + 1 parameter sets an iteration), then the central-difference Jacobian at its
 optimum in one more round (2p sets): it gives the covariance (sweep.fit.uncertainty). Central-difference iterations
-from that optimum (2p + 1 sets each, one or two more rounds, the method until 2026-11-27) moved the best values of
+from that optimum (2p + 1 sets each, one or two more rounds) moved the best values of
 benchmarks/fit.py's 100 curves by < 5e-4 of their standard errors, the standard errors by < 1.2e-5 and the 95 % bounds
 by < 7e-4 of their half-widths: the forward differences' error (~FD_STEP) barely moves the optimum they stop at.
 The 100 curves took 67 forward solves a curve with central differences throughout; Broyden's secants from one

@@ -227,7 +227,7 @@ def _decide(amp, grow, perturbation, amp_first, a_start, cycles):
 INERTIAL_NOT_CACHED = True
 """The inertial variant is compiled in every process, never loaded from numba's disk cache: loaded from the cache
 it gave slightly different numbers (3 of 40 growth rates, a few steps) from the same kernel compiled in the process
-that wrote the cache (numba 0.68, 2026-11-25; found by the dask bitwise test, whose workers load what the main
+that wrote the cache (numba 0.68; found by the dask bitwise test, whose workers load what the main
 process compiles). A resumed or distributed run must give exactly the numbers of one uninterrupted run, so this
 variant pays its compile time (~6 s) in each process until the cause is understood."""
 

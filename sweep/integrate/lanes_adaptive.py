@@ -216,7 +216,8 @@ def _stage_loops(tableau, start: tuple[str, ...], h: str, o_start: str, correcti
     one per stage: the stages' exponentials do not wait on y, so they overlap within it (model "auto" over
     "quasistatic", 2e5 default-scene points, 1 thread: 1.23-1.24 -> 1.14-1.16 of run_sweep). The (x, s) loops are
     then the plain kernel's, and a point that model="auto" leaves quasi-static gets the numbers of model="quasistatic"
-    bit for bit (tests/integrate/test_lanes_adaptive.py; benchmarks/throughput.py checks its steps). With y in the (x, s) loops
+    bit for bit (tests/integrate/test_lanes_adaptive.py; benchmarks/throughput.py checks its steps). With y in the (x,
+    s) loops
     the rounding of xi moved (the contraction into FMAs differed), and 9 of the default scene's 20,000 points took
     other steps."""
     _, A, b, _ = tableau.arrays()

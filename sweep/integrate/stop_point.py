@@ -27,7 +27,8 @@ instead, its error need not exceed the fine run's; a bound on the fine run's err
 |contributions| is added (:func:`cancelled`, and :func:`crossing_error` for t50/t90). Each run's closed-form tail
 error bound is added (negligible: the per-point path integrates until it is below TAIL_SAFETY (atol + TAIL_RTOL
 |xi|)), and for samples taken from the closed-form continuation its bound
-(:func:`sweep.integrate.models.stop.continuation_error`). On tests/integrate/test_error_estimates.py's table the estimate is
+(:func:`sweep.integrate.models.stop.continuation_error`). On tests/integrate/test_error_estimates.py's table the
+estimate is
 1.2x..50x the true error for every method at rtol 1e-3..1e-9 (t50/t90 up to 130x where the two shares of their
 error cancel). The price is accuracy: the returned solution is the less accurate of the two, so the step rules must
 make the coarse run meet rtol (``CTRL_TOL_FACTOR`` of :mod:`sweep.plan.plan` for the adaptive methods; rk4 per point,

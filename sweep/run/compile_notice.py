@@ -1,29 +1,16 @@
 """Say so before numba compiles sweep's kernels: on a machine whose numba cache holds none of them, the first run
-compiles for 5-30 s per kernel family, with nothing else to show for it.
+compiles for 5-45 s per kernel family, with nothing else to show for it.
 
 :func:`announce_if_cold` logs one INFO line (logger ``sweep``) at once when numba's on-disk cache holds no index
 file (``*.nbi``) of the package, checked once per process, with the seconds of the kernel families the scene
-needs (:func:`kernel_families`); :func:`timed` wraps an explicit warm-up and logs a line if it is still running
-after :data:`SLOW_S` (a cache that holds some kernels but not the ones a scene needs), then how long it took.
-Measured on the 2-core development machine, each family alone in a new process with an empty cache
-(NUMBA_CACHE_DIR set to an empty folder; a 3 x 3 scene of each kind, 2026-11-25, load average 0.5-1.1): relaxed
-slip (lanes, rk4 and ros4) 5.6 s (6.4 s on the default grid, whose stiff corner uses ros4), time-resolved stop
-(per-point path) 30 s, inertial stop 17 s, slip-law stop 5.5 s, driven quasi-static 7.4 s, driven inertial 16 s;
-the default scene (relaxed slip + inertial stop) 22 s in all. Loading all of them from the cache takes ~1.5 s.
-Re-measured once the inertial stop family also held the lanes that carry the first-order correction (model="auto",
-2026-11-25, load 0.6): relaxed slip 7.8 s, inertial stop 17.7 s; a cold default `sweep run` 19.9 s in all; and
-the time-resolved stop once each of its functions compiled once (no literal specialisations): 17.2 s (25.4 s before,
-same conditions). Re-measured once relaxed slip ran in the adaptive dop853 lanes (model "auto" compiles only the
-variant that carries the correction; 2026-11-25, load 2.5 from other work): relaxed slip (model "quasistatic") 14.6 s,
-a cold default `sweep run` 17.4 s of kernels, 20.2 s in all; with the fine twin's steps written once in a loop of
-their own (load 0.8): relaxed slip 11.9 s, a cold default `sweep run` 17.9 s of kernels (the inertial family,
-compiled beside it, takes longest), 21.1 s in all. The sampled adaptive lanes (time-resolved, method "auto": the
-"time-resolved lanes" family; 2026-11-26, load 2.6 from other work): 45-49 s for one point's first run (the
-generated attempt alone 26 s, the relaxed lanes' 18 s in the same conditions), the relaxed lanes 13 s beside it.
-A cold first sweep.fit (one curve, 2026-11-27, load ~1): 61 s with the sampled lanes and the per-point path compiled
-one after the other, 38-44 s with the per-point path compiled aside (:func:`compiled_aside`, sweep.fit.core).
-With the adaptive lanes' stage loops and their callees inlined into relax_runs (2026-11-27, load 0.9): relaxed slip
-(model "quasistatic", 3 x 3) 19.5-21.0 s; a cold default `sweep run` 31.8-35.8 s of kernels.
+needs (:func:`kernel_families`: its protocol's); :func:`timed` wraps an explicit warm-up and logs a line if it is
+still running after :data:`SLOW_S` (a cache that holds some kernels but not the ones a scene needs), then how long
+it took. :data:`COLD_COMPILE_S` holds each family's compile time, measured alone in a new process with an empty
+cache (NUMBA_CACHE_DIR set to an empty folder) on the 2-core development machine and rounded up: the adaptive
+lanes' ``relax_runs`` (relaxed slip, with the first-order inertial correction of model "auto") is ~30 s of a cold
+default ``sweep run``'s ~33 s; the sampled lanes of the time-resolved path are the longest family. Loading every
+family from the cache takes ~1.5 s. :func:`compiled_aside` compiles a family in a second process beside this one
+(the inertial stop before a dask fan-out, the fit's per-point path).
 """
 
 from __future__ import annotations
@@ -42,7 +29,7 @@ __all__ = ["COLD_COMPILE_S", "HELPER_WAIT_S", "SLOW_S", "announce_if_cold", "cac
            "driven_families", "inertial_stop_compiled_aside", "kernel_families", "timed"]
 
 
-COLD_COMPILE_S = {"relaxed-slip engine": 20, "time-resolved stop": 18, "time-resolved lanes": 45, "inertial stop": 18,
+COLD_COMPILE_S = {"relaxed-slip engine": 30, "time-resolved stop": 18, "time-resolved lanes": 45, "inertial stop": 18,
                   "slip-law stop": 6, "driven quasi-static": 8, "driven inertial": 16}
 """Seconds to compile each kernel family from an empty cache on the 2-core development machine (module docstring)."""
 SLOW_S = 3.0

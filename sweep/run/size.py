@@ -3,7 +3,7 @@
 the observables and the protocol; a run whose memory would exceed what the machine has available is refused with a
 message that says how to split it.
 
-The constants were measured on the 2-core development machine (2026-11-25): the peak of ``run_sweep`` under
+The constants were measured on the 2-core development machine: the peak of ``run_sweep`` under
 tracemalloc, as the slope between grids of 4e4 and 1.6e5 points (stop, relaxed slip: 163 bytes a point, with or
 without an output; driven: 279; each sampled time held in memory, i.e. trajectory or slip_at without an output:
 46 more, a journaled run keeping those in its journal instead); the file, from the bytes of its variables before

@@ -36,7 +36,8 @@ REFERENCE_REL = 1e-12
 """Relative accuracy trusted of the reference's xi_inf (Airy closed form, DOP853/Radau and the tail checks agree to
 < 3e-13 on the table: tests/integrate/test_reference_slip.py)."""
 SHARPNESS = 100.0
-"""The estimate may overstate the true error by at most this factor (the contract of tests/integrate/test_error_estimates.py)."""
+"""The estimate may overstate the true error by at most this factor (the contract of
+tests/integrate/test_error_estimates.py)."""
 
 FINITE = [c for c in STOP_CASES if c.m2 > 0.0]
 """The slip law has a finite xi_inf iff m2 > 0."""
