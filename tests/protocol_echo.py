@@ -1,6 +1,6 @@
 """A third protocol for tests/protocols/test_protocols.py: each point's reduced stiffness chi = K D0/(M g) times its
-own scene field ``scale``, "computed" chunk by chunk. It lives outside the package, as a user's protocol would, and plugs in
-through sweep.protocols.register."""
+own scene field ``scale``, "computed" chunk by chunk. It lives outside the package, as a user's protocol would, and
+plugs in through sweep.protocols.register."""
 
 from __future__ import annotations
 
