@@ -31,7 +31,7 @@ The estimate adds the closed-form tail bound (2x) and rounding (:func:`rounding_
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -44,10 +44,10 @@ Runner = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray, np.nda
 """run(points, steps) -> (xi_inf, tail bound, status, steps taken), one run per entry."""
 
 
-@dataclass
-class LadderResult:
+class LadderResult(NamedTuple):
     """Per point: the returned (finest) run's value, its error estimate, status, steps and step size, the runs
-    taken and the steps of all of them (``work``)."""
+    taken and the steps of all of them (``work``). A record of arrays: the compiled pass of the tolerance ladder
+    (tolerance_ladder._judge) writes into it."""
 
     xi: np.ndarray
     error: np.ndarray

@@ -58,7 +58,7 @@ class LadderRuns(NamedTuple):
     """The runs of one pass of :func:`climb_tolerances`, per run r (inputs of :func:`_judge`)."""
 
     entry: np.ndarray
-    """int64: the point run r solved (a row of the :class:`LadderArrays`)."""
+    """int64: the point run r solved (a row of the :class:`LadderResult`)."""
     xi: np.ndarray
     """float64: relaxed slip of the run (the coarse one) [1]."""
     fine: np.ndarray
@@ -71,25 +71,6 @@ class LadderRuns(NamedTuple):
     """int32: its attempts (each a step and two half steps)."""
     within: np.ndarray
     """bool: whether its samples' estimates (2) are within their tolerances (all True without samples)."""
-
-
-class LadderArrays(NamedTuple):
-    """The arrays of a :class:`sweep.integrate.ladder.LadderResult`, per point (in and out of :func:`_judge`): the
-    returned run's value [1], error estimate (1) [1], status, attempts, control tolerance, runs taken, and the steps
-    of all of them."""
-
-    xi: np.ndarray
-    error: np.ndarray
-    status: np.ndarray
-    steps: np.ndarray
-    step: np.ndarray
-    runs: np.ndarray
-    work: np.ndarray
-
-    @classmethod
-    def of(cls, result: LadderResult) -> LadderArrays:
-        """The arrays of ``result`` themselves (no copy: :func:`_judge` writes into them)."""
-        return cls(result.xi, result.error, result.status, result.steps, result.step, result.runs, result.work)
 
 
 def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, tol0: float, rtol: float, atol: float,
@@ -120,7 +101,6 @@ def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, to
         return out
     entries = np.arange(n)
     again = np.empty(n, np.int64)
-    arrays = LadderArrays.of(out)
     while entries.size:
         # the first pass takes every point: slices (views) instead of gathers through an index array
         i = slice(None) if entries.size == n else entries
@@ -128,7 +108,7 @@ def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, to
         within = (np.ones(entries.size, np.bool_) if samples is None
                   else samples.keep(entries, sampled[0], attempts, growth[i], tail))
         n_again = _judge(LadderRuns(entries, x, fine, tail, status, attempts, within), growth, roundoff, rtol, atol,
-                         arrays, again)
+                         out, again)
         entries = again[:n_again].copy()
     out.error[out.status != OK] = np.nan
     return out
@@ -137,7 +117,7 @@ def climb_tolerances(run: AdaptiveRunner, points: np.ndarray, h0: np.ndarray, to
 @njit(cache=True, error_model="numpy")
 def _judge(runs, growth, roundoff, rtol, atol, out, again):
     """One pass of :func:`climb_tolerances` over its runs ``runs`` (:class:`LadderRuns`): each run's estimate (1),
-    stored with its value, status and attempts into its entry's row of ``out`` (:class:`LadderArrays`); the entries
+    stored with its value, status and attempts into its entry's row of ``out`` (:class:`LadderResult`); the entries
     to run again, at step / TOL_RATIO, into ``again``; returns how many. ``growth``: per point, the growth factor of
     :func:`sweep.integrate.ladder.rounding_error` [1]; ``roundoff``, ``rtol`` [1], ``atol`` [1] as in
     :func:`climb_tolerances`. In one pass: as numpy expressions over a chunk's runs they cost ~0.2 ms of a

@@ -374,10 +374,9 @@ SCENE_DEFAULTS = {f.name: f.default for f in fields(Scene)}
 
 
 def _differs(value: Any, default: Any) -> bool:
-    """Whether a field's value is not its default (tuples and lists of the same numbers are the same)."""
+    """Whether a field's value is not its default (a tuple and a list of the same numbers are the same)."""
     try:
-        return bool(np.any(np.asarray(value, dtype=object) != np.asarray(default, dtype=object))) or \
-            np.shape(value) != np.shape(default)
+        return not np.array_equal(np.asarray(value, dtype=object), np.asarray(default, dtype=object))
     except (TypeError, ValueError):
         return True
 
@@ -523,6 +522,7 @@ def default_scene() -> Scene:
 
 def __getattr__(name: str):
     """OBSERVABLES and DRIVEN_OBSERVABLES: the observables of the stop and driven protocols (Protocol.observables)."""
-    if name in ("OBSERVABLES", "DRIVEN_OBSERVABLES"):
-        return protocols.get(PROTOCOLS[name.startswith("DRIVEN")]).observables
+    protocol = {"OBSERVABLES": "stop", "DRIVEN_OBSERVABLES": "driven"}.get(name)
+    if protocol is not None:
+        return protocols.get(protocol).observables
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

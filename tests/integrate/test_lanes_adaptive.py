@@ -12,6 +12,7 @@ from cases import STOP_CASES, case_params
 from reference import reference_stop
 
 import sweep
+import sweep.protocols.stop.chunk
 from sweep.integrate.lanes_adaptive import _log2_approx
 from sweep.plan.plan import make_plan
 from sweep.protocols.stop.engine import _adaptive_runner

@@ -9,6 +9,7 @@ import pytest
 import xarray as xr
 
 import sweep
+import sweep.run.runner
 from sweep import physics, protocols
 from sweep.errors import InputError
 from sweep.write.read import file_kind
