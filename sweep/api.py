@@ -17,7 +17,9 @@ from . import protocols
 from .analysis.hopf import with_simulated_line
 from .errors import InputError, OutputError
 from .jitcache import source_digest
-from .plan.plan import Plan, make_plan
+from .plan.layout import block_shape
+from .plan.plan import make_plan, scene_plan_hash
+from .plan.sample import plan_sample
 from .run.backends import check_backend, open_backend
 from .run.compile_notice import announce_if_cold
 from .run.journal import Journal, journal_path
@@ -27,9 +29,9 @@ from .run.size import check_fits, estimate_size
 from .scene.params import FrictionParams
 from .scene.plausibility import PlausibilityWarning, warn_implausible, warn_implausible_params, warn_not_ok
 from .scene.scene import Scene
-from .write.netcdf import NetCDFWriter, open_dataset
+from .write.netcdf import NetCDFRegions, open_dataset
+from .write.regions import GridArrays, Regions, RunTotals, lattice_steps
 from .write.targets import check_targets, write_failed
-from .write.writer import FlatArrays
 
 __all__ = ["PreparedRun", "check_run_arguments", "prepare_run", "run_sweep", "solve_point"]
 
@@ -61,7 +63,7 @@ def run_sweep(scene: Scene, progress: bool | None = None, history: str = "", out
     with prepare_run(scene, output, resume=resume, overwrite=overwrite, chunk_size=chunk_size, backend=backend,
                      workers=workers, scheduler=scheduler) as run:
         if backend == "dask":
-            warm_up_kernels(scene, run.plan, fan_out=True)  # before the fan-out: the workers load them from the cache
+            warm_up_kernels(scene, fan_out=True)  # before the fan-out: the workers load them from the cache
         return run.finish(progress, history or "sweep.run_sweep")
 
 
@@ -87,11 +89,10 @@ def check_run_arguments(output: str | os.PathLike | None = None, resume: bool = 
 
 @dataclass
 class PreparedRun:
-    """A run whose checks are made, its plan built, its backend up and its journal (if any) open and checked: what
+    """A run whose checks are made, its backend up and its journal (if any) open and checked: what
     :func:`prepare_run` yields. :meth:`finish` computes it."""
 
     scene: Scene
-    plan: Plan
     chunk_size: int
     output: Path | None
     overwrite: bool
@@ -99,54 +100,57 @@ class PreparedRun:
     imap: Callable[..., Iterator[tuple[int, dict[str, np.ndarray]]]]
     """The backend's map over chunks (sweep/run/backends.py: open_backend)."""
     compute_s: float = 0.0
-    """Wall seconds of :meth:`finish`'s chunk loop (the computing, without the Dataset, the file and the picture)."""
+    """Wall seconds of :meth:`finish`'s chunk loop (the computing, the file written as it goes)."""
+    totals: RunTotals | None = None
+    """What the run counted over its whole grid (flags, plans, seconds), once :meth:`finish` has run."""
 
     def finish(self, progress: bool | None = None, history: str = "",
                picture: Callable[[xr.Dataset], None] | None = None) -> xr.Dataset:
-        """Compute the chunks not yet in the journal, build the Dataset and write it to the output (then remove the
-        journal); returns the Dataset (see :func:`run_sweep`).
+        """Compute the chunks not yet in the journal, each written into the file as it comes (a helper thread,
+        sweep/write/regions.py) while the next ones compute; then the file's attributes, the file closed and renamed
+        into place, the journal removed. Returns the Dataset: in memory where the grid fits LATTICE_BYTES (or
+        without an output), else the file opened lazily (see :func:`run_sweep`).
 
-        ``picture(ds)`` (the command line's drawing) is called once with the Dataset: where it holds every variable,
-        in this thread while the file is written in another (the netCDF library compresses without holding
-        Python's lock, so on two cores the drawing costs little more than the writing alone); where the variables
-        sampled in time stayed in the journal, after the write, with the Dataset read from the file. The write is
-        always waited for: the file is whole or absent when this returns or raises."""
-        scene, plan, size, journal = self.scene, self.plan, self.chunk_size, self.journal
+        ``picture(ds)`` (the command line's drawing) is called once, with the Dataset in memory: the whole grid, or
+        a regular lattice of it where the grid is larger (every n-th point along each dim, attribute ``lattice``).
+        The file is whole or absent when this returns or raises."""
+        scene, size, journal = self.scene, self.chunk_size, self.journal
         protocol = protocols.get(scene.protocol)
-        # with a journal the arrays sampled in time stay there: written into the file chunk by chunk, never held
-        kept = protocol.journal_keeps(scene, plan) if journal is not None else frozenset()
-        result = (FlatArrays(plan.n_points, skip=kept) if journal is None
-                  else NetCDFWriter(self.output, plan.n_points, skip=kept))
-        t0 = time.perf_counter()
-        run_chunks(scene, plan, size, [result] if journal is None else [journal, result], progress, self.imap)
-        self.compute_s = time.perf_counter() - t0
-        blocks = protocol.sampled_blocks(scene, plan, size, journal) if kept else None  # (no reference to the plan)
-        ds = protocol.dataset(scene, plan, result.flat, result.seconds, history, sampled=blocks is None)
-        # the Dataset holds what it needs; the plan's and the unused outputs' per-point arrays (~100 bytes per point)
-        # go before the netCDF write, whose copies are the peak of a large run's memory
-        del plan
-        result.flat.clear()
-        self.plan = None
+        coords = protocol.coords(scene)
         if scene.simulated_hopf_line:  # asked for: the driven kernel is compiled only then
-            ds = with_simulated_line(ds, scene.params, scene.model, scene.model_tol, scene.state_law)
-        if journal is None:
-            if picture is not None:
-                picture(ds)
-            return ds
-        if self.output.exists() and not self.overwrite:  # checked before the work: someone wrote it meanwhile
-            raise OutputError(f"{self.output} appeared during the run; the finished chunks are kept in {journal.path}: "
-                              "run the same command with --resume --overwrite (resume=True, overwrite=True) to "
-                              "replace it, or move it away and --resume")
+            coords = dict(with_simulated_line(xr.Dataset(coords=coords), scene.params, scene.model, scene.model_tol,
+                                              scene.state_law).coords.variables)
+        steps = (None if self.output is None else
+                 lattice_steps(scene.shape, protocol.file_bytes_per_point(scene)))
+        memory = GridArrays(steps)
+        sinks = [memory] if self.output is None else [memory, NetCDFRegions(self.output, block_shape(scene.shape,
+                                                                                                      size))]
+        regions = Regions(scene, size, sinks, coords)
+        t0 = time.perf_counter()
         try:
-            result.write(ds, blocks, picture if blocks is None else None, journal.remove)
+            run_chunks(scene, None, size, [regions] if journal is None else [journal, regions], progress, self.imap)
+            self.compute_s = time.perf_counter() - t0
+            if self.output is not None and self.output.exists() and not self.overwrite:  # someone wrote it meanwhile
+                raise OutputError(f"{self.output} appeared during the run; the finished chunks are kept in "
+                                  f"{journal.path}: run the same command with --resume --overwrite (resume=True, "
+                                  "overwrite=True) to replace it, or move it away and --resume")
+            self.totals = regions.totals
+            attrs = protocol.attributes(scene, regions.totals, history)
+            regions.finish(attrs)
         except OSError as exc:
+            regions.abort(exc)
+            if journal is None or isinstance(exc, OutputError):  # (an OutputError says what is kept already)
+                raise
             raise write_failed(exc, self.output, journal.path, len(journal.done())) from None
-        if blocks is None:
-            return ds
-        ds = open_dataset(self.output, load=False)
+        except BaseException as exc:
+            regions.abort(exc)
+            raise
+        if journal is not None:
+            journal.remove()
+        ds = memory.dataset(attrs)
         if picture is not None:
             picture(ds)
-        return ds
+        return ds if memory.whole else open_dataset(self.output, load=False)
 
 
 @contextmanager
@@ -172,8 +176,7 @@ def prepare_run(scene: Scene, output: str | os.PathLike | None = None, resume: b
         output = Path(output)
         check_targets({"data": output}, overwrite=overwrite,
                       need_bytes=max(0, size.disk - _bytes_in(journal_path(output))) if resume else size.disk)
-    plan = make_plan(scene)
-    chunk_size = int(chunk_size or plan.chunk_size)
+    chunk_size = int(chunk_size or protocols.get(scene.protocol).chunk_size(scene))
     with ExitStack() as stack:
         if output is not None:
             stack.enter_context(output_lock(output))
@@ -182,10 +185,10 @@ def prepare_run(scene: Scene, output: str | os.PathLike | None = None, resume: b
         if output is not None:
             # the sources' digest: a journal of another version of sweep (or of edited sources) may hold chunks whose
             # numbers this version would not give, which the plan's hash alone does not see
-            identity = {"scene": scene.to_toml(), "plan_hash": plan.hash(), "chunk_size": chunk_size,
+            identity = {"scene": scene.to_toml(), "plan_hash": scene_plan_hash(scene), "chunk_size": chunk_size,
                         "n_points": scene.n_points, "sweep_source": source_digest()}
-            journal = Journal.open(output, identity, chunk_ranges(plan.n_points, chunk_size), resume, overwrite)
-        yield PreparedRun(scene, plan, chunk_size, output, overwrite, journal, imap)
+            journal = Journal.open(output, identity, chunk_ranges(scene.shape, chunk_size), resume, overwrite)
+        yield PreparedRun(scene, chunk_size, output, overwrite, journal, imap)
 
 
 def _bytes_in(folder: Path) -> int:
@@ -193,11 +196,17 @@ def _bytes_in(folder: Path) -> int:
     return sum(p.stat().st_size for p in folder.iterdir() if p.is_file()) if folder.is_dir() else 0
 
 
-def warm_up_kernels(scene: Scene, plan, fan_out: bool = False) -> None:
-    """Compile (or load from numba's disk cache) the kernels the scene uses, on one point each (its protocol's
-    Protocol.warm_up; ``fan_out``: before a dask fan-out, also those only some points may need), and the driven
-    kernel of the simulated Hopf line only where the scene asks for that line."""
-    protocols.get(scene.protocol).warm_up(scene, plan, fan_out)
+WARM_UP_POINTS = 10_000
+"""The warm-up plans a subsample of at most this many points of a larger grid (sweep/plan/sample.py) to find the
+kernels its points use."""
+
+
+def warm_up_kernels(scene: Scene, fan_out: bool = False) -> None:
+    """Compile (or load from numba's disk cache) the kernels the scene uses, on one point each of a subsample of its
+    grid (its protocol's Protocol.warm_up; ``fan_out``: before a dask fan-out, also those only some points may
+    need), and the driven kernel of the simulated Hopf line only where the scene asks for that line."""
+    sample, _ = plan_sample(scene, WARM_UP_POINTS)
+    protocols.get(scene.protocol).warm_up(sample, make_plan(sample), fan_out)
     if scene.simulated_hopf_line:
         with warnings.catch_warnings():  # the scene's axes were checked; this is one of its velocities
             warnings.simplefilter("ignore", PlausibilityWarning)

@@ -47,7 +47,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     protocol = protocols.get(scene.protocol)
     picture = _StagedPicture(_png(args))
     try:
-        ds, compile_s, elapsed, compute_s = _run_to_file(scene, args, warm=protocol.warm_up_timed, picture=picture)
+        ds, totals, compile_s, elapsed, compute_s = _run_to_file(scene, args, warm=protocol.warm_up_timed,
+                                                                 picture=picture)
         out = args.output
         # the rate of the computing alone: with the file and the picture in it, the default scene's 20,000 points
         # read ~20,000 points/s, of a computing at ~500,000
@@ -55,7 +56,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
                   if protocol.warm_up_timed else ", including compilation on a first run")
         print(f"wrote {out} ({scene.n_points} points in {elapsed:.2f} s: computed in {_seconds(compute_s)} s, "
               f"{scene.n_points / max(compute_s, 1e-9):,.0f} points/s, then the file and the picture{kernel})")
-        for line in protocol.summary(ds):
+        for line in protocol.summary(totals, ds):
             print(line)
         for png in picture.publish():
             print(f"wrote {png}")
@@ -66,7 +67,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"sweep: could not draw the picture ({type(exc).__name__}: {exc}); the data are in {out}",
               file=sys.stderr)
         return 1
-    return _most_failed(ds, out)
+    return _most_failed(ds, totals, out)
 
 
 class _StagedPicture:
@@ -149,14 +150,14 @@ MOST_FAILED = 0.5
 is the model's answer) exits with code 1."""
 
 
-def _most_failed(ds, out: Path) -> int:
+def _most_failed(ds, totals, out: Path) -> int:
     """Exit code of a finished run: 1, with a one-line summary on stderr, where most points failed (NOT_FAILED)."""
     from .scene.plausibility import not_ok_summary
 
-    bad, text = not_ok_summary(ds["status"].values, ds["status"].attrs["flag_meanings"].split(), failed_only=True)
-    if bad <= MOST_FAILED * ds["status"].size:
+    bad, text = not_ok_summary(totals.counts["status"], ds["status"].attrs["flag_meanings"].split(), failed_only=True)
+    if bad <= MOST_FAILED * totals.points:
         return 0
-    return _fail(f"{bad} of {ds['status'].size} points failed ({text}); the values are in {out} but most are NaN "
+    return _fail(f"{bad} of {totals.points} points failed ({text}); the values are in {out} but most are NaN "
                  "or inaccurate: check the units (K_over_M [s-2], V [m/s]) and ranges", 1)
 
 
@@ -170,7 +171,8 @@ def _run_to_file(scene, args: argparse.Namespace, warm: bool, picture=None):
     """run_sweep into args.output, journaled (resumable with --resume), through api.prepare_run: every check, the
     lock and the journal's check before the kernels are loaded (``warm``: separately, timed; a dask run always
     warms up before its fan-out); ``picture(ds)`` drawn while the file is written (api.PreparedRun.finish).
-    Returns (Dataset, seconds warming up, seconds running (the picture included), seconds of the chunk loop)."""
+    Returns (Dataset, the run's totals, seconds warming up, seconds running (the picture included), seconds of the
+    chunk loop)."""
     from .api import prepare_run, warm_up_kernels
     from .run.compile_notice import timed
 
@@ -180,11 +182,11 @@ def _run_to_file(scene, args: argparse.Namespace, warm: bool, picture=None):
         t_warm = time.perf_counter()
         if warm or dask:
             with timed("kernels"):  # says so before a first compile (empty numba cache) and when it takes long
-                warm_up_kernels(scene, run.plan, fan_out=dask)
+                warm_up_kernels(scene, fan_out=dask)
         compile_s = time.perf_counter() - t_warm
         t0 = time.perf_counter()
         ds = run.finish(progress=None if not args.quiet else False, history=_history(), picture=picture)
-    return ds, compile_s, time.perf_counter() - t0, run.compute_s
+    return ds, run.totals, compile_s, time.perf_counter() - t0, run.compute_s
 
 
 def _history() -> str:

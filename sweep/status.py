@@ -7,6 +7,7 @@ Never renumber or remove a code (files on disk depend on the values); append new
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from enum import IntEnum
 
 import numpy as np
@@ -51,8 +52,14 @@ MODEL_FLAG = {"flag_values": np.array([0, 1], np.int8), "flag_meanings": "quasis
 """CF flag attributes of the per-point ``model`` variable (0: the quasi-static model, 1: the inertial one)."""
 
 
-def flag_summary(ds, name: str) -> str:
-    """"name: meaning count, ..." of the flag variable ``name`` of a Dataset."""
-    meanings = ds[name].attrs["flag_meanings"].split()
-    codes, counts = np.unique(ds[name].values, return_counts=True)
-    return f"{name}: " + ", ".join(f"{meanings[c]} {n}" for c, n in zip(codes, counts))
+def flag_summary(ds, name: str, counts: Mapping[str, Mapping[int, int]] | None = None) -> str:
+    """"name: meaning count, ..." of the flag variable ``name`` of a Dataset: counted in it, or taken from
+    ``counts`` (name -> flag value -> points: a run's totals, sweep.write.regions.RunTotals.counts)."""
+    attrs = ds[name].attrs
+    meanings = dict(zip(np.asarray(attrs["flag_values"]).tolist(), attrs["flag_meanings"].split()))
+    if counts is None:
+        codes, n = np.unique(ds[name].values, return_counts=True)
+        found = dict(zip(codes.tolist(), n.tolist()))
+    else:
+        found = counts.get(name, {})
+    return f"{name}: " + ", ".join(f"{meanings.get(c, c)} {found[c]}" for c in sorted(found) if found[c])

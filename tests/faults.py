@@ -12,7 +12,7 @@ installs the faults, then runs ``sweep.cli.main`` on the arguments after ``--`` 
 
 * ``enospc-chunk:N`` / ``eacces-chunk:N``: the journal's chunk writes after the first N fail with
   OSError(ENOSPC) / PermissionError(EACCES), after writing part of their temporary file;
-* ``enospc-netcdf``: the netCDF write fails with OSError(ENOSPC) after writing part of its ``.part`` file;
+* ``enospc-netcdf``: the netCDF file's block writes fail with OSError(ENOSPC) after three blocks;
 * ``eacces-dir:DIR``: creating a file or folder under DIR fails with PermissionError(EACCES), as in a read-only
   folder (for tests run as root, where chmod stops nothing);
 * ``mkdir-output:PATH``: a folder appears at PATH just before the netCDF file is written there;
@@ -113,14 +113,19 @@ def _failing_chunk_writes(code: int, after: int) -> None:
     journal._save_arrays = save
 
 
-def _failing_netcdf() -> None:
-    import xarray as xr
+def _failing_netcdf(after: int = 3) -> None:
+    """The netCDF file's block writes fail with ENOSPC after ``after`` blocks (its .part then holds a partial file)."""
+    from sweep.write.netcdf import NetCDFRegions
 
-    def to_netcdf(self, path, *args, **kwargs):
-        Path(path).write_bytes(b"\x89HDF partial")  # a torn .part, which the writer must remove
-        raise _error(errno.ENOSPC, path)
+    real, calls = NetCDFRegions.put, [0]
 
-    xr.Dataset.to_netcdf = to_netcdf
+    def put(self, block):
+        calls[0] += 1
+        if calls[0] > after:
+            raise _error(errno.ENOSPC, self.part)
+        return real(self, block)
+
+    NetCDFRegions.put = put
 
 
 def _read_only(folder: Path) -> None:
@@ -148,15 +153,16 @@ def _read_only(folder: Path) -> None:
 
 
 def _folder_in_the_way(path: Path) -> None:
-    import sweep.write.netcdf as netcdf
+    """A folder appears where the file goes while the run computes (its rename into place then fails)."""
+    from sweep.write.netcdf import NetCDFRegions
 
-    real = netcdf.write
+    real = NetCDFRegions.close
 
-    def write(ds, output, *args, **kwargs):
+    def close(self, attrs):
         Path(path).mkdir(parents=True, exist_ok=True)
-        return real(ds, output, *args, **kwargs)
+        return real(self, attrs)
 
-    netcdf.write = write
+    NetCDFRegions.close = close
 
 
 def _wrapped(stop_chunk, action):

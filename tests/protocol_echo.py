@@ -10,8 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sweep.assemble.construct import assemble
-from sweep.assemble.dataset import global_attrs, grid_coords, variable
+from sweep.assemble.dataset import global_attrs, variable
 from sweep.errors import InputError
 from sweep.plan.plan import point_params
 from sweep.protocols.base import Protocol
@@ -74,17 +73,19 @@ class EchoProtocol(Protocol):
     def warm_up(self, scene, plan):
         pass
 
-    def dataset(self, scene, plan, flat, seconds, history, sampled):
+    def variables(self, scene, plan, arrays):
         grid = lambda a: a.reshape(scene.shape)  # noqa: E731
-        data = {"echo": variable(scene.dims, grid(flat["echo"]), "1", "reduced stiffness, echoed"),
-                "status": variable(scene.dims, grid(flat["status"]), "1", "numerical status", **flag_attrs())}
-        return assemble(data, grid_coords(scene), global_attrs(scene, "echo", "a test protocol", history, seconds))
+        return {"echo": variable(scene.dims, grid(arrays["echo"]), "1", "reduced stiffness, echoed"),
+                "status": variable(scene.dims, grid(arrays["status"]), "1", "numerical status", **flag_attrs())}
+
+    def attributes(self, scene, totals, history):
+        return global_attrs(scene, "echo", f"a test protocol over {totals.points} points", history, totals.seconds)
 
     def dry_run(self, scene):
         return [f"{'plan':>28}: echo chi at {scene.n_points} points"]
 
-    def summary(self, ds):
-        return [f"echo: {int(ds['echo'].count())} points"]
+    def summary(self, totals, ds):
+        return [f"echo: {totals.points} points"]
 
     def draw(self, ds, path, variable=None):
         Path(path).write_text("echo picture")

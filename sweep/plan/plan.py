@@ -74,7 +74,8 @@ from ..integrate.models.state_laws import STATE_LAWS
 from ..integrate.solvers import METHODS
 from ..scene.scene import Scene
 
-__all__ = ["Plan", "PointParams", "chunk_size_for", "common_fields", "point_params", "make_plan", "choose_method",
+__all__ = ["Plan", "PlanStats", "PointParams", "scene_plan_hash", "chunk_size_for", "common_fields", "point_params",
+           "make_plan", "choose_method",
            "line_uses_inertia",
            "samples_in_lanes", "stop_plan_for_points"]
 
@@ -268,20 +269,33 @@ class Plan:
     def roundoff(self) -> float:
         return float(ROUNDOFF[np.dtype(self.dtype)])
 
-    def describe(self) -> dict[str, str]:
-        """Human-readable summary, also stored in the Dataset attrs."""
+    def stats(self) -> PlanStats:
+        """What :meth:`describe` counts over the plan's points, mergeable over the chunks of a run (PlanStats)."""
+        finite_steps = self.step[np.isfinite(self.step)]
+        return PlanStats(points=self.n_points,
+                         step_min=float(finite_steps.min()) if finite_steps.size else np.nan,
+                         step_max=float(finite_steps.max()) if finite_steps.size else np.nan,
+                         not_finite=int(np.count_nonzero(~self.finite)),
+                         methods=tuple((m, int(np.count_nonzero(self.point_method == i)))
+                                       for i, m in enumerate(self.point_methods)))
+
+    def describe(self, stats: PlanStats | None = None) -> dict[str, str]:
+        """Human-readable summary, also stored in the Dataset attrs; ``stats``: the counts of the whole scene (its
+        chunks' :meth:`stats` merged) where this plan is one chunk's."""
         if self.notes:
             return dict(self.notes)
-        step = (f"{self.step.min():.6g}..{self.step.max():.6g}" if self.step.min() < self.step.max()
-                else f"{self.step[0]:.6g}")
+        stats = stats or self.stats()
+        step = (f"{stats.step_min:.6g}..{stats.step_max:.6g}" if stats.step_min < stats.step_max
+                else f"{stats.step_min:.6g}")
+        methods = stats.method_names(self.method)
         text = {
             "model": _model_policy(self.model, self.model_tol),
             "state_law": self.state_law,
             "state": ("xi (u = s - xi)" + (" + tau quadrature" if self.needs_tau else "") if self.aging_identity
                       else "(xi, u) in the phase plane, then xi in t = 1/u (docs/physics.md 7.3)"),
             "method": f"{self.method} ({self.method_reason})" + "".join(
-                f"; {m} at {self.points_of(m).size} stiff points (chi/A <= {STIFF_K_MAX:g}, mu1 < 0, m2 > 0, "
-                f"|mu1/A|^3/(4 m2 chi/A^2) >= {STIFF_WORK_MIN:g})" for m in self.point_methods[1:]),
+                f"; {m} at {stats.count(m)} stiff points (chi/A <= {STIFF_K_MAX:g}, mu1 < 0, m2 > 0, "
+                f"|mu1/A|^3/(4 m2 chi/A^2) >= {STIFF_WORK_MIN:g})" for m in methods[1:]),
             "stepper": (("adaptive" if self.adaptive else "fixed-step")
                         + (f", {self.dtype.name} lanes" if self.lanes else ", one point per thread")),
             **({"sampled_lanes": f"{LANES_METHOD} in adaptive lanes with its fine twin, each sample read off the dense "
@@ -301,11 +315,12 @@ class Plan:
                                 "Richardson pair per point (coarse mesh, same mesh halved): coarse run returned, "
                                 "2 |coarse - fine| + bound on cancelled contributions (integrate/stop_point.py)")
                                + ": <name>_error variables"),
-            "step_rule": self.rule,
+            "step_rule": (self.rule if methods == self.point_methods
+                          else "; ".join(_step_rule(m, self.lanes) for m in methods)),
             "max_steps": str(self.max_steps),
             "horizon": "per point: until the closed-form tail is accurate (and all requested times are passed)",
-            "points": str(self.n_points),
-            "points_without_finite_limit": str(int(np.count_nonzero(~self.finite))),
+            "points": str(stats.points),
+            "points_without_finite_limit": str(stats.not_finite),
         }
         if not self.aging_identity:  # the general path (its rule says the rest)
             text.update(step=f"adaptive, local tolerance {self.ctrl_tol:.3g}",
@@ -350,6 +365,45 @@ class Plan:
             h.update(f"{arr.dtype.str}{arr.shape}{zlib.crc32(arr):08x}".encode())
         self.__dict__["_hash"] = h.hexdigest()[:16]  # a frozen dataclass: its __setattr__ refuses
         return self.__dict__["_hash"]
+
+
+class PlanStats(NamedTuple):
+    """The counts of a plan that its description states (Plan.describe), over one chunk or, merged with ``+``,
+    over every chunk of a run."""
+
+    points: int
+    step_min: float
+    step_max: float
+    not_finite: int
+    """Points without a finite relaxed slip."""
+    methods: tuple[tuple[str, int], ...]
+    """(method, points) of each method used (the plan's own method first, counted even at 0 points)."""
+
+    def count(self, method: str) -> int:
+        return sum(n for m, n in self.methods if m == method)
+
+    def method_names(self, first: str) -> tuple[str, ...]:
+        """``first`` (the plan's method), then every other method with points, in the order met."""
+        return (first,) + tuple(dict.fromkeys(m for m, n in self.methods if m != first and n > 0))
+
+    def __add__(self, other: PlanStats) -> PlanStats:  # type: ignore[override]
+        counts: dict[str, int] = {}
+        for m, n in self.methods + other.methods:
+            counts[m] = counts.get(m, 0) + n
+        return PlanStats(self.points + other.points, float(np.fmin(self.step_min, other.step_min)),
+                         float(np.fmax(self.step_max, other.step_max)), self.not_finite + other.not_finite,
+                         tuple(counts.items()))
+
+
+def scene_plan_hash(scene: Scene) -> str:
+    """Digest of what determines a run's numbers besides sweep's own code (the journal adds the sources' digest):
+    the scene (its canonical TOML: every parameter, axis value, setting and protocol field) and the values of the
+    calibrated constants (sweep/accuracy.py). Computed from the scene alone, in microseconds whatever the grid's size:
+    each chunk's plan follows from the scene by the rules of this module."""
+    from .. import accuracy
+
+    constants = sorted((k, v) for k, v in vars(accuracy).items() if k.isupper())
+    return hashlib.sha256(repr((scene.to_toml(), constants)).encode()).hexdigest()[:16]
 
 
 def line_uses_inertia(gamma_over_A: np.ndarray, model: str, model_tol: float) -> np.ndarray:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 import numpy as np
@@ -17,14 +16,18 @@ PLANNED_POINTS = 250_000
 
 
 def plan_sample(scene: Scene, max_points: int = PLANNED_POINTS) -> tuple[Scene, str | None]:
-    """(scene, None) for a grid of at most ``max_points`` points; else the scene on every n-th value of each axis
-    (both ends kept, at most ``max_points`` points), with a line that says so."""
+    """(scene, None) for a grid of at most ``max_points`` points; else the scene on values spread evenly over each
+    axis (both ends kept, at most ``max_points`` points in all), with a line that says so."""
     if scene.n_points <= max_points:
         return scene, None
-    n_k, n_v = scene.shape
-    per_axis = max(2, int(math.isqrt(max_points)))
-    k = np.unique(np.linspace(0, n_k - 1, min(n_k, per_axis)).round().astype(int))
-    v = np.unique(np.linspace(0, n_v - 1, min(n_v, max_points // k.size)).round().astype(int))
-    sample = replace(scene, K_over_M=scene.K_over_M[k], V=scene.V[v])
-    return sample, (f"a subsample of {k.size} K/M x {v.size} V spread over the grid (its {scene.n_points:,} points "
-                    f"are too many to plan for a dry run): the counts below are the subsample's")
+    picked, room = {}, max_points
+    for d, n in sorted(zip(scene.dims, scene.shape), key=lambda item: item[1]):  # the short axes first, whole
+        left = len(scene.dims) - len(picked)
+        take = min(n, max(2, int(room ** (1.0 / left))))
+        picked[d] = np.unique(np.linspace(0, n - 1, take).round().astype(int))
+        room = max(1, room // picked[d].size)
+    values = {d: scene.axis(d)[picked[d]] for d in scene.dims}
+    sample = replace(scene, K_over_M=values["K_over_M"], V=values["V"], axes={d: values[d] for d in scene.dims[2:]})
+    sizes = " x ".join(f"{picked[d].size} {'K/M' if d == 'K_over_M' else d}" for d in scene.dims)
+    return sample, (f"a subsample of {sizes} spread over the grid (its {scene.n_points:,} points are too many to plan "
+                    f"for a dry run): the counts below are the subsample's")

@@ -8,7 +8,7 @@ loads no kernels.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 
     from ..plan.plan import Plan
     from ..scene.scene import Scene
+    from ..write.regions import RunTotals
 
 __all__ = ["ChunkCompute", "Options", "Protocol"]
 
@@ -159,20 +160,26 @@ class Protocol(ABC):
         from the cache rather than each compile it) also those only some points may need."""
 
     # --- the output -------------------------------------------------------------------------------------------------
-    def journal_keeps(self, scene: Scene, plan: Plan) -> frozenset[str]:
-        """Names of the chunk arrays that a journaled run leaves in its journal, written into the file chunk by chunk
-        (:meth:`sampled_blocks`) instead of being held whole."""
-        return frozenset()
+    def coords(self, scene: Scene) -> dict[str, xr.Variable]:
+        """The coordinates of the scene's file over its whole grid (the axes and the quantities along them)."""
+        from ..assemble.dataset import grid_coords
 
-    def sampled_blocks(self, scene: Scene, plan: Plan, chunk_size: int, journal) -> Iterator | None:
-        """The variables kept in the journal (:meth:`journal_keeps`), one chunk at a time, for the netCDF writer."""
-        return None
+        return grid_coords(scene)
 
     @abstractmethod
-    def dataset(self, scene: Scene, plan: Plan, flat: dict[str, np.ndarray], seconds: float, history: str,
-                sampled: bool) -> xr.Dataset:
-        """The Dataset of a finished run from its per-point arrays (flat over the grid); ``sampled=False``: the
-        variables kept in the journal are left out."""
+    def variables(self, scene: Scene, plan: Plan, arrays: dict[str, np.ndarray]) -> dict[str, xr.Variable]:
+        """The data variables over the grid of ``scene`` from its chunk's arrays (what :meth:`chunk` computed, in
+        the grid's C order). A run calls it once per chunk, with the chunk's block of the grid as ``scene`` and that
+        block's plan (sweep/write/regions.py): the variables depend on each point alone."""
+
+    @abstractmethod
+    def attributes(self, scene: Scene, totals: RunTotals, history: str) -> dict[str, object]:
+        """The global attributes of the scene's file, from the run's totals over every chunk (sweep.write.regions:
+        the flags' counts, the plans' counts, the seconds)."""
+
+    def reduce(self, variables: Mapping[str, xr.Variable]) -> dict[str, float]:
+        """Maxima over one chunk's variables that :meth:`summary` reports (merged over the chunks by max)."""
+        return {}
 
     # --- what the user sees -------------------------------------------------------------------------------------------
     @abstractmethod
@@ -180,11 +187,12 @@ class Protocol(ABC):
         """The dry run's lines after the size: the plan (of a subsample where the grid is large) and, where it is
         measured, the time."""
 
-    def summary(self, ds: xr.Dataset) -> list[str]:
-        """Lines ``sweep run`` prints about a finished file: the flags' counts."""
+    def summary(self, totals: RunTotals, ds: xr.Dataset) -> list[str]:
+        """Lines ``sweep run`` prints about a finished run: the flags' counts (``ds``: its Dataset, for the flags'
+        meanings)."""
         from ..status import flag_summary
 
-        return [flag_summary(ds, "status"), flag_summary(ds, "model")]
+        return [flag_summary(ds, "status", totals.counts), flag_summary(ds, "model", totals.counts)]
 
     def picture_paths(self, path: str | Path, trajectories: bool, points: int, variable: str | None = None
                       ) -> list[Path]:

@@ -1,9 +1,10 @@
 """Where the chunks of a sweep run: in this process (numba's own threads; past the first chunk, chunks side by side
 in threads of one numba thread each: sweep/run/concurrent_chunks.py) or on a dask.distributed cluster.
 
-Either way a chunk is the same task, :func:`sweep.run.runner.chunk_task` (a worker is sent the chunk's share of the plan
-made once by the driver for the whole scene, threads read the whole plan; the chunk's points; the same compiled
-kernels), and its results come back to the driver, the single writer of the journal and of the file. A point's
+Either way a chunk is the same task, :func:`sweep.run.runner.chunk_task` (sent the scene and the chunk's points, a
+block of the grid, which it plans itself: no plan of the whole grid exists anywhere; the same compiled kernels), and
+its results come back to the driver, the single writer of the journal and of the file, at most IN_FLIGHT_PER_WORKER
+chunks a worker in flight. A point's
 numbers depend on that point only and the kernels use no reassociating fastmath flags, so the results are bitwise
 the same whatever the backend, the chunking and the number of workers (on one instruction set).
 
@@ -137,9 +138,9 @@ def _on_dask(client, scene: Scene, plan: Plan, todo: Iterable[tuple[int, np.ndar
         if item is None:
             return False
         i, points = item
-        # each task carries its share of the plan (~60 bytes a point): no worker holds the whole plan, and the
-        # transfers overlap the computing instead of a broadcast of it all before the first chunk
-        future = client.submit(chunk_task, scene_f, plan.take(points), points,
+        # a chunk of a scene is planned by its worker from the scene (plan None); a caller's own plan travels as
+        # the chunk's share of it
+        future = client.submit(chunk_task, scene_f, None if plan is None else plan.take(points), points,
                                key=f"sweep-chunk-{i}-{id(todo)}", retries=3)
         index[future.key] = i
         pending.add(future)

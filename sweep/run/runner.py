@@ -12,21 +12,21 @@ chunking, the order in which chunks finish, or how many runs it took.
 from __future__ import annotations
 
 import functools
-import math
 import time
 from collections.abc import Iterable, Sequence
 
 import numpy as np
 
 from .. import protocols
-from ..plan.plan import Plan
+from ..plan.layout import block_slices, chunk_bounds
+from ..plan.plan import Plan, make_plan
 from ..scene.scene import Scene
 from ..write.writer import Writer
 from .concurrent_chunks import as_completed_in_threads, side_by_side
 from .progress import Progress
 
-__all__ = ["ORDER_SEED", "Interrupted", "chunk_points", "chunk_ranges", "chunk_task", "in_process", "rows",
-           "run_chunks"]
+__all__ = ["ORDER_SEED", "ChunkLayout", "Interrupted", "chunk_points", "chunk_ranges", "chunk_task", "in_process",
+           "rows", "run_chunks"]
 
 ORDER_SEED = 20261121
 """Seed of the fixed pseudo-random order of the points within a chunk (:func:`chunk_points`)."""
@@ -36,37 +36,63 @@ class Interrupted(RuntimeError):
     """A journaled run was interrupted (Ctrl-C); the message says where the finished chunks are and how to resume."""
 
 
+class ChunkLayout(Sequence):
+    """The chunks of a grid: ``layout[i]`` the flat points of chunk i, the block i of sweep/plan/layout.py (a
+    consecutive range of the flat index that is also a rectangle of the grid) in a fixed pseudo-random order of its
+    own (seeded by ORDER_SEED and i): the costly points cluster on the grid, and every thread's share of a chunk then
+    mixes cheap and costly ones. Made on demand, so a layout holds its chunks' bounds only (16 bytes a chunk, not 8 a
+    point). Read-only arrays."""
+
+    def __init__(self, shape: tuple[int, ...], chunk_size: int) -> None:
+        self.bounds = chunk_bounds(shape, chunk_size)
+
+    def __len__(self) -> int:
+        return len(self.bounds)
+
+    def __getitem__(self, i):  # an index (the points) or a slice (a list of them)
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        lo, hi = self.bounds[i]
+        points = lo + np.random.default_rng([ORDER_SEED, i]).permutation(hi - lo)
+        points.flags.writeable = False
+        return points
+
+    def size(self, i: int) -> int:
+        lo, hi = self.bounds[i]
+        return hi - lo
+
+
 @functools.lru_cache(maxsize=8)
-def chunk_points(n: int, chunk_size: int) -> tuple[np.ndarray, ...]:
-    """The points 0..n-1 split into consecutive chunks of at most ``chunk_size``, each in a fixed pseudo-random order:
-    the costly points cluster on the grid, and every thread's share of a chunk then mixes cheap and costly ones. A
-    chunk covers a contiguous range of the flat grid index, so that its trajectories can be written into the file as
-    one block (sweep/write/netcdf.py) and never held whole. Cached (read-only arrays): a run asks twice, for its
-    journal's ranges and for its chunks, and the permutations cost ~0.3 ms of the default scene's ~35 ms run."""
-    rng = np.random.default_rng(ORDER_SEED)
-    bounds = np.array_split(np.arange(n), max(1, math.ceil(n / chunk_size)))
-    chunks = tuple(rng.permutation(block) for block in bounds)
-    for chunk in chunks:
-        chunk.flags.writeable = False
-    return chunks
+def chunk_points(shape: int | tuple[int, ...], chunk_size: int) -> ChunkLayout:
+    """The chunk layout of a grid of ``shape`` (or of ``n`` points in a row) with at most ``chunk_size`` points a
+    chunk (:class:`ChunkLayout`)."""
+    return ChunkLayout((shape,) if isinstance(shape, (int, np.integer)) else tuple(shape), chunk_size)
 
 
-def chunk_ranges(n: int, chunk_size: int) -> list[tuple[int, int]]:
-    """The chunk layout of ``n`` points (:func:`chunk_points`): (first point, last point + 1) of each chunk, which the
+def chunk_ranges(shape: int | tuple[int, ...], chunk_size: int) -> list[tuple[int, int]]:
+    """The chunk layout of a grid (:func:`chunk_points`): (first point, last point + 1) of each chunk, which the
     journal records and checks every chunk against."""
-    return [(int(points.min()), int(points.max()) + 1) for points in chunk_points(n, chunk_size)]
+    return chunk_points(shape, chunk_size).bounds
 
 
-def chunk_task(scene: Scene, plan: Plan, points: np.ndarray, shared: bool = False,
+def chunk_task(scene: Scene, plan: Plan | None, points: np.ndarray, shared: bool = False,
                progress: bool | None = False) -> dict[str, np.ndarray]:
     """Compute one chunk (any backend) with the scene's protocol: per-point arrays plus ``seconds``, the time it took.
-    ``plan``: the chunk's share of the scene's plan (Plan.take, made once by the driver for the whole scene: what a
-    dask worker is sent), ``points`` its points in the grid; with ``shared``, the whole plan itself, ``points`` the
-    chunk's points in it (the threads backend: no copy of the chunk's share, ~0.1 ms a chunk of 4096 points).
-    ``progress``: a bar of the chunk's own slow points, where the protocol has them (see :func:`in_process`)."""
+    ``plan`` None (a run of a scene): the chunk is a block of the scene's grid (``points``, its flat indices in the
+    grid: a consecutive range, shuffled), planned here from its sub-grid (Scene.sub_grid), so no plan of the whole
+    grid is ever made or shipped to a worker. Else ``plan`` is a plan made by the caller (sweep.protocols.stop.chunk
+    .execute): its share for this chunk (Plan.take), ``points`` the chunk's points; with ``shared``, the plan itself,
+    ``points`` the chunk's rows in it (no copy of the chunk's share). ``progress``: a bar of the chunk's own slow
+    points, where the protocol has them (see :func:`in_process`)."""
     t0 = time.perf_counter()
-    compute = protocols.get(scene.protocol).chunk(scene, plan, progress)
-    arrays = compute(rows(points, shared))
+    protocol = protocols.get(scene.protocol)
+    if plan is None:
+        lo = int(points.min())
+        sub = scene.sub_grid(block_slices(scene.shape, lo, lo + points.size))
+        compute, at = protocol.chunk(sub, make_plan(sub), progress), points - lo
+    else:
+        compute, at = protocol.chunk(scene, plan, progress), rows(points, shared)
+    arrays = compute(at)
     arrays["seconds"] = np.array(time.perf_counter() - t0)
     return arrays
 
@@ -86,37 +112,42 @@ def in_process(scene: Scene, plan: Plan, todo: Iterable[tuple[int, np.ndarray]],
     of them: concurrent_chunks.MIN_CHUNKS_PER_THREAD). Every chunk reads the one plan (``shared``). A lone chunk
     (a small grid is one: plan.ONE_CHUNK_POINTS) gets ``progress`` for its inertial points, which the run's bar,
     counting chunks, would not show until the end."""
-    todo = list(todo)
-    for n, (i, points) in enumerate(todo):
+    todo = todo if isinstance(todo, Sequence) else list(todo)
+    for n in range(len(todo)):
+        i, points = todo[n]
         yield i, task(scene, plan, points, shared=True, progress=progress if len(todo) == 1 else False)
         workers = side_by_side(len(todo) - n - 1)
         if workers > 1:
-            rest = iter(todo[n + 1:])
+            rest = (todo[j] for j in range(n + 1, len(todo)))
             yield from as_completed_in_threads(lambda pts: task(scene, plan, pts, shared=True), rest, workers)
             return
 
 
-def run_chunks(scene: Scene, plan: Plan, chunk_size: int | None, writers: Sequence[Writer],
+def run_chunks(scene: Scene, plan: Plan | None, chunk_size: int | None, writers: Sequence[Writer],
                progress: bool | None, imap=None) -> None:
     """The one chunk loop: every chunk of ``scene`` that no writer holds yet (sweep/write/writer.py: the journal of
     an earlier run), computed through ``imap`` (sweep/run/backends.py; default :func:`in_process`) and handed to
-    every writer as it finishes; then the chunks held from the earlier run, read back and handed to the others."""
+    every writer as it finishes; then the chunks held from the earlier run, read back and handed to the others.
+    ``plan`` None: the chunks are the blocks of the scene's grid, each planned where it is computed
+    (:func:`chunk_task`); else the points of ``plan`` in rows."""
     imap = imap or in_process
-    n = plan.n_points
-    chunks = chunk_points(n, chunk_size or plan.chunk_size)
+    if plan is None:
+        n, chunks = scene.n_points, chunk_points(scene.shape, chunk_size)
+    else:
+        n, chunks = plan.n_points, chunk_points(plan.n_points, chunk_size or plan.chunk_size)
     held: dict[int, Writer] = {}
     for writer in writers:
         writer.start(chunks)
         for i in writer.done():
             held.setdefault(i, writer)
-    todo = ((i, points) for i, points in enumerate(chunks) if i not in held)
+    todo = _Todo(chunks, [i for i in range(len(chunks)) if i not in held])
     with Progress(n, enabled=progress) as bar:
-        bar.update(sum(chunks[i].size for i in held))
+        bar.update(sum(chunks.size(i) for i in held))
         try:
             for i, arrays in imap(scene, plan, todo, progress=progress):
                 for writer in writers:
                     writer.put(i, arrays)
-                bar.update(chunks[i].size)
+                bar.update(chunks.size(i))
             for i in sorted(held):  # chunks of an earlier run
                 arrays = held[i].read(i)
                 for writer in writers:
@@ -131,3 +162,18 @@ def run_chunks(scene: Scene, plan: Plan, chunk_size: int | None, writers: Sequen
             raise
         for writer in writers:
             writer.close()
+
+
+class _Todo(Sequence):
+    """(i, points) of the chunks ``indices`` of ``layout``, each made when asked for."""
+
+    def __init__(self, layout: ChunkLayout, indices: list[int]) -> None:
+        self.layout, self.indices = layout, indices
+
+    def __len__(self) -> int:
+        return len(self.indices)
+
+    def __getitem__(self, n):
+        if isinstance(n, slice):
+            return [self[j] for j in range(*n.indices(len(self)))]
+        return self.indices[n], self.layout[self.indices[n]]

@@ -17,6 +17,7 @@ bounds and data; each gives ONE warning per call, however many samples or axes i
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -150,13 +151,17 @@ NOT_FAILED = ("ok", "no_finite_limit")
 """Statuses that are answers, not failures: no_finite_limit is the model's (no finite relaxed slip there)."""
 
 
-def not_ok_summary(status: np.ndarray, meanings: list[str], failed_only: bool = False) -> tuple[int, str]:
-    """(number of points whose status is not ok, "name count, ..." of those statuses); ``failed_only``: leave out
-    the statuses of :data:`NOT_FAILED` (the computation did not fail there)."""
-    status = np.asarray(status).reshape(-1)
+def not_ok_summary(status: np.ndarray | Mapping[int, int], meanings: list[str], failed_only: bool = False
+                   ) -> tuple[int, str]:
+    """(number of points whose status is not ok, "name count, ..." of those statuses), from the status codes or their
+    counts (code -> points); ``failed_only``: leave out the statuses of :data:`NOT_FAILED` (the computation did not
+    fail there)."""
+    if not isinstance(status, Mapping):
+        codes, n = np.unique(np.asarray(status).reshape(-1), return_counts=True)
+        status = dict(zip(codes.tolist(), n.tolist()))
     skip = [meanings.index(name) for name in (NOT_FAILED if failed_only else NOT_FAILED[:1]) if name in meanings]
-    codes, counts = np.unique(status[~np.isin(status, skip)], return_counts=True)
-    return int(counts.sum()), ", ".join(f"{meanings[c]} {n}" for c, n in zip(codes, counts))
+    bad = {code: n for code, n in sorted(status.items()) if code not in skip and n}
+    return sum(bad.values()), ", ".join(f"{meanings[c]} {n}" for c, n in bad.items())
 
 
 def warn_not_ok(ds, where: str) -> None:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import tomllib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -322,6 +322,14 @@ class Scene:
         if name not in self.dims:
             return float(getattr(self.params, name))
         return self.axis(name)[np.unravel_index(np.asarray(points), self.shape)[self.dims.index(name)]]
+
+    def sub_grid(self, block: Sequence[slice]) -> Scene:
+        """The same scene over the block ``block`` of its grid (one slice per dim of :attr:`dims`): a chunk of a run
+        (sweep/run/layout.py). Every point's inputs are computed from its own axis values, so a point has the same
+        numbers in the sub-grid as in the whole grid."""
+        values = {d: self.axis(d)[s] for d, s in zip(self.dims, block)}
+        return replace(self, K_over_M=values["K_over_M"], V=values["V"],
+                       axes={d: values[d] for d in self.dims[2:]})
 
     @property
     def time_resolved(self) -> bool:

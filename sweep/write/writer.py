@@ -11,12 +11,19 @@ input), sweep.write.netcdf.NetCDFWriter (the file), sweep.run.journal.Journal (c
 
 from __future__ import annotations
 
+import threading
 from abc import ABC, abstractmethod
-from collections.abc import Iterable
+from collections import deque
+from collections.abc import Callable, Iterable
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 
-__all__ = ["FlatArrays", "Writer"]
+__all__ = ["PENDING_CHUNKS", "Behind", "FlatArrays", "Writer"]
+
+PENDING_CHUNKS = 2
+"""Most chunks handed to a writer's helper thread (:class:`Behind`) and not yet stored: the computing waits beyond
+that (a slow disk must not fill the memory with chunks)."""
 
 
 class Writer(ABC):
@@ -70,3 +77,37 @@ class FlatArrays(Writer):
                 fill = np.nan if value.dtype.kind == "f" else 0
                 self.flat[name] = np.full((self.n,) + value.shape[1:], fill, dtype=value.dtype)
             self.flat[name][points] = value
+
+
+class Behind:
+    """Work done in one helper thread, in the order submitted, while the caller goes on: at most ``pending`` calls
+    waiting (:meth:`submit` blocks beyond that). The first failure is raised by the next :meth:`submit` or by
+    :meth:`close`, and nothing submitted after it runs."""
+
+    def __init__(self, name: str, pending: int = PENDING_CHUNKS) -> None:
+        self.pending: deque[Future] = deque()
+        self.limit = pending
+        self.failed = threading.Event()
+        self.executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix=name)
+
+    def submit(self, fn: Callable[..., object], *args: object) -> None:
+        while self.pending and (self.pending[0].done() or len(self.pending) >= self.limit):
+            self.pending.popleft().result()  # a failed call raises here
+        self.pending.append(self.executor.submit(self._call, fn, *args))
+
+    def _call(self, fn: Callable[..., object], *args: object) -> None:
+        if self.failed.is_set():  # after a failure nothing more is done
+            return
+        try:
+            fn(*args)
+        except BaseException:
+            self.failed.set()
+            raise
+
+    def close(self, raise_errors: bool = True) -> None:
+        """Wait for every call submitted; raise the first failure (unless not ``raise_errors``)."""
+        self.executor.shutdown(wait=True)
+        while self.pending:
+            future = self.pending.popleft()
+            if raise_errors:
+                future.result()

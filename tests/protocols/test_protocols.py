@@ -40,7 +40,8 @@ def test_a_registered_protocol_runs_through_the_chunk_loop_the_journal_and_the_f
 
 
 def test_a_registered_protocol_resumes_from_its_journal(echo, tmp_path, monkeypatch):
-    """Interrupted after 2 of its 7-point chunks, the run resumes with only the rest and gives the same file."""
+    """Interrupted after 2 of its chunks (chunk size 7 on a 9 x 5 grid: 9 blocks of one V row each), the run resumes
+    with only the rest and gives the same file."""
     scene = echo_scene()
     out = tmp_path / "echo.nc"
     real, calls = echo.chunk, []
@@ -56,7 +57,7 @@ def test_a_registered_protocol_resumes_from_its_journal(echo, tmp_path, monkeypa
         return wrapped
 
     monkeypatch.setattr(echo, "chunk", interrupting)
-    with pytest.raises(sweep.run.runner.Interrupted, match="2 of 7 chunks are saved"):
+    with pytest.raises(sweep.run.runner.Interrupted, match="2 of 9 chunks are saved"):
         sweep.run_sweep(scene, progress=False, output=out)
     calls.clear()
     monkeypatch.setattr(echo, "chunk", real)

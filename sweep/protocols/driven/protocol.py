@@ -18,6 +18,7 @@ if TYPE_CHECKING:
 
     from ...plan.plan import Plan
     from ...scene.scene import Scene
+    from ...write.regions import RunTotals
 
 __all__ = ["DRIVEN_METHODS", "PROTOCOL", "DrivenProtocol"]
 
@@ -95,11 +96,20 @@ class DrivenProtocol(Protocol):
         firsts = np.unique([int(np.argmax(inertial == used)) for used in (False, True) if (inertial == used).any()])
         chunk_task(scene, plan.take(firsts), firsts)
 
-    def dataset(self, scene: Scene, plan: Plan, flat: dict[str, np.ndarray], seconds: float, history: str,
-                sampled: bool) -> xr.Dataset:
-        from .schema import build_driven_dataset
+    def coords(self, scene: Scene) -> dict[str, xr.Variable]:
+        from .schema import driven_coords
 
-        return build_driven_dataset(scene, flat, seconds, plan.describe(), history=history)
+        return driven_coords(scene)
+
+    def variables(self, scene: Scene, plan: Plan, arrays: dict[str, np.ndarray]) -> dict[str, xr.Variable]:
+        from .schema import driven_variables
+
+        return driven_variables(scene, arrays)
+
+    def attributes(self, scene: Scene, totals: RunTotals, history: str) -> dict[str, object]:
+        from .schema import driven_attributes
+
+        return driven_attributes(scene, totals.seconds, totals.plan_example.describe(totals.plan), history)
 
     def dry_run(self, scene: Scene) -> list[str]:
         from ...plan.plan import make_plan
@@ -109,10 +119,10 @@ class DrivenProtocol(Protocol):
         lines = [f"{'plan of':>28}: {note}"] if note else []
         return lines + [f"{key:>28}: {text}" for key, text in make_plan(planned).describe().items()]
 
-    def summary(self, ds: xr.Dataset) -> list[str]:
+    def summary(self, totals: RunTotals, ds: xr.Dataset) -> list[str]:
         from ...status import flag_summary
 
-        return [*super().summary(ds), flag_summary(ds, "regime")]
+        return [*super().summary(totals, ds), flag_summary(ds, "regime", totals.counts)]
 
     def draw(self, ds: xr.Dataset, path: str | Path, variable: str | None = None) -> list[Path]:
         """The regime map with the Hopf lines and the stick-slip amplitude (``variable``: that variable's map)."""

@@ -8,19 +8,18 @@ import xarray as xr
 
 from ... import physics
 from ...accuracy import RUNAWAY_XI_DOT
-from ...assemble.construct import assemble
 from ...assemble.dataset import DIMS, global_attrs, grid_coords, variable
 from ...integrate.driven import Regime
 from ...scene.scene import Scene
 from ...status import MODEL_FLAG, flag_attrs
 
-__all__ = ["build_driven_dataset"]
+__all__ = ["driven_attributes", "driven_coords", "driven_variables"]
 
 
-def build_driven_dataset(scene: Scene, out: dict[str, np.ndarray], seconds: float, description: dict[str, str],
-                         history: str = "") -> xr.Dataset:
-    """Assemble the Dataset of a driven sweep from flat outputs of :func:`sweep.integrate.models.driven.simulate_batch`
-    (keys regime, status, growth_rate, period, amplitude, cycles, steps, peak_w)."""
+def driven_variables(scene: Scene, out: dict[str, np.ndarray]) -> dict[str, xr.Variable]:
+    """The data variables of a driven sweep over the grid of ``scene`` (a run's chunk: its block of the grid) from
+    flat outputs of :func:`sweep.integrate.models.driven.simulate_batch` in the grid's C order (keys regime, status,
+    growth_rate, period, amplitude, cycles, steps, peak_w, inertial)."""
     shape = scene.shape
     p = scene.params
     grid = lambda a: a.reshape(shape)  # noqa: E731
@@ -65,13 +64,24 @@ def build_driven_dataset(scene: Scene, out: dict[str, np.ndarray], seconds: floa
                                    "sign) if the quasi-static model is used: gamma/A",
                                    comment=f"quasi-static where gamma/A <= model_tol = {scene.model_tol:g} (and the "
                                            "run did not break down: regime runaway is run again with inertia)")
+    return data
+
+
+def driven_coords(scene: Scene) -> dict[str, xr.Variable]:
+    """The coordinates of a driven sweep: the grid's, with the critical pulsation along V."""
+    p = scene.params
     coords = grid_coords(scene)
     coords["V"].attrs["long_name"] = "driving velocity"
-    coords["Omega_c"] = variable("V", physics.Omega_c(scene.V, mu1[0], p.A, p.D0),
-                             "s-1", "critical pulsation on the Hopf line (V/D0) sqrt(mu1/A) (NaN: no line)")
+    coords["Omega_c"] = variable("V", physics.Omega_c(scene.V, physics.mu1(scene.V, p.m1, p.m2, p.V0), p.A, p.D0),
+                                 "s-1", "critical pulsation on the Hopf line (V/D0) sqrt(mu1/A) (NaN: no line)")
+    return coords
+
+
+def driven_attributes(scene: Scene, seconds: float, description: dict[str, str], history: str = ""
+                      ) -> dict[str, object]:
+    """The global attributes of a driven sweep's file (``description``: its plan's)."""
     attrs = global_attrs(scene, "Stability of steady sliding and stick-slip of the Baumberger-Gauthier spring-block "
-                         "model "
-                   "(driven scene)", "regime runaway is status quasistatic_breakdown", history, seconds)
+                         "model (driven scene)", "regime runaway is status quasistatic_breakdown", history, seconds)
     attrs["runaway_slip_velocity_over_V"] = RUNAWAY_XI_DOT
     attrs.update({f"plan_{k}": v for k, v in description.items()})
-    return assemble(data, coords, attrs)
+    return attrs

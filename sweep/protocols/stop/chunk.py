@@ -1,26 +1,24 @@
 """How a chunk of the stop protocol is computed: the quasi-static kernels (engine.py), the choice of model per point
 (model_choice.py), the error_above_tol marks; and the stop kernels alone through the one chunk loop (the dry run's
-pilot, the warm-up). With a journal, the arrays sampled in time stay there and go into the file chunk by chunk."""
+pilot, the warm-up)."""
 
 from __future__ import annotations
 
 import functools
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 import numpy as np
-import xarray as xr
 
 from ...plan.plan import Plan
-from ...run.journal import Journal
-from ...run.runner import chunk_points, in_process, rows, run_chunks
+from ...run.runner import in_process, rows, run_chunks
 from ...scene.scene import Scene
 from ...status import Status
 from ...write.writer import FlatArrays
 from .engine import SAMPLED, RawResult, mark_error_above_tol, n_samples, run_points
 from .model_choice import ModelChoice, choose_stop_models
 
-__all__ = ["execute", "kernel_task", "sampled_blocks", "stop_chunk", "stop_outputs", "warm_up"]
+__all__ = ["execute", "kernel_task", "stop_chunk", "stop_outputs", "warm_up"]
 
 
 def stop_chunk(scene: Scene, plan: Plan, progress: bool | None = False
@@ -80,23 +78,8 @@ def warm_up(scene: Scene, plan: Plan) -> float:
         execute(scene, plan, firsts, progress=False)
     return time.perf_counter() - t0
 
-def sampled_blocks(scene: Scene, n_traj: int, chunk_size: int | None, journal: Journal
-                   ) -> Iterator[tuple[int, dict[str, xr.Variable]]]:
-    """The variables sampled in time (dataset.sampled_variables; ``n_traj`` trajectory times) of the journaled
-    chunks, one chunk at a time in the order of the grid: (first flat point, variables over the chunk's points), for
-    io.save(..., blocks=)."""
-    from .schema import sampled_variables
-
-    for i, points in enumerate(chunk_points(scene.n_points, chunk_size)):
-        order = np.argsort(points)  # a chunk is a consecutive range of points, shuffled (engine.chunk_points)
-        arrays = journal.read(i)
-        yield int(points[order[0]]), sampled_variables(scene, n_traj, ("point",),
-                                                       *(arrays[name][order] for name in SAMPLED),
-                                                       D0=scene.at_points("D0", points[order]))
-
-def stop_outputs(flat: dict[str, np.ndarray], seconds: float) -> tuple[RawResult, ModelChoice]:
-    """The consolidated arrays of :func:`stop_chunk` as the kernel outputs and the model choice (the arrays sampled
-    in time empty where they stayed in the journal)."""
+def stop_outputs(flat: dict[str, np.ndarray], seconds: float = 0.0) -> tuple[RawResult, ModelChoice]:
+    """The arrays of :func:`stop_chunk` (one chunk's, or consolidated) as the kernel outputs and the model choice."""
     n = flat["xi_inf"].size
     fields = {name: flat[name] if name in flat else np.empty((n, 0)) for name in RawResult.__dataclass_fields__
               if name in flat or name in SAMPLED}

@@ -19,6 +19,7 @@ if TYPE_CHECKING:
 
     from ...plan.plan import Plan
     from ...scene.scene import Scene
+    from ...write.regions import RunTotals
 
 __all__ = ["PROTOCOL", "StopProtocol"]
 
@@ -200,22 +201,24 @@ class StopProtocol(Protocol):
             warm_up_models()
 
     # --- the output -------------------------------------------------------------------------------------------------
-    def journal_keeps(self, scene: Scene, plan: Plan) -> frozenset[str]:
-        from .engine import SAMPLED, n_samples
-
-        return frozenset(SAMPLED) if n_samples(scene, plan) > 0 else frozenset()
-
-    def sampled_blocks(self, scene: Scene, plan: Plan, chunk_size: int, journal):
-        from .chunk import sampled_blocks
-
-        return sampled_blocks(scene, plan.tau_samples.size, chunk_size, journal)
-
-    def dataset(self, scene: Scene, plan: Plan, flat: dict[str, np.ndarray], seconds: float, history: str,
-                sampled: bool) -> xr.Dataset:
+    def variables(self, scene: Scene, plan: Plan, arrays: dict[str, np.ndarray]) -> dict[str, xr.Variable]:
         from .chunk import stop_outputs
-        from .schema import build_dataset
+        from .schema import stop_variables
 
-        return build_dataset(scene, plan, *stop_outputs(flat, seconds), history=history, sampled=sampled)
+        return stop_variables(scene, plan, *stop_outputs(arrays))
+
+    def attributes(self, scene: Scene, totals: RunTotals, history: str) -> dict[str, object]:
+        from .schema import stop_attributes
+
+        return stop_attributes(scene, totals, history)
+
+    def reduce(self, variables: Mapping[str, xr.Variable]) -> dict[str, float]:
+        """The largest estimated error of the quasi-static model where it was used (model_error where model = 0)."""
+        if "model_error" not in variables:
+            return {}
+        used = variables["model_error"].values[variables["model"].values == 0]
+        used = used[np.isfinite(used)]
+        return {"model_error_used": float(used.max())} if used.size else {}
 
     # --- what the user sees -------------------------------------------------------------------------------------------
     def dry_run(self, scene: Scene) -> list[str]:
@@ -231,15 +234,14 @@ class StopProtocol(Protocol):
                         f"{'estimated steps per point':>28}: {mean_steps:.0f} (mean of a pilot subsample)",
                         f"{'estimated time':>28}: {seconds:.1f} s on this machine (timed pilot)"]
 
-    def summary(self, ds: xr.Dataset) -> list[str]:
+    def summary(self, totals: RunTotals, ds: xr.Dataset) -> list[str]:
         from ...status import flag_summary
 
-        text = flag_summary(ds, "model")
-        if "model_error" in ds:  # the largest estimated error of the quasi-static model where it was used
-            used = ds["model_error"].where(ds["model"] == 0)
-            if bool(used.notnull().any()):
-                text += f" (largest estimated error of the quasi-static model where used: {float(used.max()):.2g})"
-        return [flag_summary(ds, "status"), text]
+        text = flag_summary(ds, "model", totals.counts)
+        if "model_error_used" in totals.maxima:
+            text += (" (largest estimated error of the quasi-static model where used: "
+                     f"{totals.maxima['model_error_used']:.2g})")
+        return [flag_summary(ds, "status", totals.counts), text]
 
     def picture_paths(self, path: str | Path, trajectories: bool, points: int, variable: str | None = None
                       ) -> list[Path]:

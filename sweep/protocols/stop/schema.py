@@ -4,27 +4,29 @@ plan in the attributes."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import xarray as xr
 
 from ... import physics
 from ...accuracy import ESTIMATE_RTOL, TIGHTER
-from ...assemble.construct import assemble
-from ...assemble.dataset import DIMS, global_attrs, grid_coords, variable, with_errors
-from ...plan.plan import Plan, line_uses_inertia
+from ...assemble.dataset import DIMS, global_attrs, variable, with_errors
+from ...plan.plan import Plan, line_uses_inertia, scene_plan_hash
 from ...scene.scene import Scene
 from ...status import MODEL_FLAG, flag_attrs
 from .engine import SAMPLED, RawResult
 from .model_choice import ModelChoice
 
-__all__ = ["build_dataset", "sampled_variables"]
+if TYPE_CHECKING:
+    from ...write.regions import RunTotals
+
+__all__ = ["sampled_variables", "stop_attributes", "stop_variables"]
 
 
-def build_dataset(scene: Scene, plan: Plan, raw: RawResult, choice: ModelChoice, history: str = "",
-                  sampled: bool = True) -> xr.Dataset:
-    """Assemble the Dataset of a stop sweep from the kernel's flat outputs. ``sampled=False`` leaves out the
-    variables sampled in time (:func:`sampled_variables`: the trajectory and slip_at), which a journaled run
-    writes into its file chunk by chunk instead of holding them whole (sweep/write/netcdf.py)."""
+def stop_variables(scene: Scene, plan: Plan, raw: RawResult, choice: ModelChoice) -> dict[str, xr.Variable]:
+    """The data variables of a stop sweep over the grid of ``scene`` (a run's chunk: its block of the grid) from the
+    kernel's flat outputs in the grid's C order."""
     shape = scene.shape
     dims = scene.dims
     V, A, D0, g = (scene.broadcast(n) for n in ("V", "A", "D0", "g"))
@@ -59,16 +61,22 @@ def build_dataset(scene: Scene, plan: Plan, raw: RawResult, choice: ModelChoice,
                               f"time after the stop to reach {pct} % of the relaxed slip")
             errors[name] = grid(raw.tau_at_fraction_err[:, col]) * seconds_per_tau
     data.update(with_errors(data, errors))
-    if sampled:
-        data.update(sampled_variables(scene, plan.tau_samples.size, dims, *(grid(getattr(raw, name))
-                                                                            for name in SAMPLED), D0=D0))
+    data.update(sampled_variables(scene, plan.tau_samples.size, dims, *(grid(getattr(raw, name)) for name in SAMPLED),
+                                  D0=D0))
+    return data
+
+
+def stop_attributes(scene: Scene, totals: RunTotals, history: str) -> dict[str, object]:
+    """The global attributes of a stop sweep's file from its run's totals (sweep/write/regions.py): the plan as
+    described over every chunk, the model counts."""
     attrs = global_attrs(scene, "Relaxation landscape of the Baumberger-Gauthier spring-block model (stop scene)",
-                   "points on unstable steady sliding (stable = 0) are computed and flagged by stable, not by status",
-                   history, raw.seconds)
-    attrs["plan_hash"] = plan.hash()
-    attrs.update({f"plan_{k}": v for k, v in plan.describe().items()})
-    attrs["plan_model"] = _describe_models(scene, choice)
-    return assemble(data, grid_coords(scene), attrs)
+                         "points on unstable steady sliding (stable = 0) are computed and flagged by stable, not by "
+                         "status", history, totals.seconds)
+    attrs["plan_hash"] = scene_plan_hash(scene)
+    attrs.update({f"plan_{k}": v for k, v in totals.plan_example.describe(totals.plan).items()})
+    models = totals.counts.get("model", {})
+    attrs["plan_model"] = _describe_models(scene, models.get(1, 0), sum(models.values()))
+    return attrs
 
 
 def sampled_variables(scene: Scene, n_traj: int, dims: tuple[str, ...], xi_at: np.ndarray, u_at: np.ndarray,
@@ -106,12 +114,11 @@ def _model_variables(scene: Scene, choice: ModelChoice, grid, dims=DIMS) -> dict
     return out
 
 
-def _describe_models(scene: Scene, choice: ModelChoice) -> str:
-    n_in = int(np.count_nonzero(choice.inertial))
+def _describe_models(scene: Scene, n_in: int, n_points: int) -> str:
     inertial = (f"inertial at {n_in} point(s): rodas3 (L-stable Rosenbrock, analytic Jacobian) in contact-age time "
                 f"on (xi, ln(xi' psi)), handed over to the quasi-static form once inertia is below 0.1 rtol, error "
                 f"estimate |x(rtol/{TIGHTER:g}) - x(rtol/{TIGHTER**2:g})| (local tolerances)")
     if scene.model == "auto":
-        return (f"auto (model_tol {scene.model_tol:g}): quasi-static at {choice.inertial.size - n_in} point(s), "
+        return (f"auto (model_tol {scene.model_tol:g}): quasi-static at {n_points - n_in} point(s), "
                 f"{inertial}")
     return f"{scene.model} (forced)" + (f"; {inertial}" if scene.model == "inertial" else "")
