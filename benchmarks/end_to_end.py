@@ -21,7 +21,8 @@ package is not changed; a wrapper costs ~1 us a call, a few hundred calls a run)
   thread, waiting for it where it is behind, and for the last chunks at the end), ``consolidate`` (the rest of the
   chunk loop: chunks into the flat arrays, the progress bar);
 * ``planning`` (``make_plan``), ``prepare_other`` (the checks before the work, the journal's opening),
-  ``warm_up`` (kernels loaded, one point each), ``dataset`` (``build_dataset``), ``netcdf`` (``io.write``),
+  ``warm_up`` (kernels loaded, one point each), ``dataset`` (``build_block``: a chunk's variables, beside its
+  computing), ``netcdf`` (``NetCDFRegions.put``: a block into the file, in the writer's helper thread),
   ``png`` (``plot_file``), ``cli_other`` (the rest: imports, summaries, the journal's removal);
 * ``total``: the wall time of ``main``; ``ratio_total_over_kernel`` = total / kernel (issue 17's target: <= 1.3).
 
@@ -142,11 +143,11 @@ def instrumented(watch: Stopwatch):
         (sweep.protocols.stop.chunk, "run_points", "chunk_other"),
         (sweep.run.journal.Journal, "write", "journal"),
         (sweep.api, "run_chunks", "consolidate"),
-        (sweep.api, "make_plan", "planning"),
+        (sweep.run.runner, "make_plan", "planning"),
         (sweep.api, "prepare_run", "prepare_other"),
         (sweep.api, "warm_up_kernels", "warm_up"),
-        (sweep.protocols.stop.schema, "build_dataset", "dataset"),
-        (sweep.write.netcdf, "write", "netcdf"),
+        (sweep.run.runner, "build_block", "dataset"),
+        (sweep.write.netcdf.NetCDFRegions, "put", "netcdf"),
         (sweep.plot.files, "plot_file", "png"),
     ]
     engine = sweep.protocols.stop.engine

@@ -125,7 +125,7 @@ class PreparedRun:
         memory = GridArrays(steps)
         sinks = [memory] if self.output is None else [memory, NetCDFRegions(self.output, block_shape(scene.shape,
                                                                                                       size))]
-        regions = Regions(scene, size, sinks, coords)
+        regions = Regions(scene, sinks, coords)
         t0 = time.perf_counter()
         try:
             run_chunks(scene, None, size, [regions] if journal is None else [journal, regions], progress, self.imap)

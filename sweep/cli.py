@@ -37,7 +37,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     warn_implausible_params(scene.params, scene.axes)
     size = estimate_size(scene, journaled=True)
     if args.dry_run:
-        return _dry_run(scene, size)
+        return _dry_run(scene, size, args.output)
     _check_run_targets(scene, args)
     check_fits(scene, size)  # (api.prepare_run checks again) before the plan's and the kernels' imports: at once
     announce_if_cold(scene)  # within a second of the start, before the plan imports and compiles anything
@@ -124,24 +124,29 @@ def _check_run_targets(scene, args: argparse.Namespace) -> None:
     check_targets(targets, overwrite=args.overwrite, inputs={"scene file": args.config})
 
 
-def _dry_run(scene, size) -> int:
+def _dry_run(scene, size, output: Path) -> int:
     """``sweep run --dry-run``: the size from the grid's shape (refused, like the run, if it does not fit in
-    memory), then the plan and, where its protocol measures it, the pilot's estimate of the time, both from a
-    subsample where the grid is large (Protocol.dry_run)."""
+    memory or its output's disk), then the plan and, where its protocol measures it, the pilot's estimate of the
+    time, both from a subsample where the grid is large (Protocol.dry_run)."""
     from . import protocols
     from .run.size import check_fits
+    from .write.targets import check_free_space
 
     protocol = protocols.get(scene.protocol)
     axes = " x ".join(f"{n} {name}" for n, name in zip(scene.shape, ("K/M", "V", *scene.dims[2:])))
     print(f"{'grid':>28}: {axes} = {scene.n_points:,} points, "
           + (f"rtol {scene.rtol:g}, " if protocol.warm_up_timed else "")
           + f"observables {', '.join(scene.observables)}")
-    for line in size.lines():
+    folder = output.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    for line in size.lines(folder):
         print(line)
     sys.stdout.flush()
     check_fits(scene, size)  # before the imports of the plan and the kernels (~1 s): a refusal answers at once
     for line in protocol.dry_run(scene):
         print(line)
+    check_free_space(folder, size.disk, output)  # the time estimated too: what the run would need, then why not
     return 0
 
 

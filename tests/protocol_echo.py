@@ -4,13 +4,12 @@ plugs in through sweep.protocols.register."""
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from sweep.assemble.dataset import global_attrs, variable
+from sweep.assemble.dataset import global_attrs, grid_coords, variable
 from sweep.errors import InputError
 from sweep.plan.plan import point_params
 from sweep.protocols.base import Protocol
@@ -28,9 +27,6 @@ class EchoPlan:
 
     def take(self, rows: np.ndarray) -> EchoPlan:
         return EchoPlan(self.chi[rows], self.chunk_size)
-
-    def hash(self) -> str:
-        return hashlib.sha256(self.chi.tobytes()).hexdigest()[:16]
 
     def describe(self) -> dict[str, str]:
         return {"rule": "scale x chi = K D0/(M g) per point"}
@@ -72,6 +68,9 @@ class EchoProtocol(Protocol):
 
     def warm_up(self, scene, plan):
         pass
+
+    def coords(self, scene):
+        return grid_coords(scene)
 
     def variables(self, scene, plan, arrays):
         grid = lambda a: a.reshape(scene.shape)  # noqa: E731

@@ -25,7 +25,8 @@ ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "benchmarks"
 TIMEOUT_S = 600
 
-DRAWS = {"end_to_end", "error_coverage", "fit", "hopf", "models", "peers", "scaling", "throughput", "work_precision"}
+DRAWS = {"end_to_end", "error_coverage", "fit", "hopf", "models", "out_of_core", "peers", "scaling", "throughput",
+         "work_precision"}
 """Scripts that draw a PNG beside their JSON (run with --no-png)."""
 
 SMOKE_FLAG = {"compare_commits": "--self-test"}
@@ -46,6 +47,7 @@ KEYS = {
              "driven_grid", "driven_grid_auto"},
     "models": {"benchmark", "quick", "machine", "cost", "accuracy_inertia_scene_model_tol_1e-2",
                "model_tol_sweep_inertia_scene"},
+    "out_of_core": {"benchmark", "quick", "machine", "runs"},
     "peers": {"benchmark", "machine", "versions", "peers_status", "tools_missing", "settings", "scenes"},
     "readme_numbers": {"numbers", "readme_spans", "readme_stale_keys", "readme_up_to_date"},
     "scaling": {"benchmark", "quick", "tools_missing", "machine", "threads", "dask", "memory", "memory_trajectories",

@@ -429,7 +429,7 @@ from numba.core.dispatcher import Dispatcher
 import sweep
 from sweep.api import warm_up_kernels
 scene = sweep.default_scene()
-warm_up_kernels(scene, sweep.make_plan(scene), fan_out=sys.argv[1] == "fan_out")
+warm_up_kernels(scene, fan_out=sys.argv[1] == "fan_out")
 for d in gc.get_objects():
     if isinstance(d, Dispatcher) and d.overloads and d.py_func.__module__.startswith("sweep."):
         print(d.py_func.__module__ + "." + d.py_func.__qualname__)

@@ -30,7 +30,6 @@ small m2, where the slider creeps along a slow manifold).
 from __future__ import annotations
 
 import hashlib
-import zlib
 from dataclasses import dataclass, replace
 from typing import NamedTuple
 
@@ -340,31 +339,6 @@ class Plan:
 
     def text(self) -> str:
         return "\n".join(f"{k:>28}: {v}" for k, v in self.describe().items())
-
-    def hash(self) -> str:
-        """Digest of everything that determines the numbers (compared on resume): the plan's choices, the per-point
-        arrays and the values of the calibrated constants (sweep/accuracy.py), not the prose of :meth:`describe`.
-        Computed once per plan (its arrays are not changed after make_plan): a run with an output needs it for the
-        journal and for the file. The per-point arrays enter by their CRC-32 (zlib, ~4 GB/s against SHA-256's
-        ~1.7 GB/s: 0.25 instead of 0.6 ms at 20,000 points, 3 % of a default-scene run at rtol 1e-3; it guards
-        against accidental change, not against forgery)."""
-        cached = self.__dict__.get("_hash")
-        if cached is not None:
-            return cached
-        from .. import accuracy
-
-        h = hashlib.sha256()
-        choices = (self.protocol, self.model, self.model_tol, self.method, self.point_methods, self.dtype.name,
-                   self.lanes, self.adaptive, self.step_source, self.ctrl_tol, self.max_steps, self.state_law,
-                   self.needs_tau, self.chunk_size, self.sampled_lanes)
-        constants = sorted((k, v) for k, v in vars(accuracy).items() if k.isupper())
-        h.update(repr((choices, constants)).encode())
-        for arr in (self.k, self.a, self.b, self.s_c, self.step, self.finite, self.tau_samples, self.point_method,
-                    self.G, self.inertial):
-            arr = np.ascontiguousarray(arr)  # the buffer itself: the same bytes as tobytes(), without a copy
-            h.update(f"{arr.dtype.str}{arr.shape}{zlib.crc32(arr):08x}".encode())
-        self.__dict__["_hash"] = h.hexdigest()[:16]  # a frozen dataclass: its __setattr__ refuses
-        return self.__dict__["_hash"]
 
 
 class PlanStats(NamedTuple):

@@ -160,11 +160,10 @@ class Protocol(ABC):
         from the cache rather than each compile it) also those only some points may need."""
 
     # --- the output -------------------------------------------------------------------------------------------------
+    @abstractmethod
     def coords(self, scene: Scene) -> dict[str, xr.Variable]:
-        """The coordinates of the scene's file over its whole grid (the axes and the quantities along them)."""
-        from ..assemble.dataset import grid_coords
-
-        return grid_coords(scene)
+        """The coordinates of the scene's file over its whole grid (the axes and the quantities along them:
+        sweep.assemble.dataset.grid_coords and the protocol's own)."""
 
     @abstractmethod
     def variables(self, scene: Scene, plan: Plan, arrays: dict[str, np.ndarray]) -> dict[str, xr.Variable]:

@@ -292,7 +292,7 @@ class Journal(Writer):
         self._keep = self._writing.enter_context(self.background())
 
     def put(self, index: int, arrays: dict[str, np.ndarray]) -> None:
-        self._keep(index, arrays)
+        self._keep(index, {name: value for name, value in arrays.items() if isinstance(value, np.ndarray)})
 
     def close(self) -> None:
         self._writing.close()

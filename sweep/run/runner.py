@@ -21,6 +21,7 @@ from .. import protocols
 from ..plan.layout import block_slices, chunk_bounds
 from ..plan.plan import Plan, make_plan
 from ..scene.scene import Scene
+from ..write.regions import BLOCK, build_block
 from ..write.writer import Writer
 from .concurrent_chunks import as_completed_in_threads, side_by_side
 from .progress import Progress
@@ -80,7 +81,8 @@ def chunk_task(scene: Scene, plan: Plan | None, points: np.ndarray, shared: bool
     """Compute one chunk (any backend) with the scene's protocol: per-point arrays plus ``seconds``, the time it took.
     ``plan`` None (a run of a scene): the chunk is a block of the scene's grid (``points``, its flat indices in the
     grid: a consecutive range, shuffled), planned here from its sub-grid (Scene.sub_grid), so no plan of the whole
-    grid is ever made or shipped to a worker. Else ``plan`` is a plan made by the caller (sweep.protocols.stop.chunk
+    grid is ever made or shipped to a worker; its variables are built here too (sweep.write.regions.BLOCK). Else
+    ``plan`` is a plan made by the caller (sweep.protocols.stop.chunk
     .execute): its share for this chunk (Plan.take), ``points`` the chunk's points; with ``shared``, the plan itself,
     ``points`` the chunk's rows in it (no copy of the chunk's share). ``progress``: a bar of the chunk's own slow
     points, where the protocol has them (see :func:`in_process`)."""
@@ -89,10 +91,11 @@ def chunk_task(scene: Scene, plan: Plan | None, points: np.ndarray, shared: bool
     if plan is None:
         lo = int(points.min())
         sub = scene.sub_grid(block_slices(scene.shape, lo, lo + points.size))
-        compute, at = protocol.chunk(sub, make_plan(sub), progress), points - lo
+        block_plan = make_plan(sub)
+        arrays = protocol.chunk(sub, block_plan, progress)(points - lo)
+        arrays[BLOCK] = build_block(scene, points, arrays, block_plan)  # here, side by side: not in the writer
     else:
-        compute, at = protocol.chunk(scene, plan, progress), rows(points, shared)
-    arrays = compute(at)
+        arrays = protocol.chunk(scene, plan, progress)(rows(points, shared))
     arrays["seconds"] = np.array(time.perf_counter() - t0)
     return arrays
 

@@ -1,15 +1,13 @@
-"""The size of a run from its grid's shape alone, before any plan is made: a plan holds ~70 bytes a point, so a
-1e5 x 1e5 grid could not even be planned (700 GB). Memory, disk and a rough time are known from the number of points,
-the observables and the protocol; a run whose memory would exceed what the machine has available is refused with a
-message that says how to split it.
+"""The size of a run from its grid's shape alone, before any plan is made. Memory, disk and a rough time are known
+from the number of points, the chunk size, the observables and the protocol; a run whose memory would exceed what
+the machine has available is refused with a message that says how to split it or to give it an output file.
 
-The constants were measured on the 2-core development machine: the peak of ``run_sweep`` under
-tracemalloc, as the slope between grids of 4e4 and 1.6e5 points (stop, relaxed slip: 163 bytes a point, with or
-without an output; driven: 279; each sampled time held in memory, i.e. trajectory or slip_at without an output:
-46 more, a journaled run keeping those in its journal instead); the file, from the bytes of its variables before
-compression; the rates, from the default scene (benchmarks/scaling.py: 94,500 points/s on 2 threads at 1e6 points)
-and the driven grid of benchmarks/hopf.py (3,220 points/s on one thread). They are rounded up: the check refuses
-what would certainly not fit, it does not promise that the rest does.
+A run with an output file holds O(chunk) in memory, whatever the grid's size: the chunks in flight (computing,
+waiting for the journal and for the file: ~memory_per_point each point), and the Dataset it returns and draws, whole
+up to sweep.write.regions.LATTICE_BYTES, else a lattice of that size. A run without one holds its whole Dataset (the
+file's bytes per point) besides. The constants were measured on the 2-core development machine (the protocols'
+memory_per_point under tracemalloc; the file, from the bytes of its variables before compression). They are rounded
+up: the check refuses what would certainly not fit, it does not promise that the rest does.
 """
 
 from __future__ import annotations
@@ -22,12 +20,15 @@ from pathlib import Path
 from .. import protocols
 from ..errors import InputError
 from ..scene.scene import Scene
-from ..write.targets import human_bytes
+from ..write.targets import free_bytes, human_bytes
 
 __all__ = ["RunSize", "available_memory", "check_fits", "estimate_size"]
 
 MEMORY_PER_SAMPLE = 50
-"""Peak bytes per point and sampled time held in memory (a run without an output file)."""
+"""Peak bytes per point and sampled time of a chunk being computed."""
+CHUNKS_IN_FLIGHT = 8
+"""Chunks a run holds at once, at most: computing (one a thread, and those submitted ahead), finished and waiting for
+the journal and for the file (sweep.write.writer.PENDING_CHUNKS each)."""
 UNCHECKED_MEMORY = 32 * 2**20
 """Bytes of memory a run may need without a look at what the machine has (:func:`check_fits`): less than the
 process's own imports took (numba, xarray: ~200 MB), and the look (/proc/meminfo, the control group's files) costs
@@ -37,24 +38,28 @@ process's own imports took (numba, xarray: ~200 MB), and the look (/proc/meminfo
 @dataclass(frozen=True)
 class RunSize:
     """What a run needs, from its grid's shape: ``memory`` [bytes] at its peak, ``file`` [bytes] before compression,
-    ``disk`` [bytes] while it runs (the journal and the file side by side at the end), ``seconds`` at a typical
-    rate on this machine's cores."""
+    ``disk`` [bytes] while it runs (the journal and the file side by side until the end), ``seconds`` at a typical
+    rate on this machine's cores (the size check's rough time: the dry run times a pilot instead)."""
 
     points: int
     memory: int
     file: int
     disk: int
     seconds: float
+    output: bool = True
+    """With an output file (memory O(chunk)), or the whole Dataset in memory."""
 
-    def lines(self) -> list[str]:
-        """The dry run's lines about the size."""
+    def lines(self, folder: str | os.PathLike | None = None) -> list[str]:
+        """The dry run's lines about the size (``folder``: an existing folder where the output goes, for its free
+        space)."""
         available = available_memory()
         room = f", {human_bytes(available)} available" if available is not None else ""
-        return [f"{'estimated memory':>28}: ~{human_bytes(self.memory)} (from the grid's shape{room})",
+        held = ("chunks in flight and the picture's lattice: flat in the grid's size" if self.output
+                else "the whole Dataset in memory")
+        free = "" if folder is None else f", {human_bytes(free_bytes(folder))} free in {folder}"
+        return [f"{'estimated memory':>28}: ~{human_bytes(self.memory)} ({held}{room})",
                 f"{'estimated disk':>28}: ~{human_bytes(self.file)} file before compression, ~{human_bytes(self.disk)} "
-                "with the journal while running",
-                f"{'typical time':>28}: ~{_duration(self.seconds)} at a typical rate on {_cores()} cores (from the "
-                "grid's shape)"]
+                f"with the journal while running{free}"]
 
 
 def _cores() -> int:
@@ -62,27 +67,24 @@ def _cores() -> int:
     return int(threads) if threads.isdigit() and int(threads) > 0 else os.cpu_count() or 1
 
 
-def _duration(seconds: float) -> str:
-    for unit, length in (("days", 86400.0), ("h", 3600.0), ("min", 60.0)):
-        if seconds >= 2 * length:
-            return f"{seconds / length:.3g} {unit}"
-    return f"{seconds:.2g} s"
-
-
 def file_bytes_per_point(scene: Scene) -> int:
     """Bytes per point of the scene's file before compression (its protocol's Protocol.file_bytes_per_point)."""
     return protocols.get(scene.protocol).file_bytes_per_point(scene)
 
 
-def estimate_size(scene: Scene, journaled: bool) -> RunSize:
-    """The size of running ``scene`` (``journaled``: with an output file, whose journal keeps the sampled times)."""
+def estimate_size(scene: Scene, journaled: bool, chunk_size: int | None = None) -> RunSize:
+    """The size of running ``scene`` (``journaled``: with an output file, and its journal; ``chunk_size``: points per
+    chunk, default the protocol's)."""
+    from ..write.regions import LATTICE_BYTES
+
     n = scene.n_points
     protocol = protocols.get(scene.protocol)  # its bytes and seconds per point (sweep/protocols/)
-    samples = 0 if journaled else protocol.samples_per_point(scene)
-    memory = n * (protocol.memory_per_point + MEMORY_PER_SAMPLE * samples)
+    chunk = min(n, chunk_size or protocol.chunk_size(scene))
+    per_point = protocol.memory_per_point + MEMORY_PER_SAMPLE * protocol.samples_per_point(scene)
     file = n * file_bytes_per_point(scene)
+    memory = CHUNKS_IN_FLIGHT * chunk * per_point + (min(file, LATTICE_BYTES) if journaled else file)
     return RunSize(points=n, memory=memory, file=file, disk=2 * file if journaled else file,
-                   seconds=n * protocol.core_seconds_per_point / _cores())
+                   seconds=n * protocol.core_seconds_per_point / _cores(), output=journaled)
 
 
 def available_memory() -> int | None:
@@ -126,5 +128,6 @@ def check_fits(scene: Scene, size: RunSize) -> None:
              f"split the grid into scenes of at most {fit:,} points each (one file each)")
     shape = " x ".join(f"{n} {name}" for n, name in zip(scene.shape, ("K/M", "V", *scene.dims[2:])))
     raise InputError(f"the grid of {size.points:,} points ({shape}) needs ~{human_bytes(size.memory)} of "
-                     f"memory (estimated from its shape), {human_bytes(available)} available: {split}, or run it on "
-                     f"a machine with more memory")
+                     f"memory (estimated from its shape), {human_bytes(available)} available: {split}, or give it an "
+                     f"output file (output=..., whose run holds only its chunks in memory), or run it on a machine "
+                     f"with more memory")

@@ -6,10 +6,11 @@ handed to the run's sinks, none of which holds more than it keeps by design:
   whole) or a regular lattice of them (the picture of a grid too large to hold: at most LATTICE_BYTES);
 * sweep.write.netcdf.NetCDFRegions: the netCDF file, each block written into its region (its own storage chunk).
 
-The blocks are built and stored in one helper thread while the next chunks compute (at most PENDING_CHUNKS waiting),
-and :class:`RunTotals` gathers what the file's attributes and the run's summary say of the whole grid: the flags'
-counts, the plan's counts, the seconds of computing, the protocol's maxima (Protocol.reduce). Nothing here is O(grid)
-except what a sink keeps.
+A chunk's block is built where the chunk is computed (:func:`build_block`, called by sweep.run.runner.chunk_task: in
+the computing threads or dask workers, side by side), and stored in one helper thread while the next chunks compute
+(at most PENDING_CHUNKS waiting); :class:`RunTotals` gathers what the file's attributes and the run's summary say of
+the whole grid: the flags' counts, the plan's counts, the seconds of computing, the protocol's maxima
+(Protocol.reduce). Nothing here is O(grid) except what a sink keeps.
 """
 
 from __future__ import annotations
@@ -24,16 +25,60 @@ import numpy as np
 import xarray as xr
 
 from .. import protocols
-from ..plan.layout import block_slices, chunk_bounds
+from ..plan.layout import block_slices
 from ..plan.plan import Plan, PlanStats, make_plan
 from ..scene.scene import Scene
 from .writer import Behind, Writer
 
-__all__ = ["LATTICE_BYTES", "Block", "GridArrays", "Regions", "RunTotals", "Sink", "lattice_steps"]
+__all__ = ["BLOCK", "LATTICE_BYTES", "Block", "GridArrays", "Regions", "RunTotals", "Sink", "build_block",
+           "lattice_steps"]
 
 LATTICE_BYTES = 256 * 2**20
 """Most bytes a run keeps in memory for its picture and returned Dataset where the grid is larger (a regular lattice
 of its points, every n-th along each dim)."""
+
+
+BLOCK = "__block__"
+"""The key of a chunk's results that holds its :class:`Block` where it was built beside the computing
+(sweep.run.runner.chunk_task); writers that keep arrays (the journal) leave it out."""
+
+
+class Block(NamedTuple):
+    """One chunk's output: its block of the grid (a slice per grid dim), its variables over that block, and what
+    the run's totals take from it."""
+
+    slices: tuple[slice, ...]
+    variables: dict[str, xr.Variable]
+    counts: dict[str, dict[int, int]]
+    """Points per flag value of each variable with ``flag_values``."""
+    plan_stats: PlanStats | None
+    plan_choices: object
+    """The chunk's plan without its points (Plan.take of none): the scene-level choices its description states."""
+    maxima: dict[str, float]
+    """The protocol's maxima over the block (Protocol.reduce)."""
+
+
+def build_block(scene: Scene, points: np.ndarray, arrays: Mapping[str, np.ndarray], plan=None) -> Block:
+    """The :class:`Block` of a chunk of ``scene``: ``points``, its flat points (a consecutive range of the grid,
+    shuffled, sweep.run.runner.ChunkLayout) in the order of its ``arrays``; ``plan``: the block's plan where the
+    caller has it (else made here from the block's sub-grid)."""
+    protocol = protocols.get(scene.protocol)
+    lo = int(points.min())
+    order = np.empty(points.size, np.intp)
+    order[points - lo] = np.arange(points.size)  # the grid's C order within the block
+    slices = block_slices(scene.shape, lo, lo + points.size)
+    sub = scene.sub_grid(slices)
+    plan = make_plan(sub) if plan is None else plan
+    ordered = {name: value[order] for name, value in arrays.items() if isinstance(value, np.ndarray) and value.ndim}
+    variables = protocol.variables(sub, plan, ordered)
+    counts = {}
+    for name, var in variables.items():
+        if "flag_values" in var.attrs:
+            low = int(np.min(var.attrs["flag_values"]))
+            n = np.bincount(var.values.ravel().astype(np.intp) - low)
+            counts[name] = {code + low: int(k) for code, k in enumerate(n.tolist()) if k}
+    stats = plan.stats() if isinstance(plan, Plan) else None
+    return Block(slices, variables, counts, stats, plan.take(np.arange(0)), protocol.reduce(variables))
 
 
 @dataclass
@@ -42,39 +87,28 @@ class RunTotals:
 
     seconds: float = 0.0
     """Seconds of computing, summed over the chunks."""
+    points: int = 0
     counts: dict[str, dict[int, int]] = field(default_factory=dict)
     """Points per flag value, for every variable with ``flag_values`` (status, model, stable, regime...)."""
     plan: PlanStats | None = None
     """The chunks' plan counts, merged."""
     plan_example: Plan | None = None
-    """The first chunk's plan: the scene-level choices (method, rules) that every chunk's plan shares."""
+    """A chunk's plan without its points: the scene-level choices (method, rules) that every chunk's plan shares."""
     maxima: dict[str, float] = field(default_factory=dict)
     """The protocol's running maxima (Protocol.reduce)."""
-    points: int = 0
 
-    def add(self, seconds: float, points: int, variables: Mapping[str, xr.Variable], plan: Plan,
-            maxima: Mapping[str, float]) -> None:
+    def add(self, seconds: float, points: int, block: Block) -> None:
         self.seconds += seconds
         self.points += points
-        for name, var in variables.items():
-            if "flag_values" in var.attrs:
-                counts = self.counts.setdefault(name, {})
-                codes, n = np.unique(var.values, return_counts=True)
-                for code, k in zip(codes.tolist(), n.tolist()):
-                    counts[code] = counts.get(code, 0) + k
-        stats = plan.stats() if hasattr(plan, "stats") else None
-        self.plan = stats if self.plan is None else self.plan + stats if stats is not None else self.plan
-        self.plan_example = self.plan_example or plan
-        for name, value in maxima.items():
+        for name, found in block.counts.items():
+            counts = self.counts.setdefault(name, {})
+            for code, k in found.items():
+                counts[code] = counts.get(code, 0) + k
+        if block.plan_stats is not None:
+            self.plan = block.plan_stats if self.plan is None else self.plan + block.plan_stats
+        self.plan_example = self.plan_example or block.plan_choices
+        for name, value in block.maxima.items():
             self.maxima[name] = float(np.fmax(self.maxima.get(name, np.nan), value))
-
-
-class Block(NamedTuple):
-    """One chunk's output: its block of the grid (a slice per grid dim) and its variables over that block."""
-
-    index: int
-    slices: tuple[slice, ...]
-    variables: dict[str, xr.Variable]
 
 
 class Sink(ABC):
@@ -97,15 +131,12 @@ class Sink(ABC):
 class Regions(Writer):
     """The writer of a run's chunk loop that turns chunks into blocks for its ``sinks`` (module docstring)."""
 
-    def __init__(self, scene: Scene, chunk_size: int, sinks: Sequence[Sink],
-                 coords: Mapping[str, xr.Variable]) -> None:
-        self.scene, self.chunk_size, self.sinks, self.coords = scene, chunk_size, list(sinks), coords
-        self.protocol = protocols.get(scene.protocol)
+    def __init__(self, scene: Scene, sinks: Sequence[Sink], coords: Mapping[str, xr.Variable]) -> None:
+        self.scene, self.sinks, self.coords = scene, list(sinks), coords
         self.totals = RunTotals()
 
-    def start(self, layout: tuple[np.ndarray, ...]) -> None:
+    def start(self, layout) -> None:
         super().start(layout)
-        self.bounds = chunk_bounds(self.scene.shape, self.chunk_size)
         for sink in self.sinks:
             sink.start(self.scene, self.coords)
         self._behind = Behind("sweep-regions")
@@ -114,23 +145,10 @@ class Regions(Writer):
         self._behind.submit(self._store, index, dict(arrays))
 
     def _store(self, index: int, arrays: dict[str, np.ndarray]) -> None:
-        block = self.block(index, arrays)
+        block = arrays.get(BLOCK) or build_block(self.scene, self.layout[index], arrays)  # (a resumed chunk: here)
+        self.totals.add(float(arrays.get("seconds", 0.0)), self.layout.size(index), block)
         for sink in self.sinks:
             sink.put(block)
-
-    def block(self, index: int, arrays: Mapping[str, np.ndarray]) -> Block:
-        """Chunk ``index``'s arrays (in its points' order, layout[index]) as the variables of its block."""
-        lo, hi = self.bounds[index]
-        points = self.layout[index]
-        order = np.empty(points.size, np.intp)
-        order[points - lo] = np.arange(points.size)  # the chunk's points are lo..hi-1, shuffled
-        slices = block_slices(self.scene.shape, lo, hi)
-        sub = self.scene.sub_grid(slices)
-        plan = make_plan(sub)
-        ordered = {name: value[order] for name, value in arrays.items() if np.ndim(value)}
-        variables = self.protocol.variables(sub, plan, ordered)
-        self.totals.add(float(arrays.get("seconds", 0.0)), hi - lo, variables, plan, self.protocol.reduce(variables))
-        return Block(index, slices, variables)
 
     def close(self) -> None:
         self._behind.close()

@@ -88,7 +88,7 @@ def check_targets(targets: Mapping[str, str | os.PathLike], overwrite: bool = Fa
             raise InputError(f"{path} exists: {OVERWRITE_HINT}")
     folders = dict.fromkeys(_writable_folder(path) for _, path in seen)  # each probed once, in order
     if seen and need_bytes > 0:
-        _check_free_space(next(iter(folders)), need_bytes, seen[0][1])
+        check_free_space(next(iter(folders)), need_bytes, seen[0][1])
 
 
 def _writable_folder(path: Path) -> Path:
@@ -110,7 +110,8 @@ def _writable_folder(path: Path) -> Path:
     return existing
 
 
-def _check_free_space(folder: Path, need_bytes: int, path: Path) -> None:
+def check_free_space(folder: Path, need_bytes: int, path: Path) -> None:
+    """InputError where ``folder`` (the nearest existing folder of ``path``) has less than ``need_bytes`` free."""
     free = free_bytes(folder)
     if free < need_bytes:
         raise InputError(f"not enough free space for {path}: the run needs ~{human_bytes(need_bytes)} (estimated from "

@@ -71,7 +71,7 @@ class FlatArrays(Writer):
         points = self.layout[index]
         self.seconds += float(arrays.get("seconds", 0.0))
         for name, value in arrays.items():
-            if name == "seconds" or name in self.skip:
+            if name == "seconds" or name in self.skip or not isinstance(value, np.ndarray):
                 continue
             if name not in self.flat:
                 fill = np.nan if value.dtype.kind == "f" else 0

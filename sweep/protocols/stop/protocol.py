@@ -201,6 +201,11 @@ class StopProtocol(Protocol):
             warm_up_models()
 
     # --- the output -------------------------------------------------------------------------------------------------
+    def coords(self, scene: Scene) -> dict[str, xr.Variable]:
+        from ...assemble.dataset import grid_coords
+
+        return grid_coords(scene)
+
     def variables(self, scene: Scene, plan: Plan, arrays: dict[str, np.ndarray]) -> dict[str, xr.Variable]:
         from .chunk import stop_outputs
         from .schema import stop_variables
