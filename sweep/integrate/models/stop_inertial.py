@@ -1,18 +1,29 @@
 """Stop scene with inertia (docs/physics.md 3a), and the first-order inertial correction of the quasi-static model.
 
-The Newton equation gamma xi'' = -chi xi - dmu(psi) - A ln(xi' psi) (' = d/dtau) is integrated in the
-contact-age time s = int dtau/psi of :mod:`sweep.integrate.models.stop`, where xi + u = s still holds exactly (u = ln
-psi),
-with q = ln(xi' psi) = ln E as the second state (k = chi/A, a = mu1/A, b = m2/A, G = gamma/A):
+The Newton equation gamma xi'' = -chi xi - dmu(psi) - A ln(xi' psi) (' = d/dtau) is written in the contact-age time
+s = int dtau/psi of :mod:`sweep.integrate.models.stop`, where xi + u = s still holds exactly (u = ln psi), with
+q = ln(xi' psi) = ln E as the second state (k = chi/A, a = mu1/A, b = m2/A, G = gamma/A):
 
     dxi/ds = e^q,    dq/ds = -P R + 1 - e^q,
     P = k xi + a u + b u^2 + q = (q - q_qs),    R = e^(2u - q)/G = A psi/(gamma xi'),
 
 P being the inertial term: A P = -gamma xi'' exactly, q_qs the quasi-static ln E. R is the relaxation rate of P in
-s: 1/G at the start, growing without bound late in every stop (as psi/xi'). The system is integrated with the
-L-stable, stiffly accurate RODAS3 (:data:`sweep.integrate.solvers.RODAS3`) and the analytic 2x2 Jacobian, step size by
-the
-embedded error (controller below), and handed over to the quasi-static form (state xi alone, as in
+s: 1/G at the start, growing without bound late in every stop (as psi/xi').
+
+Plunge-resolving time sigma. Where k G is large the slider swings inertially to xi ~ sqrt(G/k) and the swing ends in
+a plunge: P ~ sqrt(k G) >> 1 relaxes at the rate R ~ e^(-q)/G while q falls to q_qs ~ -sqrt(k G), so q(s) has a
+log singularity (steps in s shrink by e per unit fall of q, ~70 steps each at rtol 1e-7) and the span of s left
+falls below the resolution of s once R > ~1e12/s (in s, the steps would underflow wherever k G > ~1e2).
+:func:`inertial_system` integrates (s, xi, q) in sigma instead,
+
+    ds/dsigma = w = 1/(1 + R (nu s + mu P^2)),    dxi/dsigma = w E,    dq/dsigma = w (1 - E) - w R P,
+
+(mu = PLUNGE_WEIGHT, nu = S_WEIGHT): w = 1 up to rounding on the slow path (P ~ (k + |g| + 1)/R, so R mu P^2 << 1)
+and in the swing, and w ~ 1/(R mu P^2) in the plunge, where q then falls at ~1/(mu P) per unit sigma, smoothly; the
+nu s term takes over wherever R > ~1/(nu s), where a step in s could no longer resolve the last relaxation of P. The
+map changes the time, not the solution. The system is integrated with the L-stable, stiffly accurate RODAS3
+(:data:`sweep.integrate.solvers.RODAS3`) and the analytic 3x3 Jacobian, step size by the embedded error (controller
+of sweep/integrate/stop_inertial.py), and handed over to the quasi-static form (state xi alone in s, as in
 :mod:`sweep.integrate.models.stop`) once inertia is negligible now and later:
 
     |P| <= eps,   (k + |g| + 1)/R <= eps,   d ln R/ds = 2 (1 - E) - dq/ds > 0,    eps = HANDOVER_FRACTION rtol,
@@ -47,31 +58,63 @@ from ..solvers.fastmath import FAST
 from ..solvers.vmath import EXP_MAX, exp_f32, exp_f64_coarse
 from .stop import tail_integral
 
-__all__ = ["LN_R_MAX", "inertia_negligible", "inertial_system", "make_correction_rate", "quasistatic_system",
-           "tail_correction"]
+__all__ = ["LN_R_MAX", "PLUNGE_WEIGHT", "S_WEIGHT", "inertia_negligible", "inertial_system", "make_correction_rate",
+           "quasistatic_system", "tail_correction", "time_rate"]
 
 LN_R_MAX = 600.0
 """Cap of ln R in the right-hand side (comment there)."""
+PLUNGE_WEIGHT = 1e-6
+"""mu of the time map ds/dsigma = 1/(1 + R (nu s + mu P^2)) (module docstring): sigma takes over from s once the
+inertial term relaxes at a rate R > ~1/(mu P^2), i.e. in the plunge at the end of a swing (P ~ 1..1e4), and not
+on the slow path (P ~ (k + |g| + 1)/R)."""
+S_WEIGHT = 1e-13
+"""nu of the time map: sigma takes over from s wherever R > ~1e13/s, where a step in s that resolves a transient
+at the rate R (~1e-3/R at rtol 1e-7) would fall below the resolution of s itself (~1e-15 s)."""
 
 
 @njit(inline="always", fastmath=FAST, error_model="numpy")
-def inertial_system(s, y, p, f, J, ft, jacobian):
-    """The inertial system in s (module docstring) for :func:`sweep.integrate.solvers.rosenbrock_step.make_rodas3_step`:
-    y = (xi, q), p = (k, a, b, G)."""
-    k, a, b, G = p
-    xi, q = y[0], y[1]
+def inertial_system(sigma, y, p, f, J, ft, jacobian):
+    """The inertial system in the plunge-resolving time sigma (module docstring) for
+    :func:`sweep.integrate.solvers.rosenbrock_step.make_rodas3_step`: y = (s, xi, q), p = (k, a, b, G, mu, nu);
+    autonomous (ft = 0)."""
+    k, a, b, G, mu, nu = p
+    s, xi, q = y[0], y[1], y[2]
     u = s - xi
     g = a + 2.0 * b * u
     P = k * xi + u * (a + b * u) + q
-    # R capped at e^LN_R_MAX: beyond that the inertial term relaxes in far less than any step (L-stability then
-    # slaves it), and the capped value keeps the linear algebra in range when xi' plunges towards 0 in a rebound
-    R = math.exp(min(2.0 * u - q - math.log(G), LN_R_MAX))
+    # R capped at e^LN_R_MAX: beyond that the inertial term relaxes in far less than any step in s, and w R stays
+    # ~1/(nu s + mu P^2) whatever R, so the cap only stops R itself from overflowing
+    ln_r = 2.0 * u - q - math.log(G)
+    free = 1.0 if ln_r < LN_R_MAX else 0.0
+    R = math.exp(min(ln_r, LN_R_MAX))
+    v = R * (nu * s + mu * P * P)
+    w = 1.0 / (1.0 + v)
+    wR = w * R
     E = math.exp(q) if q < EXP_MAX else math.nan
-    f[0], f[1] = E, 1.0 - E - P * R
+    f[0], f[1], f[2] = w, w * E, w * (1.0 - E) - wR * P
     if jacobian:
-        J[0, 0], J[0, 1] = 0.0, E
-        J[1, 0], J[1, 1] = R * (2.0 * P - k + g), R * (P - 1.0) - E
-        ft[0], ft[1] = 0.0, -R * (g + 2.0 * P)
+        # d ln R/d(s, xi, q) = free (2, -2, -1), dP/d(s, xi, q) = (g, k - g, 1), dv = v d ln R + R (nu ds + 2 mu P dP)
+        c = 2.0 * mu * R * P
+        dv0, dv1, dv2 = 2.0 * free * v + R * nu + c * g, -2.0 * free * v + c * (k - g), -free * v + c
+        ww = w * w
+        J[0, 0], J[0, 1], J[0, 2] = -ww * dv0, -ww * dv1, -ww * dv2
+        J[1, 0], J[1, 1], J[1, 2] = -ww * dv0 * E, -ww * dv1 * E, (w - ww * dv2) * E
+        # d(w R) = w R (d ln R - w dv)
+        J[2, 0] = -ww * dv0 * (1.0 - E) - wR * (2.0 * free - w * dv0) * P - wR * g
+        J[2, 1] = -ww * dv1 * (1.0 - E) - wR * (-2.0 * free - w * dv1) * P - wR * (k - g)
+        J[2, 2] = -ww * dv2 * (1.0 - E) - w * E - wR * (-free - w * dv2) * P - wR
+        ft[0], ft[1], ft[2] = 0.0, 0.0, 0.0
+
+
+@njit(cache=True, fastmath=FAST, error_model="numpy")
+def time_rate(y, p):
+    """ds/dsigma = w at the state y = (s, xi, q) of :func:`inertial_system` (same p)."""
+    k, a, b, G, mu, nu = p
+    s, xi, q = y[0], y[1], y[2]
+    u = s - xi
+    P = k * xi + u * (a + b * u) + q
+    R = math.exp(min(2.0 * u - q - math.log(G), LN_R_MAX))
+    return 1.0 / (1.0 + R * (nu * s + mu * P * P))
 
 
 @njit(inline="always", fastmath=FAST, error_model="numpy")
