@@ -15,10 +15,13 @@ Whether the closed-form tail may take over is tested in the vectorised loop that
 (:func:`_tail_lines`); the per-lane bookkeeping (finishing a run, refilling its lane) is a short scalar loop, as in
 the fixed-step lanes. A run's arithmetic does not depend on which lane or neighbours it had.
 
-The compiled entry point is ``relax_runs`` itself (``nogil``, every callee inlined in numba's IR), called from Python
+The compiled entry point is ``relax_runs`` itself (``nogil``, no calls left in its lane loops), called from Python
 threads by :func:`sweep.integrate.batch.lanes_in_threads` rather than from a ``prange`` loop: a kernel compiled in the
 process and one loaded from numba's cache then run the same code and give the same bits (docs/design.md,
-"Adaptive lanes").
+"Adaptive lanes"). ``load`` and ``take_next`` are inlined into it in numba's IR; the generated attempt and the
+right-hand sides it calls ~60 times are compiled by numba once each and inlined by LLVM (``forceinline``,
+:func:`_rates`): inlined in numba's IR they took ~2/3 of a cold default run (numba copies a callee's IR at every
+call site, block by block, and types and lowers each copy again), for the same machine code.
 
 Error estimate of a point: :mod:`sweep.integrate.tolerance_ladder` (each run's fine twin on the mesh halved, and a
 run again at a tighter control tolerance where the estimate exceeds the tolerance).
@@ -334,10 +337,32 @@ def _tail_lines(field) -> list[str]:
     ]
 
 
+@functools.cache
+def _rates(f):
+    """(rate, correction_rate) for float type f as functions that numba compiles once each and LLVM inlines at
+    every call (``forceinline``: LLVM's always-inline attribute), the same arithmetic as numba's ``inline="always"``
+    with the same fastmath flags, so the same machine code. Inlined in numba's IR instead, each of the attempt's ~60
+    calls was a copy to type and lower: relax_runs with the correction compiled in ~35 s, of a cold default run's
+    ~38 s (2 cores, NUMBA_CACHE_DIR empty), and in ~9-12 s so, with the attempt itself inlined the same way
+    (benchmarks/cold_start.py)."""
+    rate, correction_rate = make_rate(f), make_correction_rate(f)
+
+    @njit(forceinline=True, fastmath=FAST, error_model="numpy")
+    def rate_call(xi, s, k, a, b, s_c):
+        return rate(xi, s, k, a, b, s_c)
+
+    @njit(forceinline=True, fastmath=FAST, error_model="numpy")
+    def correction_rate_call(xi, s, y, k, a, b, G, w, E, expo):
+        return correction_rate(xi, s, y, k, a, b, G, w, E, expo)
+
+    return pin(rate_call, np.dtype(f).name), pin(correction_rate_call, np.dtype(f).name)
+
+
 def _attempt(f, tableau, correction: bool, fine, split: int):
     """attempt_all(st, atol) compiled for float type f (float64 only for now) and ``tableau``; ``atol`` is the
     absolute floor of xi in the error norm."""
-    namespace = {"rate": make_rate(f), "correction_rate": make_correction_rate(f), "exp_f64": exp_f64,
+    rate, correction_rate = _rates(f)
+    namespace = {"rate": rate, "correction_rate": correction_rate, "exp_f64": exp_f64,
                  "_log2_approx": _log2_approx, "W": LANES, "one": f(1.0), "zero": f(0.0), "half": f(0.5),
                  "tail_bound": tail_bound, "two": f(2.0), "e_tail_max": f(E_TAIL_MAX), "tail_safety": f(TAIL_SAFETY),
                  "tail_rtol": f(TAIL_RTOL), "tail_share": f(TAIL_SHARE),
@@ -349,8 +374,9 @@ def _attempt(f, tableau, correction: bool, fine, split: int):
                  "i_now": f(-_LN2 / (2.0 * (tableau.error_order + 1))), "__name__": __name__}
     source = _lane_source(tableau, correction, fine, split)
     exec(compile(source, f"<sweep.integrate.lanes_adaptive: {tableau.name}>", "exec"), namespace)
-    # not cached itself (generated source has no file): compiled into relax_runs, which is
-    return pin(njit(inline="always", fastmath=FAST, error_model="numpy")(namespace["attempt_all"]), tableau.name,
+    # not cached itself (generated source has no file): inlined by LLVM into relax_runs, which is (_rates: numba
+    # copied this body's IR once per block when it inlined it, ~8 s of its compile)
+    return pin(njit(forceinline=True, fastmath=FAST, error_model="numpy")(namespace["attempt_all"]), tableau.name,
                fine.name, split, correction)
 
 
@@ -391,8 +417,7 @@ def make_adaptive_lane_kernels(tableau, fine, split: int, correction: bool = Fal
     :class:`sweep.integrate.lanes.LanePoints`, runs in an :class:`AdaptiveRuns`, results in an
     :class:`AdaptiveOutputs`; with ``correction`` each run also carries the first-order inertial correction."""
     f = np.float64
-    rate = make_rate(f)
-    correction_rate = make_correction_rate(f)
+    rate, correction_rate = _rates(f)
     attempt_all = _attempt(f, tableau, correction, fine, split)
     W = LANES
     # the fine twin's stage loops use the same stage fields: room for the larger of the two

@@ -149,3 +149,42 @@ def test_a_sweep_compiles_each_adaptive_kernel_once():
     # the warm-up (sweep.protocols.stop.chunk.warm_up, the command line's) and the dask workers pass writable arrays
     readonly = {name: str(k.signatures[0]) for name, k in kernels.items() if "readonly" in str(k.signatures[0])}
     assert not readonly, readonly
+
+
+INLINED_PROBE = """
+import re
+import numpy as np
+from sweep.integrate.lanes import LanePoints
+from sweep.integrate.lanes_adaptive import AdaptiveOutputs, AdaptiveRuns, _rates, adaptive_lane_kernels
+relax_runs = adaptive_lane_kernels("dop853", True)[0]
+cells = dict(zip(relax_runs.py_func.__code__.co_freevars, relax_runs.py_func.__closure__))
+n = 3
+points = LanePoints(*(np.full(n, v) for v in (1e3, 0.5, 0.3, 1.0, 0.01)))
+runs = AdaptiveRuns(np.arange(n), np.full(n, 1e-6), np.full(n, 1e-3), 1e-12, 100_000)
+relax_runs(points, runs, np.arange(n), AdaptiveOutputs.empty(n, True))
+ir = "\\n".join(relax_runs.inspect_llvm().values())
+calls = re.findall(r"call [^@]*@\\S*(?:rate_call|attempt_all)", ir)
+print(len(calls), len(re.findall(r"@llvm\\.sqrt\\.v\\d+f64\\(", ir)))
+print(*(len(f.signatures) for f in (cells["attempt_all"].cell_contents, *_rates(np.float64))))
+"""
+
+
+@pytest.mark.slow
+def test_the_attempt_and_its_right_hand_sides_are_inlined_by_llvm(tmp_path):
+    """The generated attempt and the right-hand sides it calls are compiled by numba once each and inlined by LLVM
+    (``forceinline``, lanes_adaptive._rates), not copied into relax_runs in numba's IR, which took ~2/3 of a cold
+    default run (benchmarks/cold_start.py): relax_runs compiled in a new process on an empty cache (its LLVM IR is
+    kept only then) calls none of them, and its stage loops are vectorised (vector square roots, one per stage of
+    the run and of its twin, as with numba's inlining); numba compiled each of them once, on its own."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+    out = subprocess.run([sys.executable, "-c", INLINED_PROBE], env=env, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-3000:]
+    inlined, compiled = out.stdout.splitlines()[-2:]
+    calls, vector_sqrt = map(int, inlined.split())
+    assert compiled.split() == ["1", "1", "1"]  # attempt_all, rate, correction_rate: each compiled by numba itself
+    assert calls == 0
+    assert vector_sqrt >= 2 * 12  # dop853: 12 evaluations a step, the run's and its twin's
