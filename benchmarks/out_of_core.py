@@ -87,9 +87,11 @@ def run_command(folder: Path, n: int, extra: tuple[str, ...] = ()) -> dict:
     if proc.returncode != 0:
         raise RuntimeError(f"sweep run failed ({proc.returncode}): {stderr[-2000:]}")
     computed = float(re.search(r"computed in ([\d.e+-]+) s", stdout).group(1))
+    kernels = re.search(r"kernel (?:compiled|loaded) in ([\d.]+) s", stdout)
     rss = int(re.search(r"maxrss_kb=(\d+)", stderr).group(1)) * 1024
     result = {"points": n, "grid": list(grid(n)), "extra_args": list(extra), "wall_s": wall, "compute_s": computed,
-              "wall_over_compute": wall / computed, "peak_rss_bytes": rss,
+              "wall_over_compute": wall / computed, "kernels_loaded_s": float(kernels.group(1)) if kernels else None,
+              "peak_rss_bytes": rss,
               "peak_rss_sampled_bytes": max((r for _, r in samples), default=None),
               "rss_samples": [[round(t, 1), r] for t, r in samples[::max(1, len(samples) // 200)]],
               "file_bytes": out.stat().st_size, "points_per_s_compute": n / computed,
@@ -221,6 +223,7 @@ def main() -> None:
     try:
         dask_sizes = {int(float(s)) for s in args.dask.split(",") if s}
         for n in (int(float(s)) for s in args.sizes.split(",")):
+            run_command(folder, 10_000)  # numba's cache filled (others may edit the kernels' sources meanwhile)
             threads = run_command(folder, n)
             result["runs"].append(threads)
             if n in dask_sizes:

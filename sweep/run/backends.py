@@ -81,10 +81,35 @@ def _dask(workers: int | None, scheduler: str | None):
             raise InputError(f"could not connect to the dask scheduler at {scheduler!r} (tried for at most "
                              f"{CONNECT_TIMEOUT_S:g} s): {why}") from None
         with client:
+            check_workers_run_this_sweep(client)
             yield client
         return
     with local_cluster(workers or 2) as address, distributed.Client(address) as client:
         yield client
+
+
+WORKER_PROBE = "__import__('sweep.jitcache').jitcache.source_digest()"
+"""What each worker of an existing cluster is asked before any work: the digest of its sweep's sources."""
+
+
+def check_workers_run_this_sweep(client) -> None:
+    """InputError, before any work, where a worker of the cluster cannot import sweep or runs other sources than
+    this process (other sources may give other numbers, and the journal binds a run to its sources)."""
+    from ..jitcache import source_digest
+
+    found = client.run(eval, WORKER_PROBE, on_error="return")
+    if not found:
+        raise InputError("the dask cluster has no workers: start some (dask worker ADDRESS) before the run")
+    missing = {w: v for w, v in found.items() if isinstance(v, BaseException)}
+    if missing:
+        why = next(iter(missing.values()))
+        raise InputError(f"{len(missing)} of {len(found)} dask workers cannot import sweep ({type(why).__name__}: "
+                         f"{why}): install this sweep on them (pip install '.[distributed]' in its checkout)")
+    mine = source_digest()
+    other = sorted({v for v in found.values() if v != mine})
+    if other:
+        raise InputError(f"the dask workers run other sweep sources (digest {', '.join(other)}; here {mine}): "
+                         "install the same version of sweep on them")
 
 
 def _reachable(scheduler: str) -> None:

@@ -212,6 +212,36 @@ def test_killed_or_interrupted_cli_run_resumes_to_the_uninterrupted_file(tmp_pat
     assert not list(tmp_path.glob("**/*.tmp")), os.listdir(tmp_path)
 
 
+@pytest.mark.slow
+def test_sigkill_at_random_moments_then_resume_gives_the_uninterrupted_numbers(tmp_path, driven_40_reference):
+    """The file is written region by region while the chunks compute (sweep/write/regions.py) into a ``.part`` that
+    a SIGKILL may leave torn; the journal is what survives. Killed three times at random moments (after a random
+    number of chunks, plus a random delay: mid-chunk, mid-journal write, mid-region write), each time resumed by a
+    new process, then resumed to the end: the file holds the uninterrupted run's numbers, no .part or .tmp is left."""
+    from sweep.cli import main
+
+    rng = np.random.default_rng(33)
+    config = tmp_path / "scene.toml"
+    config.write_text(driven_scene_40().to_toml())
+    out = tmp_path / "d.nc"
+    args = ["run", str(config), "-o", str(out), "-q", "--chunk-size", "2"]
+    done = 0
+    for kill in range(3):
+        proc = _cli(args + (["--resume"] if kill else []))
+        _wait_for_chunks(out, min(36, done + int(rng.integers(1, 8))), proc)
+        time.sleep(float(rng.uniform(0.0, 0.3)))
+        proc.kill()
+        proc.communicate(timeout=120)
+        assert not out.exists()
+        now = len(list(journal_path(out).glob("chunk-*.npz")))
+        assert now >= done
+        done = now
+    assert main(args + ["--resume"]) == 0
+    assert_same_numbers(open_dataset(out), driven_40_reference)
+    assert not journal_path(out).exists()
+    assert not list(tmp_path.glob("**/*.tmp")) and not list(tmp_path.glob("*.part")), os.listdir(tmp_path)
+
+
 # --- dask.distributed ------------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("make, workers, size", [(stop_scene, 2, 29), (driven_scene, 2, 29), (stop_scene, 1, 50)],
@@ -237,6 +267,24 @@ def test_dask_workers_run_one_numba_thread_each():
     with sweep.local_cluster(2) as address, Client(address) as client:
         assert set(client.run(numba_threads).values()) == {1}
         assert {w["nthreads"] for w in client.scheduler_info()["workers"].values()} == {1}
+
+
+@pytest.mark.slow
+def test_a_cluster_without_this_sweep_is_refused_before_any_work(monkeypatch):
+    """Workers that cannot import sweep, or run other sources (which may give other numbers): one line, before any
+    chunk is sent (here the probe each worker evaluates is replaced by one that fails, and by another digest)."""
+    from distributed import Client
+
+    import sweep.run.backends as backends
+
+    with sweep.local_cluster(1) as address, Client(address) as client:
+        backends.check_workers_run_this_sweep(client)  # this process's own sources: accepted
+        monkeypatch.setattr(backends, "WORKER_PROBE", "__import__('no_sweep_here')")
+        with pytest.raises(InputError, match=r"1 of 1 dask workers cannot import sweep \(ModuleNotFoundError"):
+            backends.check_workers_run_this_sweep(client)
+        monkeypatch.setattr(backends, "WORKER_PROBE", "'0123456789abcdef'")
+        with pytest.raises(InputError, match="the dask workers run other sweep sources .digest 0123456789abcdef"):
+            backends.check_workers_run_this_sweep(client)
 
 
 @pytest.mark.slow
