@@ -6,10 +6,11 @@ file (``*.nbi``) of the package, checked once per process, with the seconds of t
 needs (:func:`kernel_families`: its protocol's); :func:`timed` wraps an explicit warm-up and logs a line if it is
 still running after :data:`SLOW_S` (a cache that holds some kernels but not the ones a scene needs), then how long
 it took. :data:`COLD_COMPILE_S` holds each family's compile time, measured alone in a new process with an empty
-cache (NUMBA_CACHE_DIR set to an empty folder) on the 2-core development machine and rounded up: the adaptive
-lanes' ``relax_runs`` (relaxed slip, with the first-order inertial correction of model "auto") is ~30 s of a cold
-default ``sweep run``'s ~33 s; the sampled lanes of the time-resolved path are the longest family. Loading every
-family from the cache takes ~1.5 s. :func:`compiled_aside` compiles a family in a second process beside this one
+cache (NUMBA_CACHE_DIR set to an empty folder) on the 2-core development machine and rounded up: the relaxed-slip
+engine (the adaptive lanes' ``relax_runs`` with the first-order inertial correction of model "auto", ~9-12 s, and
+the tolerance ladder's and the model choice's small kernels) ~11 s of CPU, the sampled lanes of the time-resolved
+path ~22 s, the longest family (benchmarks/cold_start.py times a whole cold default run). Loading every family from
+the cache takes ~1.5 s. :func:`compiled_aside` compiles a family in a second process beside this one
 (the inertial stop before a dask fan-out, the fit's per-point path).
 """
 
@@ -29,7 +30,7 @@ __all__ = ["COLD_COMPILE_S", "HELPER_WAIT_S", "SLOW_S", "announce_if_cold", "cac
            "driven_families", "inertial_stop_compiled_aside", "kernel_families", "timed"]
 
 
-COLD_COMPILE_S = {"relaxed-slip engine": 30, "time-resolved stop": 18, "time-resolved lanes": 45, "inertial stop": 18,
+COLD_COMPILE_S = {"relaxed-slip engine": 12, "time-resolved stop": 18, "time-resolved lanes": 25, "inertial stop": 18,
                   "slip-law stop": 6, "driven quasi-static": 8, "driven inertial": 16}
 """Seconds to compile each kernel family from an empty cache on the 2-core development machine (module docstring)."""
 SLOW_S = 3.0
