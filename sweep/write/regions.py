@@ -33,9 +33,11 @@ from .writer import Behind, Writer
 __all__ = ["BLOCK", "LATTICE_BYTES", "Block", "GridArrays", "Regions", "RunTotals", "Sink", "build_block",
            "lattice_steps"]
 
-LATTICE_BYTES = 256 * 2**20
-"""Most bytes a run keeps in memory for its picture and returned Dataset where the grid is larger (a regular lattice
-of its points, every n-th along each dim)."""
+LATTICE_BYTES = 64 * 2**20
+"""Most bytes a run with an output file keeps in memory for its picture and returned Dataset (the whole grid up to
+this size, else a regular lattice of its points, every n-th along each dim: ~800,000 points of the default scene,
+more cells than a picture has pixels). Small beside the process itself (~300 MB of imports and kernels), so that
+the run's memory stays flat as the grid grows."""
 
 
 BLOCK = "__block__"
