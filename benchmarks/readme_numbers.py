@@ -266,6 +266,25 @@ def _end_to_end() -> list[str]:
     ]
 
 
+def _cold_start() -> list[str]:
+    d = _json("cold_start")
+    spread = lambda t, key: f"{t[key + '_median']:.1f} ({t[key + '_min']:.1f}-{t[key + '_max']:.1f})"  # noqa: E731
+    rows = [[label, t["commit"] or "", str(len(t["runs"])), spread(t, "wall_s"), spread(t, "cpu_s"),
+             ", ".join(f"{r['load_before'][0]:.1f}" for r in t["runs"])] for label, t in d["trees"].items()]
+    top = d["compile_by_function"]["this tree"][:4]
+    targets = d["targets"]
+    return [
+        "## First run on a machine", "",
+        f"`python benchmarks/cold_start.py`: {d['scene']} from an empty numba cache ({d['command']}), the trees "
+        "alternated; median (range) of the runs:", "",
+        *_table(["tree", "commit", "runs", "wall s", "CPU s", "1-min load average before each run"], rows), "",
+        f"Targets (issue 37): wall {targets['wall_s']['target']} s, CPU {targets['cpu_s']['target']} s on two cores. "
+        "Compile CPU seconds of this tree's largest functions (without what compiles inside them): "
+        + ", ".join(f"`{k['function'].rsplit('.', 1)[-1]}` {k['exclusive_cpu_s']:.1f}" for k in top) + ".", "",
+        _record("cold_start"), "",
+    ]
+
+
 def _hopf() -> list[str]:
     d = _json("hopf")
     line, grid, auto = d["line"], d["driven_grid"], d["driven_grid_auto"]
@@ -356,8 +375,8 @@ def _fit() -> list[str]:
     ]
 
 
-SECTIONS = [_peers, _work_precision, _throughput, _models, _auto_cost, _end_to_end, _scaling, _axes, _hopf,
-            _error_coverage, _fit]
+SECTIONS = [_peers, _work_precision, _throughput, _models, _auto_cost, _end_to_end, _cold_start, _scaling, _axes,
+            _hopf, _error_coverage, _fit]
 
 
 def render_benchmarks() -> str:

@@ -38,6 +38,7 @@ KEYS = {
                   "targets"},
     "calibrate_rk4": {"benchmark", "points", "reference_failures", "rows", "plan_constants", "versions"},
     "calibrate_stiff": {"what", "quick", "points", "reference_failures", "rows"},
+    "cold_start": {"benchmark", "quick", "machine", "scene", "command", "trees", "compile_by_function", "targets"},
     "compare_commits": {"benchmark", "self_test", "machine", "trees", "compile", "numbers", "speed", "verdict",
                         "commands"},
     "end_to_end": {"benchmark", "quick", "machine", "scene", "runs", "best", "ratio_total_over_kernel", "target"},
