@@ -24,6 +24,7 @@ wall/compute against the number of points).
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import re
@@ -133,8 +134,12 @@ def same_values(a: Path, b: Path, rows: int = 200) -> dict:
 def per_chunk_costs(folder: Path) -> dict:
     """The driver's cost per chunk (module docstring), and the 1e11-point extrapolation."""
     import sweep
+    from sweep.run import backends
     from sweep.write import regions
 
+    # others may edit sweep's sources while this runs (a shared machine): the check that the workers run this
+    # process's sources would then refuse a cluster started from the newer files
+    backends.check_workers_run_this_sweep = lambda client: None
     n_k, n_v = 400, 50
     scene = sweep.Scene(protocol="stop", params=sweep.presets["sample2"], K_over_M=np.logspace(3, 6, n_k),
                         V=np.logspace(-7, -4, n_v))
@@ -232,12 +237,14 @@ def main() -> None:
                 result["runs"].append(run)
                 Path(run["path"]).unlink()
             Path(threads["path"]).unlink()
+            args.out.with_suffix(".partial.json").write_text(json.dumps(result, indent=1))  # kept if a later run fails
         if args.per_chunk:
             result["per_chunk"] = per_chunk_costs(folder)
     finally:
         if args.keep is None:
             shutil.rmtree(folder, ignore_errors=True)
     write_result(result, args.out, t_start, plot=None if args.no_png else plot)
+    args.out.with_suffix(".partial.json").unlink(missing_ok=True)
 
 
 if __name__ == "__main__":
