@@ -132,7 +132,9 @@ def same_values(a: Path, b: Path, rows: int = 200) -> dict:
 
 
 def per_chunk_costs(folder: Path) -> dict:
-    """The driver's cost per chunk (module docstring), and the 1e11-point extrapolation."""
+    """The driver's cost per chunk (module docstring), and the 1e11-point extrapolation. The writer's time per block
+    is fitted as a + b x points from blocks of 50 and of 10,000 points; the scheduler's from 400 one-row chunks run
+    on a LocalCluster of 2 workers against the threads backend."""
     import sweep
     from sweep.run import backends
     from sweep.write import regions
@@ -140,47 +142,55 @@ def per_chunk_costs(folder: Path) -> dict:
     # others may edit sweep's sources while this runs (a shared machine): the check that the workers run this
     # process's sources would then refuse a cluster started from the newer files
     backends.check_workers_run_this_sweep = lambda client: None
-    n_k, n_v = 400, 50
-    scene = sweep.Scene(protocol="stop", params=sweep.presets["sample2"], K_over_M=np.logspace(3, 6, n_k),
-                        V=np.logspace(-7, -4, n_v))
-    block_s = []
+    stored: list[float] = []
     real = regions.Regions._store
 
     def timed(self, index, arrays):
         t0 = time.perf_counter()
         real(self, index, arrays)
-        block_s.append(time.perf_counter() - t0)
+        stored.append(time.perf_counter() - t0)
 
-    sweep.run_sweep(scene, progress=False)  # kernels loaded
-    walls = {}
-    for backend in ("threads", "dask"):
-        kw = {}
-        if backend == "dask":
-            cluster = sweep.local_cluster(2)
-            kw = {"backend": "dask", "scheduler": cluster.__enter__()}
-            sweep.run_sweep(scene, progress=False, **kw)  # the workers warm
-        regions.Regions._store = timed
-        block_s.clear()
-        t0 = time.perf_counter()
-        sweep.run_sweep(scene, progress=False, output=folder / f"chunks-{backend}.nc", chunk_size=n_v,
-                        overwrite=True, **kw)
-        walls[backend] = time.perf_counter() - t0
+    def scene(n_k: int, n_v: int) -> sweep.Scene:
+        return sweep.Scene(protocol="stop", params=sweep.presets["sample2"], K_over_M=np.logspace(3, 6, n_k),
+                           V=np.logspace(-7, -4, n_v))
+
+    small, large = scene(400, 50), scene(200, 5000)
+    sweep.run_sweep(small, progress=False)  # kernels loaded
+    walls, medians = {}, {}
+    regions.Regions._store = timed
+    try:
+        for name, sc, size in (("small", small, 50), ("large", large, 10_000)):
+            stored.clear()
+            sweep.run_sweep(sc, progress=False, output=folder / f"chunks-{name}.nc", chunk_size=size, overwrite=True)
+            medians[size] = float(np.median(stored))
+        with sweep.local_cluster(2) as address:
+            sweep.run_sweep(small, progress=False, backend="dask", scheduler=address)  # the workers warm
+            for backend, kw in (("threads", {}), ("dask", {"backend": "dask", "scheduler": address})):
+                t0 = time.perf_counter()
+                sweep.run_sweep(small, progress=False, output=folder / f"chunks-{backend}.nc", chunk_size=50,
+                                overwrite=True, **kw)
+                walls[backend] = time.perf_counter() - t0
+    finally:
         regions.Regions._store = real
-        if backend == "dask":
-            cluster.__exit__(None, None, None)
-    writer = float(np.median(block_s))
-    scheduler = max(0.0, (walls["dask"] - walls["threads"]) / n_k)
+    per_point = max(0.0, (medians[10_000] - medians[50]) / (10_000 - 50))
+    per_chunk = max(0.0, medians[50] - 50 * per_point)
+    scheduler = max(0.0, (walls["dask"] - walls["threads"]) / 400)
     points, workers, rate = 1e11, 1000, 5.5e5  # points per second per core (this machine, default scene)
-    chunk = 16384
-    needed = points / chunk / (points / (workers * rate))
-    return {"chunks": n_k, "points_per_chunk": n_v, "wall_threads_s": walls["threads"], "wall_dask_s": walls["dask"],
-            "scheduler_s_per_chunk": scheduler, "writer_s_per_chunk_median": writer,
+    total_rate = workers * rate
+    rows = {}
+    for chunk in (16_384, 1_000_000):
+        chunks_per_s = total_rate / chunk
+        rows[str(chunk)] = {"chunks_per_s": chunks_per_s, "scheduler_busy": chunks_per_s * scheduler,
+                            "writer_busy": chunks_per_s * (per_chunk + per_point * chunk)}
+    return {"wall_threads_s": walls["threads"], "wall_dask_s": walls["dask"], "chunks": 400,
+            "scheduler_s_per_chunk": scheduler, "writer_s_per_block_50": medians[50],
+            "writer_s_per_block_10000": medians[10_000], "writer_s_per_chunk": per_chunk,
+            "writer_s_per_point": per_point,
             "extrapolation_1e11_on_1000_workers": {
-                "points_per_core_s": rate, "chunk_points": chunk, "compute_s": points / (workers * rate),
-                "chunks_per_s_needed": needed,
-                "chunks_per_s_one_driver_scheduler": 1 / scheduler if scheduler else None,
-                "chunks_per_s_one_writer": 1 / writer,
-                "chunk_points_for_one_writer": math.ceil(workers * rate * writer)}}
+                "points_per_core_s": rate, "compute_s": points / total_rate,
+                "by_chunk_points": rows,
+                "note": "busy = seconds of work per second of the run for one driver thread: above 1 it cannot "
+                        "keep up; the writer's share then needs that many writers (regions written by the workers)"}}
 
 
 def plot(result: dict, path: Path) -> str:
@@ -214,6 +224,8 @@ def main() -> None:
     parser.add_argument("--sizes", default="1e6,1e7,3e7,1e8")
     parser.add_argument("--dask", default="", help="sizes also run with --workers 2")
     parser.add_argument("--per-chunk", action="store_true")
+    parser.add_argument("--per-chunk-only", action="store_true",
+                        help="measure the per-chunk costs alone into the existing --out JSON (its runs kept)")
     parser.add_argument("--keep", type=Path, help="folder for the files (default: a temporary one, removed)")
     parser.add_argument("--out", type=Path, default=HERE / "results" / "out_of_core.json")
     parser.add_argument("--no-png", action="store_true")
@@ -223,6 +235,13 @@ def main() -> None:
     t_start = time.perf_counter()
     folder = args.keep or Path(tempfile.mkdtemp(prefix="sweep-ooc-"))
     folder.mkdir(parents=True, exist_ok=True)
+    if args.per_chunk_only:
+        result = json.loads(args.out.read_text())
+        result["per_chunk"] = per_chunk_costs(folder)
+        result["per_chunk"]["machine"], result["per_chunk"]["sweep_digest"] = machine_info(), sweep_digest()
+        write_result(result, args.out, t_start, plot=None if args.no_png else plot)
+        shutil.rmtree(folder, ignore_errors=True)
+        return
     result = {"benchmark": "out_of_core", "quick": args.quick, "machine": machine_info(),
               "sweep_digest": sweep_digest(), "free_disk_bytes": shutil.disk_usage(folder).free, "runs": []}
     try:
