@@ -15,7 +15,9 @@ installs the faults, then runs ``sweep.cli.main`` on the arguments after ``--`` 
 * ``enospc-netcdf``: the netCDF file's block writes fail with OSError(ENOSPC) after three blocks;
 * ``eacces-dir:DIR``: creating a file or folder under DIR fails with PermissionError(EACCES), as in a read-only
   folder (for tests run as root, where chmod stops nothing);
-* ``mkdir-output:PATH``: a folder appears at PATH just before the netCDF file is written there;
+* ``mkdir-output:PATH``: a folder appears at PATH just before the netCDF file is renamed there;
+* ``kill-after-region:N``: the process SIGKILLs itself right after its N-th block reached the netCDF ``.part``, its
+  chunk held back from the journal;
 * ``trace-chunks``: each chunk computed prints ``fault: computing a chunk`` on stderr (to check that something
   happened before any computation).
 """
@@ -28,7 +30,8 @@ import os
 import sys
 from pathlib import Path
 
-FAULTS = ("enospc-chunk", "eacces-chunk", "enospc-netcdf", "eacces-dir", "mkdir-output", "trace-chunks")
+FAULTS = ("enospc-chunk", "eacces-chunk", "enospc-netcdf", "eacces-dir", "mkdir-output", "trace-chunks",
+          "kill-after-region")
 TRACE = "fault: computing a chunk"
 
 
@@ -165,6 +168,32 @@ def _folder_in_the_way(path: Path) -> None:
     NetCDFRegions.close = close
 
 
+def _killed_after_region(count: int) -> None:
+    """The process SIGKILLs itself right after writing its ``count``-th block into the netCDF ``.part``, before the
+    journal may have stored that chunk (the journal's thread waits here until the kill)."""
+    import signal
+    import threading
+
+    from sweep.run.journal import Journal
+    from sweep.write.netcdf import NetCDFRegions
+
+    real_put, real_write, calls, hold = NetCDFRegions.put, Journal.write, [0], threading.Event()
+
+    def put(self, block):
+        real_put(self, block)
+        calls[0] += 1
+        if calls[0] == count:
+            self.nc.sync()  # the region on disk, its chunk not yet in the journal
+            os.kill(os.getpid(), signal.SIGKILL)
+
+    def write(self, index, arrays):
+        if calls[0] >= count - 1:
+            hold.wait(5)  # the journal falls behind the file: the kill comes between the two
+        return real_write(self, index, arrays)
+
+    NetCDFRegions.put, Journal.write = put, write
+
+
 def _wrapped(stop_chunk, action):
     """``stop_chunk`` (sweep.run.runner) calling ``action()`` before each chunk it computes."""
     def wrapped(scene, plan, progress=False):
@@ -197,6 +226,8 @@ def install(spec: str) -> None:
         _read_only(Path(arg))
     elif name == "mkdir-output":
         _folder_in_the_way(Path(arg))
+    elif name == "kill-after-region":
+        _killed_after_region(int(arg))
     else:
         # one write a line: chunks computed side by side print from two threads at once
         _before_each_chunk(lambda: (sys.stderr.write(TRACE + "\n"), sys.stderr.flush()))

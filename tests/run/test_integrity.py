@@ -450,6 +450,21 @@ def test_a_netcdf_write_failing_keeps_the_journal_for_resume(tmp_path, config, m
     assert_same_file(out, reference)
 
 
+def test_a_kill_between_a_region_write_and_its_journal_record_resumes_to_the_same_file(tmp_path, config, monkeypatch,
+                                                                                       capsys, reference):
+    """SIGKILL right after a block reached the file, before the journal stored its chunk: the torn .part is never
+    trusted; --resume computes the chunks the journal lacks (that one included) and writes the file afresh."""
+    out = tmp_path / "s.nc"
+    proc = cli("run", config, "-o", out, "--chunk-size", CHUNK, "-q", faults_=("kill-after-region:6",), cwd=tmp_path)
+    assert proc.returncode == -9, (proc.returncode, proc.stderr)
+    kept = len(list(journal_path(out).glob("chunk-*.npz")))
+    assert kept < 6 and not out.exists(), kept
+    proc = main_run(config, out, "--resume", monkeypatch=monkeypatch, capsys=capsys)
+    assert proc.returncode == 0 and computed(proc) == 15 - kept, proc.stderr
+    assert_same_file(out, reference)
+    assert not list(tmp_path.glob("*.part"))
+
+
 def test_too_little_free_space_is_refused_before_any_work(tmp_path, monkeypatch):
     import sweep.write.targets
 
