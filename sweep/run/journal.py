@@ -42,18 +42,15 @@ import json
 import os
 import re
 import shutil
-import threading
 import warnings
-from collections import deque
 from collections.abc import Callable, Iterator
-from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError, JournalWarning, OutputError
 from ..write.targets import remove_quietly, write_failed
-from ..write.writer import Writer
+from ..write.writer import PENDING_CHUNKS, Behind, Writer
 
 __all__ = ["FORMAT", "JOURNAL_RECORD", "Journal", "journal_path", "rejected_path"]
 
@@ -63,9 +60,6 @@ MANIFEST = "manifest.json"
 JOURNAL_RECORD = "__journal__"
 """The member of a chunk's .npz that holds its record (JSON text)."""
 CHUNK = re.compile(r"chunk-(\d{6,})\.npz")
-PENDING_CHUNKS = 2
-"""Most chunks handed to :meth:`Journal.background` and not yet written: the computing waits beyond that (a slow disk
-must not fill the memory with chunks)."""
 TEMPORARY = re.compile(r"(chunk-\d{6,}\.npz|manifest\.json)\.tmp")
 """Leftovers of a write interrupted before its rename: never whole, so removed."""
 
@@ -306,37 +300,18 @@ class Journal(Writer):
 
     @contextlib.contextmanager
     def background(self) -> Iterator[Callable[[int, dict[str, np.ndarray]], None]]:
-        """``with journal.background() as keep: keep(index, arrays)``: :meth:`write` in one helper thread, chunks
-        written in the order handed over (module docstring). A failed write is raised (its :class:`OutputError`) by
-        the next ``keep`` or when the block ends, and no chunk is written after it; the block's end waits for every
-        chunk handed over. ``arrays`` may not change after the call, the dict itself may (the caller's ``seconds`` is
-        popped while the chunk is written: the chunk keeps it)."""
-        pending: deque[Future] = deque()
-        failed = threading.Event()
-
-        def write(index: int, arrays: dict[str, np.ndarray]) -> None:
-            if failed.is_set():  # after a failed write none is tried: the error's count of kept chunks stays true
-                return
-            try:
-                self.write(index, arrays)
-            except BaseException:
-                failed.set()
-                raise
-
-        def keep(index: int, arrays: dict[str, np.ndarray]) -> None:
-            while pending and (pending[0].done() or len(pending) >= PENDING_CHUNKS):
-                pending.popleft().result()  # a failed write raises here
-            pending.append(executor.submit(write, index, dict(arrays)))
-
-        executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="sweep-journal")
+        """``with journal.background() as keep: keep(index, arrays)``: :meth:`write` in one helper thread
+        (sweep.write.writer.Behind), chunks written in the order handed over (module docstring). A failed write is
+        raised (its :class:`OutputError`) by the next ``keep`` or when the block ends, and no chunk is written after
+        it; the block's end waits for every chunk handed over. ``arrays`` may not change after the call, the dict
+        itself may (the caller's ``seconds`` is popped while the chunk is written: the chunk keeps it)."""
+        behind = Behind("sweep-journal", PENDING_CHUNKS)
         try:
-            yield keep
+            yield lambda index, arrays: behind.submit(self.write, index, dict(arrays))
         except BaseException:
-            executor.shutdown(wait=True)  # the chunks computed are kept; the block's own error is the one raised
+            behind.close(raise_errors=False)  # the chunks computed are kept; the block's own error is the one raised
             raise
-        executor.shutdown(wait=True)
-        while pending:
-            pending.popleft().result()
+        behind.close()
 
     def read(self, index: int) -> dict[str, np.ndarray]:
         """The arrays of chunk ``index``, checked against its record; a chunk that changed on disk since it was
