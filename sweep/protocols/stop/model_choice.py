@@ -64,6 +64,11 @@ RELAX_BATCH = 256
 """Points per call of the per-point module (:func:`_relax`): an inertial point takes ~1 ms, so a batch ends every
 ~0.1 s on two threads and the progress bar moves (a grid of up to plan.ONE_CHUNK_POINTS is one chunk, whose
 inertial points could otherwise take half a minute in one silent call)."""
+EXTRA_RUNGS = 3
+"""Rungs of the inertial ladder beyond the first pair (:func:`solve_inertial`): local tolerances down to
+rtol/TIGHTER^5."""
+LOCAL_RTOL_FLOOR = 1e-13
+"""Tightest local tolerance of the inertial ladder (a few hundred ulps: the RODAS3 steps' rounding)."""
 QUASISTATIC, INERTIAL = 0, 1
 
 
@@ -127,16 +132,33 @@ def _estimate(scene: Scene, plan: Plan, pts: np.ndarray, carried: np.ndarray, pr
 def solve_inertial(scene: Scene, plan: Plan, raw: RawResult, rows: np.ndarray, idx: np.ndarray,
                    progress: bool | None = False) -> None:
     """Replace the relaxed slip of the rows ``rows`` of ``raw`` (whose rows are the plan's points ``idx``; points
-    with a finite limit) by the inertial model's, with the error estimate of :data:`TIGHTER`."""
+    with a finite limit) by the inertial model's, with the error estimate of :data:`TIGHTER`: runs at local
+    tolerances rtol/TIGHTER and rtol/TIGHTER^2, the tighter one kept, their difference its estimate. Where that
+    estimate exceeds the scene's tolerance (points whose motion amplifies local errors, below the Hopf line: the
+    global error reaches 100-1000x the local tolerance there), the ladder goes on, one run a rung at a tolerance
+    TIGHTER times tighter (the last run becoming the coarse one), up to EXTRA_RUNGS rungs and not below
+    LOCAL_RTOL_FLOOR."""
     if rows.size == 0:
         return
-    fine, coarse = _relax(scene, plan, idx[rows], True, (scene.rtol / TIGHTER**2, scene.rtol / TIGHTER), progress,
-                          "inertia")
-    raw.xi_inf[rows] = fine["xi_inf"]
-    raw.xi_inf_err[rows] = np.abs(fine["xi_inf"] - coarse["xi_inf"])
-    raw.status[rows] = np.where(fine["status"] != Status.OK, fine["status"], coarse["status"])
-    raw.steps[rows] = fine["steps"]
-    raw.work[rows] = fine["steps"] + coarse["steps"]
+    local = scene.rtol / TIGHTER**2
+    fine, coarse = _relax(scene, plan, idx[rows], True, (local, scene.rtol / TIGHTER), progress, "inertia")
+    status = np.where(fine["status"] != Status.OK, fine["status"], coarse["status"])
+    xi, err, work = fine["xi_inf"], np.abs(fine["xi_inf"] - coarse["xi_inf"]), fine["steps"] + coarse["steps"]
+    steps = fine["steps"].copy()
+    for _ in range(EXTRA_RUNGS):
+        local /= TIGHTER
+        with np.errstate(invalid="ignore"):
+            over = np.flatnonzero((status == Status.OK) & (err > scene.rtol * np.abs(xi) + scene.atol["xi_inf"]))
+        if over.size == 0 or local < LOCAL_RTOL_FLOOR:
+            break
+        finer = _relax(scene, plan, idx[rows[over]], True, (local,), progress, "inertia")[0]
+        good = finer["status"] == Status.OK  # else the previous rung stands, with its estimate
+        at = over[good]
+        err[at] = np.abs(finer["xi_inf"][good] - xi[at])
+        xi[at], steps[at] = finer["xi_inf"][good], finer["steps"][good]
+        work[over] += finer["steps"]
+    raw.xi_inf[rows], raw.xi_inf_err[rows], raw.status[rows] = xi, err, status
+    raw.steps[rows], raw.work[rows] = steps, work
 
 
 def choose_stop_models(scene: Scene, plan: Plan, raw: RawResult, idx: np.ndarray | None = None,
