@@ -27,6 +27,7 @@ __all__ = ["CATALOGUE", "file_protocol", "get", "names", "register"]
 _CATALOGUE = {
     "stop": "sweep.protocols.stop.protocol",
     "driven": "sweep.protocols.driven.protocol",
+    "history": "sweep.protocols.history.protocol",
 }
 CATALOGUE = MappingProxyType(_CATALOGUE)
 """Protocol name -> the module whose ``PROTOCOL`` implements it. A new protocol is one folder and one line here (or

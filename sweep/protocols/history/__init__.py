@@ -1,0 +1,1 @@
+"""The history protocol: a piecewise load history (velocity steps, holds, slide-hold-slide) at every point."""

@@ -1,0 +1,135 @@
+"""The plan of a history scene and its chunks: per point the reduced inputs, two runs of the load-history driver
+(sweep/integrate/history.py) at local tolerances rtol/TIGHTER and rtol/TIGHTER^2, and the observables read off the
+tighter run, each with the difference to the looser run as its error estimate."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ... import physics
+from ...accuracy import TIGHTER
+from ...plan.plan import point_params
+from ...scene.scene import Scene
+from ...status import Status
+from .segments import reduced_durations, segment_ratios
+
+__all__ = ["DEFAULT_CHUNK", "OBSERVABLES", "HistoryPlan", "history_chunk", "history_plan", "read_off"]
+
+OBSERVABLES = ("mu_end", "delta_mu_ss", "delta_mu_peak", "delta_mu_relax")
+"""What a history point yields per segment (docs/physics.md, "Load histories")."""
+DEFAULT_CHUNK = 256
+"""Points per chunk (a history point costs about as much as a driven one, times its segments)."""
+
+
+@dataclass(frozen=True)
+class HistoryPlan:
+    """Per-point inputs of a history scene (flat in the grid's C order) and the run's settings."""
+
+    k: np.ndarray
+    """chi/A."""
+    a: np.ndarray
+    """mu1(V)/A."""
+    b: np.ndarray
+    """m2/A."""
+    A: np.ndarray
+    """Direct-effect coefficient (the unit of s)."""
+    mu_ref: np.ndarray
+    """mu_d(V): the steady friction at the grid's V (paper eq. 6)."""
+    durations: np.ndarray
+    """Reduced durations V t_j/D0, (points, segments)."""
+    ratios: np.ndarray
+    """Load-point velocity / V per segment."""
+    state_law: str
+    rtol: float
+    max_steps: int
+    perturbation: float
+    chunk_size: int
+
+    @property
+    def n_points(self) -> int:
+        return self.k.size
+
+    def take(self, rows: np.ndarray) -> HistoryPlan:
+        return replace(self, k=self.k[rows], a=self.a[rows], b=self.b[rows], A=self.A[rows],
+                       mu_ref=self.mu_ref[rows], durations=self.durations[rows])
+
+    def describe(self) -> dict[str, str]:
+        return {"model": f"quasistatic, {self.state_law} law",
+                "method": f"dp5 (adaptive, I control) on (s = (mu - mu_d(V))/A, u = ln psi), segment by segment, at "
+                          f"local tolerances rtol/{TIGHTER:g} and rtol/{TIGHTER**2:g}: the tighter run's values, their "
+                          f"difference as error estimate",
+                "perturbation": f"z(0) = {self.perturbation:g} beyond steady sliding at the first segment's velocity"}
+
+
+def history_plan(scene: Scene) -> HistoryPlan:
+    """The plan of a history scene over its grid (sweep.protocols.history)."""
+    pts = point_params(scene)
+    k, a, b = pts.reduced
+    flat = lambda name: np.broadcast_to(scene.broadcast(name), scene.shape).ravel().astype(float)  # noqa: E731
+    V, D0 = flat("V"), flat("D0")
+    p = scene.params
+    mu_ref = physics.mu_d(V, p.m0, flat("m1"), flat("m2"), p.V0)
+    return HistoryPlan(k=k, a=a, b=b, A=pts.A, mu_ref=np.asarray(mu_ref, float),
+                       durations=reduced_durations(scene.options.segments, V, D0),
+                       ratios=segment_ratios(scene.options.segments), state_law=scene.state_law, rtol=scene.rtol,
+                       max_steps=int(scene.max_steps), perturbation=float(scene.options.perturbation),
+                       chunk_size=DEFAULT_CHUNK)
+
+
+def _run(plan: HistoryPlan, points: np.ndarray, tol: float) -> dict[str, np.ndarray]:
+    from ...integrate.history import history_batch
+    from ...integrate.models.history import LAW_CODES
+
+    n, m = points.size, plan.ratios.size
+    rec = {name: np.full((n, m), np.nan) for name in ("s_start", "s_end", "s_peak")}
+    rec["steady"] = np.zeros((n, m), np.int8)
+    status, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
+    k = plan.k[points]
+    history_batch(k, plan.a[points], plan.b[points], LAW_CODES[plan.state_law], k * plan.perturbation,
+                  plan.ratios, np.ascontiguousarray(plan.durations[points]), tol, plan.max_steps, rec["s_start"],
+                  rec["s_end"], rec["s_peak"], rec["steady"], status, steps)
+    return {**rec, "status": status, "steps": steps}
+
+
+def read_off(rec: dict[str, np.ndarray], ratios: np.ndarray, a: np.ndarray, b: np.ndarray, A: np.ndarray,
+             mu_ref: np.ndarray) -> dict[str, np.ndarray]:
+    """The observables (points, segments) from one run's records: mu at each segment's end; the steady-state jump
+    from the previous segment where both end in steady sliding; the peak after a hold above the steady friction at
+    the reslide velocity; the relaxation during a hold (NaN where a segment has no such value)."""
+    A_, a_, b_ = A[:, None], a[:, None], b[:, None]
+    r = ratios[None, :]
+    prev = np.concatenate([[np.nan], ratios[:-1]])[None, :]
+    steady = rec["steady"].astype(bool)
+    both = steady & np.concatenate([np.zeros_like(steady[:, :1]), steady[:, :-1]], axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lr = np.log(np.where(r > 0, r, 1.0))
+        s_ss = -a_ * lr + b_ * lr**2
+        jump = rec["s_end"] - np.concatenate([np.full_like(rec["s_end"][:, :1], np.nan), rec["s_end"][:, :-1]], axis=1)
+    return {"mu_end": mu_ref[:, None] + A_ * rec["s_end"],
+            "delta_mu_ss": np.where(both, A_ * jump, np.nan),
+            "delta_mu_peak": np.where((r > 0) & (prev == 0), A_ * (rec["s_peak"] - s_ss), np.nan),
+            "delta_mu_relax": np.where(r == 0, A_ * (rec["s_start"] - rec["s_end"]), np.nan)}
+
+
+def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dict[str, np.ndarray]]:
+    """compute(points) -> per-point arrays (observables and their errors (points, segments); status, steps)."""
+
+    def compute(points: np.ndarray) -> dict[str, np.ndarray]:
+        loose, tight = (_run(plan, points, plan.rtol / TIGHTER**e) for e in (1, 2))
+        args = (plan.ratios, plan.a[points], plan.b[points], plan.A[points], plan.mu_ref[points])
+        values, looser = read_off(tight, *args), read_off(loose, *args)
+        status = np.where(tight["status"] != Status.OK, tight["status"], loose["status"]).astype(np.int8)
+        out: dict[str, np.ndarray] = {"status": status, "steps": tight["steps"] + loose["steps"]}
+        above = np.zeros(points.size, bool)
+        for name in OBSERVABLES:
+            err = np.abs(values[name] - looser[name])
+            err = np.where(np.isnan(values[name]), np.nan, np.where(np.isnan(err), np.inf, err))
+            above |= np.any(err > plan.rtol * (np.abs(values[name]) + plan.A[points, None]), axis=1)
+            out[name], out[f"{name}_error"] = values[name], err
+        out["status"] = np.where((status == Status.OK) & above, np.int8(Status.ERROR_ABOVE_TOL), status)
+        return out
+
+    return compute

@@ -1,0 +1,134 @@
+"""The history protocol: a piecewise load history (velocity steps, holds, slide-hold-slide) from steady sliding,
+quasi-static, with the aging or the slip law; per segment what the laboratory reads off (docs/physics.md, "Load
+histories")."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ...errors import InputError
+from ..base import ChunkCompute, Options, Protocol
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from ...scene.scene import Scene
+    from ...write.regions import RunTotals
+    from .engine import HistoryPlan
+
+__all__ = ["HISTORY_METHODS", "PROTOCOL", "HistoryProtocol"]
+
+HISTORY_METHODS = ("auto", "dp5")
+"""Methods a history scene accepts: its stepper is the adaptive dp5."""
+
+
+class HistoryProtocol(Protocol):
+    name = "history"
+    title = "history scene"
+    marker = "mu_end"
+    observables = ("mu_end", "delta_mu_ss", "delta_mu_peak", "delta_mu_relax")
+    always = "mu_end"
+    default_observables = observables
+    option_fields = MappingProxyType({"segments": (), "perturbation": 0.0})
+    default_chunk = 256
+    memory_per_point = 400
+    file_per_point = 80
+    core_seconds_per_point = 1e-3
+    warm_up_timed = False
+
+    @property
+    def models(self) -> frozenset[tuple[str, str]]:
+        """Quasi-static with every state law of the registry (no inertial model yet)."""
+        from ...integrate.models.history import LAW_CODES
+
+        return frozenset({("quasistatic", law) for law in LAW_CODES})
+
+    def supports(self, model: str, state_law: str) -> bool:
+        """Model "auto" runs where the quasi-static model is enough (:meth:`check` refuses a scene where inertia
+        would matter), so it is supported wherever the quasi-static model is."""
+        return ("quasistatic" if model == "auto" else model, state_law) in self.models
+
+    def make_options(self, scene: Scene, given: Mapping[str, Any]) -> Options:
+        """The history scene's own fields: ``segments`` (sweep/protocols/history/segments.py) and the initial spring
+        stretch ``perturbation`` beyond steady sliding (reduced by D0, as the driven scene's; 0 by default)."""
+        from ...scene.params import require_finite
+        from .segments import check_segments
+
+        options = dict(super().make_options(scene, given))
+        segments = check_segments(options["segments"])
+        pert = require_finite("perturbation", options["perturbation"])
+        if abs(pert) > 1.0:
+            raise InputError(f"perturbation must be in [-1, 1] (reduced spring stretch), got {pert!r}")
+        return Options({"segments": segments, "perturbation": float(pert)})
+
+    def check(self, scene: Scene) -> None:
+        from ... import physics
+
+        if scene.method not in HISTORY_METHODS:
+            raise InputError(f"protocol 'history' runs the adaptive dp5 stepper: method must be one of "
+                             f"{list(HISTORY_METHODS)}, got {scene.method!r}")
+        p = scene.params
+        r_max = max(seg["V_ratio"] for seg in scene.options.segments)
+        G = physics.inertia_number(r_max * float(np.max(scene.V)), p.D0, p.g) / p.A
+        if scene.model == "auto" and G > scene.model_tol:
+            raise InputError(f"protocol 'history' has the quasi-static model only, and inertia matters at the fastest "
+                             f"segment (gamma/A = {G:.3g} > model_tol = {scene.model_tol:g} at "
+                             f"{r_max:g} x V = {r_max * float(np.max(scene.V)):.3g} m/s): lower V or raise model_tol")
+
+    def toml_lines(self, scene: Scene) -> list[str]:
+        from ..base import toml_value
+
+        return [f"perturbation = {scene.options.perturbation!r}",
+                f"segments = {toml_value([dict(seg) for seg in scene.options.segments])}"]
+
+    def make_plan(self, scene: Scene) -> HistoryPlan:
+        from .engine import history_plan
+
+        return history_plan(scene)
+
+    def chunk(self, scene: Scene, plan: HistoryPlan, progress: bool | None = False) -> ChunkCompute:
+        from .engine import history_chunk
+
+        return history_chunk(scene, plan)
+
+    def kernel_families(self, scene: Scene) -> list[str]:
+        return []
+
+    def warm_up(self, scene: Scene, plan: HistoryPlan, fan_out: bool = False) -> None:
+        """One point through the kernel (compiled or loaded from numba's cache)."""
+        self.chunk(scene, plan.take(np.arange(1)))(np.arange(1))
+
+    def coords(self, scene: Scene) -> dict[str, xr.Variable]:
+        from .schema import history_coords
+
+        return history_coords(scene)
+
+    def variables(self, scene: Scene, plan: HistoryPlan, arrays: dict[str, np.ndarray]) -> dict[str, xr.Variable]:
+        from .schema import history_variables
+
+        return history_variables(scene, arrays)
+
+    def attributes(self, scene: Scene, totals: RunTotals, history: str) -> dict[str, object]:
+        from .engine import history_plan
+        from .schema import history_attributes
+
+        example = totals.plan_example or history_plan(scene).take(np.arange(0))
+        return history_attributes(scene, totals.seconds, example.describe(), history)
+
+    def dry_run(self, scene: Scene) -> list[str]:
+        from .engine import history_plan
+
+        describe = history_plan(scene).take(np.arange(0)).describe()
+        return [f"{key:>28}: {text}" for key, text in describe.items()]
+
+    def draw(self, ds: xr.Dataset, path: str | Path, variable: str | None = None) -> list[Path]:
+        """Not drawn yet: mu at the segments' ends over the grid is the next picture to add."""
+        raise InputError("protocol 'history' has no picture yet; read the file with sweep.open")
+
+
+PROTOCOL = HistoryProtocol()
