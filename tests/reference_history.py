@@ -1,0 +1,56 @@
+"""Independent scipy reference of the quasi-static spring-slider under a piecewise load history (PHYSICS.md 1 and 7),
+in physical units and the paper's variables, written from the equations and not from the package's code:
+
+    mu(v, phi) = mu_d(D0/phi) + A ln(v phi/D0),   mu_d(v) = m0 - m1 ln(v/V0) + m2 ln(v/V0)^2     (paper eq. 1, 6)
+    => v = (D0/phi) exp((mu - mu_d(D0/phi))/A)
+    dmu/dt = k_lab (v_lp - v),   k_lab = K/(M g) [1/m]
+    aging: dphi/dt = 1 - v phi/D0;   slip: dphi/dt = -(v phi/D0) ln(v phi/D0)
+
+integrated in (mu, ln phi) with Radau at rtol 1e-10 segment by segment; peaks located by solve_ivp's events
+(dmu/dt = 0, falling)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+G = 9.81
+
+
+def history_reference(A, m1, m2, D0, K_over_M, V, segments, law="aging", m0=0.3, V0=1e-6, stretch=0.0, rtol=1e-10):
+    """Per segment (mu_start, mu_end, mu_peak) of the history ``segments`` (dicts with V_ratio and duration [s] or
+    displacement [m]), from steady sliding at the first segment's velocity with the spring stretched by ``stretch``
+    [m] beyond it; also the final (v, phi)."""
+    k_lab = K_over_M / G
+
+    def mu_d(v):
+        lv = np.log(v / V0)
+        return m0 - m1 * lv + m2 * lv * lv
+
+    def velocity(mu, lphi):
+        phi = np.exp(lphi)
+        return D0 / phi * np.exp((mu - mu_d(D0 / phi)) / A)
+
+    def rhs(t, y, v_lp):
+        v = velocity(y[0], y[1])
+        E = v * np.exp(y[1]) / D0
+        dphi = 1.0 - E if law == "aging" else -E * np.log(E)
+        return [k_lab * (v_lp - v), dphi / np.exp(y[1])]
+
+    segments = [{"V_ratio": 0.0, "duration": s["hold"]} if "hold" in s else s for s in segments]
+    v1 = segments[0]["V_ratio"] * V
+    y = np.array([mu_d(v1) + k_lab * stretch, np.log(D0 / v1)])
+    out = []
+    for seg in segments:
+        v_lp = seg["V_ratio"] * V
+        T = seg["duration"] if "duration" in seg else seg["displacement"] / v_lp
+        peak = lambda t, y, v_lp: k_lab * (v_lp - velocity(y[0], y[1]))  # noqa: E731
+        peak.direction = -1
+        sol = solve_ivp(rhs, (0.0, T), y, method="Radau", rtol=rtol, atol=[1e-14, 1e-12], args=(v_lp,),
+                        events=peak, first_step=min(T, 1e-6 * D0 / max(v_lp, V)))
+        assert sol.success, sol.message
+        peaks = [ye[0] for ye in sol.y_events[0]]
+        mu_start = y[0]
+        y = sol.y[:, -1]
+        out.append({"mu_start": mu_start, "mu_end": y[0], "mu_peak": max([mu_start, y[0], *peaks])})
+    return out, (velocity(y[0], y[1]), np.exp(y[1]))
