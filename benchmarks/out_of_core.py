@@ -242,7 +242,8 @@ def main() -> None:
         write_result(result, args.out, t_start, plot=None if args.no_png else plot)
         shutil.rmtree(folder, ignore_errors=True)
         return
-    result = {"benchmark": "out_of_core", "quick": args.quick, "machine": machine_info(),
+    result = {"benchmark": "out_of_core", "quick": args.quick, "date": time.strftime("%Y-%m-%d", time.gmtime()),
+              "machine": machine_info(),
               "sweep_digest": sweep_digest(), "free_disk_bytes": shutil.disk_usage(folder).free, "runs": []}
     try:
         dask_sizes = {int(float(s)) for s in args.dask.split(",") if s}

@@ -285,6 +285,42 @@ def _cold_start() -> list[str]:
     ]
 
 
+def _out_of_core() -> list[str]:
+    d = _json("out_of_core")
+    rows = []
+    for r in d["runs"]:
+        rows.append([f"{r['points']:,}", "dask, 2 workers" if r["extra_args"] else "threads", f"{r['wall_s']:.1f}",
+                     f"{r['compute_s']:.1f}", f"{r['wall_over_compute']:.2f}", f"{r['peak_rss_bytes'] / 2**30:.2f}",
+                     f"{r['file_bytes'] / 2**30:.2f}", f"{r['loadavg_start_end'][0][0]:.1f}"])
+    dask = [r for r in d["runs"] if r["extra_args"]]
+    lines = [
+        "## Sweeps larger than memory", "",
+        "`python benchmarks/out_of_core.py`: `sweep run` of the default scene's ranges (sample2, rtol 1e-6, model "
+        "auto) on grids of N points, each in a new process; peak RSS of that process; wall time of the whole command "
+        "against its chunk loop (computing, journal and file written as the chunks finish):", "",
+        *_table(["points", "backend", "wall s", "chunk loop s", "wall / loop", "peak RSS GiB", "file GiB",
+                 "1-min load before"], rows), "",
+    ]
+    if dask:
+        same = "bit for bit" if dask[0].get("bitwise_equal") else f"except {dask[0].get('differing')}"
+        lines += [f"The dask run's file equals the threads run's {same} ({dask[0].get('values_compared', 0):,} "
+                  "values compared).", ""]
+    if "per_chunk" in d:
+        c = d["per_chunk"]
+        x = c["extrapolation_1e11_on_1000_workers"]
+        rows = x["by_chunk_points"]
+        lines += [f"Per chunk, the driver pays {c['scheduler_s_per_chunk'] * 1e3:.1f} ms of dask scheduling (over "
+                  f"the threads backend) and its writer {c['writer_s_per_chunk'] * 1e3:.2f} ms + "
+                  f"{c['writer_s_per_point'] * 1e9:.0f} ns a point. A 1e11-point sweep on 1,000 workers at "
+                  f"{_int(x['points_per_core_s'])} points/s each computes in {x['compute_s']:.0f} s; one driver "
+                  "would then be busy " + ", ".join(
+                      f"{r['scheduler_busy']:.2g} s (scheduling) and {r['writer_busy']:.2g} s (writing) per second "
+                      f"with chunks of {int(k):,} points" for k, r in rows.items())
+                  + ": above 1 it cannot keep up, so such a cluster needs its regions written by the workers (as "
+                  "many writers as the writing's busy seconds) and chunks of ~1e6 points.", ""]
+    return lines + [_record("out_of_core"), ""]
+
+
 def _hopf() -> list[str]:
     d = _json("hopf")
     line, grid, auto = d["line"], d["driven_grid"], d["driven_grid_auto"]
@@ -375,8 +411,8 @@ def _fit() -> list[str]:
     ]
 
 
-SECTIONS = [_peers, _work_precision, _throughput, _models, _auto_cost, _end_to_end, _cold_start, _scaling, _axes,
-            _hopf, _error_coverage, _fit]
+SECTIONS = [_peers, _work_precision, _throughput, _models, _auto_cost, _end_to_end, _cold_start, _out_of_core,
+            _scaling, _axes, _hopf, _error_coverage, _fit]
 
 
 def render_benchmarks() -> str:
