@@ -229,6 +229,8 @@ def main() -> None:
     parser.add_argument("--keep", type=Path, help="folder for the files (default: a temporary one, removed)")
     parser.add_argument("--out", type=Path, default=HERE / "results" / "out_of_core.json")
     parser.add_argument("--no-png", action="store_true")
+    parser.add_argument("--merge", action="store_true",
+                        help="replace only the runs measured now in the existing --out JSON (the others kept)")
     args = parser.parse_args()
     if args.quick:
         args.sizes = args.dask = "2e4"
@@ -263,6 +265,14 @@ def main() -> None:
     finally:
         if args.keep is None:
             shutil.rmtree(folder, ignore_errors=True)
+    if args.merge and args.out.is_file():
+        old = json.loads(args.out.read_text())
+        fresh = {(r["points"], tuple(r["extra_args"])) for r in result["runs"]}
+        kept = [r for r in old["runs"] if (r["points"], tuple(r["extra_args"])) not in fresh]
+        result["runs"] = sorted(kept + result["runs"], key=lambda r: (r["points"], r["extra_args"]))
+        result["merged_from"] = {"date": old.get("date"), "commit": old["machine"]["versions"].get("git_commit")}
+        if "per_chunk" not in result and old.get("per_chunk"):
+            result["per_chunk"] = old["per_chunk"]
     write_result(result, args.out, t_start, plot=None if args.no_png else plot)
     args.out.with_suffix(".partial.json").unlink(missing_ok=True)
 
