@@ -271,6 +271,7 @@ def main() -> None:
         kept = [r for r in old["runs"] if (r["points"], tuple(r["extra_args"])) not in fresh]
         result["runs"] = sorted(kept + result["runs"], key=lambda r: (r["points"], r["extra_args"]))
         result["merged_from"] = {"date": old.get("date"), "commit": old["machine"]["versions"].get("git_commit")}
+        result["remeasured"] = sorted(fresh)
         if "per_chunk" not in result and old.get("per_chunk"):
             result["per_chunk"] = old["per_chunk"]
     write_result(result, args.out, t_start, plot=None if args.no_png else plot)

@@ -293,13 +293,17 @@ def _out_of_core() -> list[str]:
                      f"{r['compute_s']:.1f}", f"{r['wall_over_compute']:.2f}", f"{r['peak_rss_bytes'] / 2**30:.2f}",
                      f"{r['file_bytes'] / 2**30:.2f}", f"{r['loadavg_start_end'][0][0]:.1f}"])
     dask = [r for r in d["runs"] if r["extra_args"]]
+    merged = d.get("merged_from")
+    note = ([f"The rows of {', '.join(f'{r[0]:,}' for r in d['remeasured'])} points were measured again "
+             f"(`--merge`); the others come from the run of commit {merged['commit']}.", ""]
+            if merged and d.get("remeasured") else [])
     lines = [
         "## Sweeps larger than memory", "",
         "`python benchmarks/out_of_core.py`: `sweep run` of the default scene's ranges (sample2, rtol 1e-6, model "
         "auto) on grids of N points, each in a new process; peak RSS of that process; wall time of the whole command "
         "against its chunk loop (computing, journal and file written as the chunks finish):", "",
         *_table(["points", "backend", "wall s", "chunk loop s", "wall / loop", "peak RSS GiB", "file GiB",
-                 "1-min load before"], rows), "",
+                 "1-min load before"], rows), "", *note,
     ]
     if dask:
         same = "bit for bit" if dask[0].get("bitwise_equal") else f"except {dask[0].get('differing')}"
