@@ -207,15 +207,18 @@ def test_implausible_axes_name_the_likely_unit_mistake(km, v, words):
     assert implausible([1e3, 1e6], [1e-7, 1e-4]) == []
 
 
-def test_solve_point_at_1_m_per_s_warns_and_its_status_says_why():
+def test_solve_point_at_1_m_per_s_warns_and_is_solved_with_inertia():
+    """1 m/s is far above any laboratory drive: a PlausibilityWarning says so; the point itself is solved with the
+    inertial model (the stiff, oscillatory inertial stop, issue 37), near the pure inertial slip sqrt(gamma/chi)
+    (eqs. 14-15), which inertia dominates at this speed (creep adds a little, never takes away)."""
     from sweep.scene.plausibility import PlausibilityWarning
 
     with pytest.warns(PlausibilityWarning) as record:
         pt = sweep.solve_point(sweep.presets["sample2"], K_over_M=2.8e5, V=1.0, observables=["xi_inf"])
-    status = pt["status"].attrs["flag_meanings"].split()[int(pt["status"])]
-    assert status != "ok"
-    texts = [str(w.message) for w in record]
-    assert any(f"ended with status {status}" in t for t in texts), texts
+    assert any("V" in str(w.message) for w in record), [str(w.message) for w in record]
+    assert int(pt["status"]) == sweep.Status.OK and int(pt["model"]) == 1
+    ratio = float(pt["xi_inf"]) / float(pt["xi_inertial"])
+    assert 1.0 <= ratio < 1.01, ratio
 
 
 # --- logging, the compile notice, progress ------------------------------------------------------------------------
