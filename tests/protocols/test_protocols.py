@@ -97,7 +97,7 @@ def test_a_registered_protocol_has_its_own_scene_fields(echo, tmp_path):
 
 
 def test_an_unknown_protocol_is_refused_with_the_catalogue():
-    with pytest.raises(InputError, match=r"protocol must be one of \('stop', 'driven'\), got 'hold'"):
+    with pytest.raises(InputError, match=r"protocol must be one of \('stop', 'driven', 'history'\), got 'hold'"):
         sweep.Scene(protocol="hold", params=sweep.presets["sample2"], K_over_M=[1e4], V=[1e-6])
 
 
