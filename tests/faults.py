@@ -16,8 +16,8 @@ installs the faults, then runs ``sweep.cli.main`` on the arguments after ``--`` 
 * ``eacces-dir:DIR``: creating a file or folder under DIR fails with PermissionError(EACCES), as in a read-only
   folder (for tests run as root, where chmod stops nothing);
 * ``mkdir-output:PATH``: a folder appears at PATH just before the netCDF file is renamed there;
-* ``kill-after-region:N``: the process SIGKILLs itself right after its N-th block reached the netCDF ``.part``, its
-  chunk held back from the journal;
+* ``kill-after-region:N``: the process SIGKILLs itself right after its N-th chunk reached the netCDF ``.part``, the
+  journal storing a chunk only after the file has it;
 * ``trace-chunks``: each chunk computed prints ``fault: computing a chunk`` on stderr (to check that something
   happened before any computation).
 """
@@ -169,29 +169,30 @@ def _folder_in_the_way(path: Path) -> None:
 
 
 def _killed_after_region(count: int) -> None:
-    """The process SIGKILLs itself right after writing its ``count``-th block into the netCDF ``.part``, before the
-    journal may have stored that chunk (the journal's thread waits here until the kill)."""
+    """The process SIGKILLs itself right after its ``count``-th chunk reached the netCDF ``.part``; the journal
+    stores a chunk only once the file has it, so that chunk is in the file and not in the journal."""
     import signal
-    import threading
+    import time
 
     from sweep.run.journal import Journal
-    from sweep.write.netcdf import NetCDFRegions
+    from sweep.write.regions import Regions
 
-    real_put, real_write, calls, hold = NetCDFRegions.put, Journal.write, [0], threading.Event()
+    real_store, real_write, stored = Regions._store, Journal.write, set()
 
-    def put(self, block):
-        real_put(self, block)
-        calls[0] += 1
-        if calls[0] == count:
-            self.nc.sync()  # the region on disk, its chunk not yet in the journal
+    def store(self, index, arrays):
+        real_store(self, index, arrays)
+        if len(stored) + 1 == count:
+            self.sinks[-1].nc.sync()  # the region on disk, its chunk not in the journal
             os.kill(os.getpid(), signal.SIGKILL)
+        stored.add(index)
 
     def write(self, index, arrays):
-        if calls[0] >= count - 1:
-            hold.wait(5)  # the journal falls behind the file: the kill comes between the two
+        t0 = time.monotonic()
+        while index not in stored and time.monotonic() - t0 < 30:
+            time.sleep(0.005)
         return real_write(self, index, arrays)
 
-    NetCDFRegions.put, Journal.write = put, write
+    Regions._store, Journal.write = store, write
 
 
 def _wrapped(stop_chunk, action):
