@@ -130,16 +130,14 @@ def _dry_run(scene, size, output: Path) -> int:
     time, both from a subsample where the grid is large (Protocol.dry_run)."""
     from . import protocols
     from .run.size import check_fits
-    from .write.targets import check_free_space
+    from .write.targets import check_free_space, existing_folder
 
     protocol = protocols.get(scene.protocol)
     axes = " x ".join(f"{n} {name}" for n, name in zip(scene.shape, ("K/M", "V", *scene.dims[2:])))
     print(f"{'grid':>28}: {axes} = {scene.n_points:,} points, "
           + (f"rtol {scene.rtol:g}, " if protocol.warm_up_timed else "")
           + f"observables {', '.join(scene.observables)}")
-    folder = output.parent
-    while not folder.exists() and folder != folder.parent:
-        folder = folder.parent
+    folder = existing_folder(output)
     for line in size.lines(folder):
         print(line)
     sys.stdout.flush()

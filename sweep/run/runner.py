@@ -93,7 +93,7 @@ def chunk_task(scene: Scene, plan: Plan | None, points: np.ndarray, shared: bool
         sub = scene.sub_grid(block_slices(scene.shape, lo, lo + points.size))
         block_plan = make_plan(sub)
         arrays = protocol.chunk(sub, block_plan, progress)(points - lo)
-        arrays[BLOCK] = build_block(scene, points, arrays, block_plan)  # here, side by side: not in the writer
+        arrays[BLOCK] = build_block(scene, points, arrays, block_plan, sub)  # here, side by side: not in the writer
     else:
         arrays = protocol.chunk(scene, plan, progress)(rows(points, shared))
     arrays["seconds"] = np.array(time.perf_counter() - t0)

@@ -61,16 +61,17 @@ class Block(NamedTuple):
     """The protocol's maxima over the block (Protocol.reduce)."""
 
 
-def build_block(scene: Scene, points: np.ndarray, arrays: Mapping[str, np.ndarray], plan=None) -> Block:
+def build_block(scene: Scene, points: np.ndarray, arrays: Mapping[str, np.ndarray], plan=None,
+                sub: Scene | None = None) -> Block:
     """The :class:`Block` of a chunk of ``scene``: ``points``, its flat points (a consecutive range of the grid,
-    shuffled, sweep.run.runner.ChunkLayout) in the order of its ``arrays``; ``plan``: the block's plan where the
-    caller has it (else made here from the block's sub-grid)."""
+    shuffled, sweep.run.runner.ChunkLayout) in the order of its ``arrays``; ``sub`` and ``plan``: the block's
+    sub-grid scene and plan where the caller has them (else made here)."""
     protocol = protocols.get(scene.protocol)
     lo = int(points.min())
     order = np.empty(points.size, np.intp)
     order[points - lo] = np.arange(points.size)  # the grid's C order within the block
     slices = block_slices(scene.shape, lo, lo + points.size)
-    sub = scene.sub_grid(slices)
+    sub = scene.sub_grid(slices) if sub is None else sub
     plan = make_plan(sub) if plan is None else plan
     ordered = {name: value[order] for name, value in arrays.items() if isinstance(value, np.ndarray) and value.ndim}
     variables = protocol.variables(sub, plan, ordered)

@@ -91,13 +91,19 @@ def check_targets(targets: Mapping[str, str | os.PathLike], overwrite: bool = Fa
         check_free_space(next(iter(folders)), need_bytes, seen[0][1])
 
 
-def _writable_folder(path: Path) -> Path:
-    """The folder that will receive ``path`` (its parent, or the nearest existing ancestor where the parent is to be
-    created), after checking that a file can be created there; InputError otherwise."""
-    folder = path.parent if str(path.parent) else Path(".")
-    existing = folder
+def existing_folder(path: str | os.PathLike) -> Path:
+    """The folder that will receive ``path``: its parent, or the nearest existing ancestor where the parent is to be
+    created."""
+    existing = Path(path).parent if str(Path(path).parent) else Path(".")
     while not existing.exists() and existing != existing.parent:
         existing = existing.parent
+    return existing
+
+
+def _writable_folder(path: Path) -> Path:
+    """:func:`existing_folder` of ``path``, after checking that a file can be created there; InputError otherwise."""
+    folder = path.parent if str(path.parent) else Path(".")
+    existing = existing_folder(path)
     if not existing.is_dir():
         raise InputError(f"cannot create the folder {folder} of {path}: {existing} is a file")
     try:
