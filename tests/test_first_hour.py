@@ -179,21 +179,34 @@ def test_api_messages_print_plain_numbers():
 # --- plausibility: likely unit mistakes ---------------------------------------------------------------------------
 
 UM_AS_M = "preset = \"sample2\"\n[K_over_M]\nstart = 1e3\nstop = 1e6\nnum = 4\n[V]\nstart = 0.1\nstop = 100\nnum = 3\n"
+NM_AS_M = UM_AS_M.replace("start = 0.1\nstop = 100", "start = 1e3\nstop = 1e5")
 
 
 @pytest.mark.slow
-def test_v_in_um_per_s_is_warned_before_any_work_and_a_failed_run_exits_1(tmp_path):
+def test_v_in_um_per_s_is_warned_once_before_any_work(tmp_path):
+    """V of 0.1..100 "m/s" (meant µm/s): one warning in the dry run and one in the run, before its first line of
+    progress (-q: nothing else). Whether such points solve is the inertial stop's business (test_extremes_inertial)."""
     (tmp_path / "um.toml").write_text(UM_AS_M)
-    proc = sweep_cli("run", "um.toml", "--dry-run", "-o", "um.nc", cwd=tmp_path)
-    assert proc.returncode == 0
     warning = "sweep: warning: V up to 100 m/s: did you give µm/s? V is in m/s"
-    assert proc.stderr.count(warning) == 1, proc.stderr
+    proc = sweep_cli("run", "um.toml", "--dry-run", "-o", "um.nc", cwd=tmp_path)
+    assert proc.returncode == 0 and proc.stderr.count(warning) == 1, proc.stderr
     proc = sweep_cli("run", "um.toml", "-o", "um.nc", "-q", cwd=tmp_path)
+    assert proc.stderr.startswith(warning) and proc.stderr.count(warning) == 1, proc.stderr
+
+
+@pytest.mark.slow
+def test_a_run_where_most_points_fail_is_warned_and_exits_1(tmp_path):
+    """V of 1e3..1e5 "m/s" (meant nm/s): the inertial solve fails at such speeds (step underflow, error above tol);
+    the run keeps the values, says how many points failed and why to look at the units, and exits 1."""
+    (tmp_path / "nm.toml").write_text(NM_AS_M)
+    proc = sweep_cli("run", "nm.toml", "-o", "nm.nc", "-q", cwd=tmp_path)
+    warning = "sweep: warning: V up to 100000 m/s: V is in m/s"
     assert proc.returncode == 1 and proc.stderr.count(warning) == 1, (proc.stdout, proc.stderr)
     assert len(proc.stderr.strip().splitlines()) == 2  # -q: the warning and the summary, no progress or notes
     last = proc.stderr.strip().splitlines()[-1]
-    assert last.startswith("sweep: 12 of 12 points failed (") and "check the units" in last, last
-    assert (tmp_path / "um.nc").exists()  # the values are kept for inspection
+    assert last.startswith("sweep: ") and " of 12 points failed (" in last and "check the units" in last, last
+    assert int(last.split()[1]) > 6, last  # most of them (cli.MOST_FAILED)
+    assert (tmp_path / "nm.nc").exists()  # the values are kept for inspection
 
 
 @pytest.mark.parametrize("km, v, words", [([1e3, 1e13], [1e-6], "K/M 1000..1e+13 s^-2 is outside"),
@@ -243,7 +256,7 @@ def test_first_run_on_an_empty_cache_says_it_compiles_before_anything_else(tmp_p
 
 @pytest.mark.slow
 def test_verbose_goes_through_the_sweep_logger(tmp_path):
-    """(-q, warnings and errors only: test_v_in_um_per_s_is_warned_before_any_work_and_a_failed_run_exits_1.)"""
+    """(-q, warnings and errors only: test_a_run_where_most_points_fail_is_warned_and_exits_1.)"""
     (tmp_path / "s.toml").write_text(SMALL)
     loud = sweep_cli("run", "s.toml", "-o", "o.nc", "-v", cwd=tmp_path)
     assert loud.returncode == 0 and "sweep: kernels ready in" in loud.stderr, loud.stderr
