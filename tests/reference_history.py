@@ -54,3 +54,47 @@ def history_reference(A, m1, m2, D0, K_over_M, V, segments, law="aging", m0=0.3,
         y = sol.y[:, -1]
         out.append({"mu_start": mu_start, "mu_end": y[0], "mu_peak": max([mu_start, y[0], *peaks])})
     return out, (velocity(y[0], y[1]), np.exp(y[1]))
+
+
+def history_reference_at(A, m1, m2, D0, K_over_M, velocities, durations, times, law="aging", m0=0.3, V0=1e-6,
+                         stretch=0.0, g=G, rtol=1e-10, method="Radau"):
+    """mu at the sorted ``times`` [s] from the start of the history of load-point ``velocities`` [m/s] held for
+    ``durations`` [s], from steady sliding at velocities[0] with the spring stretched by ``stretch`` [m]. Each
+    segment is integrated in pieces that end at its sample times (no interpolation: every value is a step's end
+    at ``rtol``); a sample on a segment boundary takes the earlier segment's end."""
+    k_lab = K_over_M / g
+
+    def mu_d(v):
+        lv = np.log(v / V0)
+        return m0 - m1 * lv + m2 * lv * lv
+
+    def rhs(t, y, v_lp):
+        phi = np.exp(y[1])
+        v = D0 / phi * np.exp((y[0] - mu_d(D0 / phi)) / A)
+        E = v * phi / D0
+        dphi = 1.0 - E if law == "aging" else -E * np.log(E)
+        return [k_lab * (v_lp - v), dphi / phi]
+
+    times = np.asarray(times, float)
+    y = np.array([mu_d(velocities[0]) + k_lab * stretch, np.log(D0 / velocities[0])])
+    out = np.full(times.size, np.nan)
+    ends = np.cumsum(durations)
+    i, start = 0, 0.0
+    for j, (v_lp, end) in enumerate(zip(velocities, ends)):
+        last = j == len(durations) - 1
+        stops = [tt for tt in times[(times >= start) & ((times <= end) | last)] if tt > start]
+        while i < times.size and times[i] <= start:
+            out[i] = y[0]
+            i += 1
+        t0 = start
+        for stop in [*stops, end] if not stops or stops[-1] < end else stops:
+            if stop > t0:
+                sol = solve_ivp(rhs, (t0, stop), y, method=method, rtol=rtol, atol=[1e-14, 1e-12], args=(v_lp,),
+                                first_step=min(stop - t0, 1e-6 * D0 / max(v_lp, velocities[0])))
+                assert sol.success, sol.message
+                y, t0 = sol.y[:, -1], stop
+            while i < times.size and times[i] <= t0:
+                out[i] = y[0]
+                i += 1
+        start = end
+    return out

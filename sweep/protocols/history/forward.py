@@ -1,0 +1,183 @@
+"""The friction of a load history at given times, for many parameter sets at once: the forward model of fits to
+laboratory records (docs/physics.md 7b; sweep.fit builds on :func:`friction_at`).
+
+Each parameter set is reduced with the first segment's velocity V = velocities[0] (section 2: xi = x/D0,
+tau = V t/D0; k = chi/A, a = mu1(V)/A, b = m2/A) and integrated quasi-statically by the dense-output driver
+(sweep/integrate/history_dense.py) in s = (mu - mu_d(V))/A, twice: at local tolerances rtol/10 and rtol/100. The
+friction is the tighter run's mu = mu_d(V) + A s; its error estimate the difference of the two runs.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ... import physics
+from ...accuracy import TIGHTER
+from ...errors import InputError
+from ...status import Status
+
+__all__ = ["INERTIA_LIMIT", "PARAMS", "FrictionSamples", "LoadHistory", "friction_at"]
+
+PARAMS = ("A", "m1", "m2", "D0", "m0", "V0", "K_over_M")
+"""The parameters friction_at needs (``g`` optional, 9.81 m s-2)."""
+INERTIA_LIMIT = 0.01
+"""gamma/A = v^2/(g D0 A) at the fastest segment above which inertia would matter: such a set's status is
+quasistatic_breakdown (its values are the quasi-static model's, kept for inspection)."""
+RTOL_RANGE = (1e-10, 1e-2)
+
+
+def _vector(name: str, value: ArrayLike) -> np.ndarray:
+    try:
+        x = np.array(value, dtype=float, ndmin=1)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a 1-D array of numbers, got {value!r}") from None
+    if x.ndim != 1 or x.size == 0:
+        raise InputError(f"{name} must be a non-empty 1-D array, got shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise InputError(f"{name} must be finite, got {x[~np.isfinite(x)][0]!r}")
+    return x
+
+
+@dataclass(frozen=True)
+class LoadHistory:
+    """A piecewise-constant load-point velocity: segment j moves the load point at ``velocities[j]`` [m/s] (0: a
+    hold) for ``durations[j]`` [s]. The history starts in steady sliding at velocities[0] > 0."""
+
+    velocities: np.ndarray
+    """Load-point velocity per segment [m/s], >= 0, the first > 0."""
+    durations: np.ndarray
+    """Duration per segment [s], > 0."""
+
+    def __post_init__(self) -> None:
+        v, d = _vector("velocities", self.velocities), _vector("durations", self.durations)
+        if v.size != d.size:
+            raise InputError(f"durations must have one entry per segment ({v.size} velocities), got {d.size}")
+        if np.any(v < 0):
+            raise InputError(f"velocities must be >= 0 m/s (allowed range: 0 <= v < inf), got {v[v < 0][0]!r}")
+        if v[0] <= 0:
+            raise InputError(f"velocities[0] must be > 0 m/s (the history starts in steady sliding), got {v[0]!r}")
+        if np.any(d <= 0):
+            raise InputError(f"durations must be > 0 s (allowed range: 0 < t < inf), got {d[d <= 0][0]!r}")
+        object.__setattr__(self, "velocities", v)
+        object.__setattr__(self, "durations", d)
+
+    @property
+    def total(self) -> float:
+        """The history's length [s]."""
+        return float(np.sum(self.durations))
+
+
+@dataclass(frozen=True)
+class FrictionSamples:
+    """The friction of each parameter set at the requested times."""
+
+    mu: np.ndarray
+    """(n_sets, n_t) friction coefficient at the times [1] (the run at local tolerance rtol/100)."""
+    error: np.ndarray
+    """(n_sets, n_t) its error estimate [1]: |the run at rtol/100 - the run at rtol/10|."""
+    status: np.ndarray
+    """(n_sets,) int8 sweep.Status: ok, max_steps, step_underflow (values NaN from the failure on),
+    error_above_tol (some error estimate above rtol (|mu| + A)), quasistatic_breakdown (gamma/A > INERTIA_LIMIT at
+    the fastest segment)."""
+    steps: np.ndarray
+    """(n_sets,) accepted and rejected steps of both runs."""
+
+
+def _params(params: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
+    missing = [name for name in PARAMS if name not in params]
+    if missing:
+        raise InputError(f"params is missing {missing}; needed: {list(PARAMS)} (and optionally g)")
+    unknown = sorted(set(params) - set(PARAMS) - {"g"})
+    if unknown:
+        raise InputError(f"params has unknown name(s) {unknown}; allowed: {list(PARAMS)} and g")
+    names = [*PARAMS, "g"]
+    raw = {name: np.asarray(params.get(name, 9.81), dtype=float) for name in names}
+    for name, x in raw.items():
+        if x.ndim > 1:
+            raise InputError(f"params[{name!r}] must be a number or a 1-D array (one per set), got shape {x.shape}")
+    try:
+        arrays = np.broadcast_arrays(*raw.values())
+    except ValueError:
+        raise InputError(f"params' arrays must broadcast to one length (n_sets), got sizes "
+                         f"{ {n: x.size for n, x in raw.items()} }") from None
+    out = {name: np.ascontiguousarray(x, dtype=float).reshape(-1) for name, x in zip(names, arrays)}
+    for name, x in out.items():
+        if not np.all(np.isfinite(x)):
+            raise InputError(f"params[{name!r}] must be finite, got {x[~np.isfinite(x)][0]!r}")
+        if name in ("A", "D0", "V0", "K_over_M", "g") and np.any(x <= 0):
+            raise InputError(f"params[{name!r}] must be > 0 (allowed range: 0 < {name} < inf), got {x[x <= 0][0]!r}")
+    return out
+
+
+def _times(t: ArrayLike, total: float) -> np.ndarray:
+    times = _vector("t", t)
+    if np.any(np.diff(times) < 0):
+        raise InputError("t must be sorted (non-decreasing times from the history's start)")
+    if times[0] < 0 or times[-1] > total * (1 + 1e-12):
+        raise InputError(f"t must lie in [0, {total:g}] s (the history's length), got [{times[0]:g}, {times[-1]:g}]")
+    return np.minimum(times, total)
+
+
+def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike, *, state_law: str = "aging",
+                rtol: float = 1e-6, max_steps: int = 1_000_000, stretch: float = 0.0) -> FrictionSamples:
+    """Friction mu(t) of a spring-slider under the load history ``load`` at the times ``t`` [s] from its start
+    (sorted, in [0, load.total]), for every parameter set of ``params`` in one compiled call.
+
+    ``params``: A, m1, m2 [1], D0 [m], m0 [1], V0 [m/s] (paper eqs. 1, 6), K_over_M [s-2] (and g [m s-2], 9.81
+    unless given), each a number or an array; they broadcast to (n_sets,). The history starts in steady sliding at
+    velocities[0] with the spring stretched ``stretch`` [m] beyond it (mu raised by K/(M g) x stretch). The
+    quasi-static equations of docs/physics.md 7b; ``state_law`` "aging" or "slip". ``rtol``: the relative accuracy
+    asked of mu in units of (|mu| + A); ``max_steps``: the step budget of one run over all segments.
+    """
+    from ...integrate.history_dense import history_dense_batch
+    from ...integrate.models.history import LAW_CODES
+
+    if state_law not in LAW_CODES:
+        raise InputError(f"state_law must be one of {sorted(LAW_CODES)}, got {state_law!r}")
+    if not isinstance(load, LoadHistory):
+        raise InputError(f"load must be a LoadHistory, got {type(load).__name__}")
+    rtol = float(rtol)
+    if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
+        raise InputError(f"rtol must be in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}], got {rtol!r}")
+    if isinstance(max_steps, bool) or int(max_steps) != max_steps or max_steps < 1:
+        raise InputError(f"max_steps must be an integer >= 1, got {max_steps!r}")
+    stretch = float(stretch)
+    if not math.isfinite(stretch):
+        raise InputError(f"stretch must be finite [m], got {stretch!r}")
+    p = _params(params)
+    times = _times(t, load.total)
+
+    V = load.velocities[0]
+    chi = physics.reduced_stiffness(p["K_over_M"], p["D0"], p["g"])
+    mu1 = physics.mu1(V, p["m1"], p["m2"], p["V0"])
+    A = p["A"]
+    k, a, b = np.asarray(chi / A, float), np.asarray(mu1 / A, float), p["m2"] / A
+    s_kick = k * (stretch / p["D0"])
+    scale = V / p["D0"]
+    ratios = load.velocities / V
+    mu_ref = np.asarray(physics.mu_d(V, p["m0"], p["m1"], p["m2"], p["V0"]), float).reshape(-1)
+
+    n, m = A.size, times.size
+    runs = []
+    for e in (1, 2):
+        s_out = np.empty((n, m))
+        status, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
+        history_dense_batch(k, a, b, LAW_CODES[state_law], s_kick, ratios, load.durations, scale, times,
+                            rtol / TIGHTER**e, int(max_steps), s_out, status, steps)
+        runs.append((s_out, status, steps))
+    (s_loose, st_loose, n_loose), (s_tight, st_tight, n_tight) = runs
+    mu = mu_ref[:, None] + A[:, None] * s_tight
+    error = np.abs(A[:, None] * (s_tight - s_loose))
+    error[np.isnan(error) & np.isfinite(mu)] = np.inf  # the looser run failed: no estimate
+    status = np.where(st_tight != Status.OK, st_tight, st_loose).astype(np.int8)
+    with np.errstate(invalid="ignore"):
+        above = np.any(error > rtol * (np.abs(mu) + A[:, None]), axis=1)
+    status[(status == Status.OK) & above] = Status.ERROR_ABOVE_TOL
+    gamma = np.max(load.velocities) ** 2 / (p["g"] * p["D0"])
+    status[(status == Status.OK) & (gamma / A > INERTIA_LIMIT)] = Status.QUASISTATIC_BREAKDOWN
+    return FrictionSamples(mu=mu, error=error, status=status, steps=n_loose + n_tight)
