@@ -74,8 +74,8 @@ def _dense(y0, y1, hf1, hf7, dd, theta):
 def history_dense_point(k, a, b, law, s_kick, ratios, durations, scale, times, tol, max_steps, s_out):
     """Integrate one point through its segments (``ratios`` r_j; physical ``durations`` [s], reduced by ``scale``
     = V/D0 [1/s]) at the local tolerance ``tol`` from steady sliding at r_0 with s raised by ``s_kick``; writes s at
-    the sorted physical ``times`` [s] from the history's start into ``s_out`` (NaN from a failure on) and returns
-    (status, steps)."""
+    the sorted physical ``times`` [s] from the history's start into ``s_out`` (NaN from a failure on, and at times
+    past the history's end by more than 1e-12 of its length) and returns (status, steps)."""
     n, m = ratios.size, times.size
     for i in range(m):
         s_out[i] = np.nan
@@ -85,6 +85,13 @@ def history_dense_point(k, a, b, law, s_kick, ratios, durations, scale, times, t
     h0 = 1e-3 / (1.0 + k + abs(a))
     i = 0  # next sample
     start = 0.0  # physical start of the segment
+    total = 0.0
+    for j in range(n):
+        total += durations[j]
+    m_in = m  # the samples within the history
+    while m_in > 0 and times[m_in - 1] > total * (1.0 + 1e-12):
+        m_in -= 1
+    m = m_in
     for j in range(n):
         r, T = ratios[j], durations[j] * scale
         end = start + durations[j]
@@ -126,11 +133,11 @@ def history_dense_point(k, a, b, law, s_kick, ratios, durations, scale, times, t
 
 @njit(nogil=True, cache=True, fastmath=FAST, error_model="numpy")
 def history_dense_batch(k, a, b, law, s_kick, ratios, durations, scale, times, tol, max_steps, s_out, status, steps):
-    """:func:`history_dense_point` for every parameter set i (its k[i], a[i], b[i], s_kick[i], scale[i]; row
-    s_out[i]); the segments' ratios and physical durations and the sample times are shared."""
+    """:func:`history_dense_point` for every parameter set i: its k[i], a[i], b[i], s_kick[i], scale[i], segments
+    ratios[i, :] and physical durations[i, :] [s]; row s_out[i]. The sample times are shared."""
     for i in range(k.size):
-        status[i], steps[i] = history_dense_point(k[i], a[i], b[i], law, s_kick[i], ratios, durations, scale[i], times,
-                                                  tol, max_steps, s_out[i])
+        status[i], steps[i] = history_dense_point(k[i], a[i], b[i], law, s_kick[i], ratios[i], durations[i], scale[i],
+                                                  times, tol, max_steps, s_out[i])
 
 
 pin_module(__name__)

@@ -159,7 +159,8 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
     k, a, b = np.asarray(chi / A, float), np.asarray(mu1 / A, float), p["m2"] / A
     s_kick = k * (stretch / p["D0"])
     scale = V / p["D0"]
-    ratios = load.velocities / V
+    ratios = np.tile(load.velocities / V, (A.size, 1))
+    durations = np.tile(load.durations, (A.size, 1))
     mu_ref = np.asarray(physics.mu_d(V, p["m0"], p["m1"], p["m2"], p["V0"]), float).reshape(-1)
 
     n, m = A.size, times.size
@@ -167,7 +168,7 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
     for e in (1, 2):
         s_out = np.empty((n, m))
         status, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
-        history_dense_batch(k, a, b, LAW_CODES[state_law], s_kick, ratios, load.durations, scale, times,
+        history_dense_batch(k, a, b, LAW_CODES[state_law], s_kick, ratios, durations, scale, times,
                             rtol / TIGHTER**e, int(max_steps), s_out, status, steps)
         runs.append((s_out, status, steps))
     (s_loose, st_loose, n_loose), (s_tight, st_tight, n_tight) = runs
