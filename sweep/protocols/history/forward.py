@@ -17,7 +17,6 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ... import physics
-from ...accuracy import TIGHTER
 from ...errors import InputError
 from ...status import Status
 
@@ -134,8 +133,8 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
     quasi-static equations of docs/physics.md 7b; ``state_law`` "aging" or "slip". ``rtol``: the relative accuracy
     asked of mu in units of (|mu| + A); ``max_steps``: the step budget of one run over all segments.
     """
-    from ...integrate.history_dense import history_dense_batch
     from ...integrate.models.history import LAW_CODES
+    from .sampled import two_runs
 
     if state_law not in LAW_CODES:
         raise InputError(f"state_law must be one of {sorted(LAW_CODES)}, got {state_law!r}")
@@ -163,22 +162,8 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
     durations = np.tile(load.durations, (A.size, 1))
     mu_ref = np.asarray(physics.mu_d(V, p["m0"], p["m1"], p["m2"], p["V0"]), float).reshape(-1)
 
-    n, m = A.size, times.size
-    runs = []
-    for e in (1, 2):
-        s_out = np.empty((n, m))
-        status, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
-        history_dense_batch(k, a, b, LAW_CODES[state_law], s_kick, ratios, durations, scale, times,
-                            rtol / TIGHTER**e, int(max_steps), s_out, status, steps)
-        runs.append((s_out, status, steps))
-    (s_loose, st_loose, n_loose), (s_tight, st_tight, n_tight) = runs
-    mu = mu_ref[:, None] + A[:, None] * s_tight
-    error = np.abs(A[:, None] * (s_tight - s_loose))
-    error[np.isnan(error) & np.isfinite(mu)] = np.inf  # the looser run failed: no estimate
-    status = np.where(st_tight != Status.OK, st_tight, st_loose).astype(np.int8)
-    with np.errstate(invalid="ignore"):
-        above = np.any(error > rtol * (np.abs(mu) + A[:, None]), axis=1)
-    status[(status == Status.OK) & above] = Status.ERROR_ABOVE_TOL
+    out = two_runs(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, times, rtol, max_steps)
+    status = out["status"]
     gamma = np.max(load.velocities) ** 2 / (p["g"] * p["D0"])
     status[(status == Status.OK) & (gamma / A > INERTIA_LIMIT)] = Status.QUASISTATIC_BREAKDOWN
-    return FrictionSamples(mu=mu, error=error, status=status, steps=n_loose + n_tight)
+    return FrictionSamples(mu=out["mu_t"], error=out["mu_t_error"], status=status, steps=out["steps"])
