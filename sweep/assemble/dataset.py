@@ -71,7 +71,8 @@ def grid_coords(scene: Scene) -> dict[str, xr.Variable]:
     line_model = lambda V, m1, m2, A, D0: line_uses_inertia(  # noqa: E731
         physics.inertia_number(V, D0, p.g) / A, scene.model, scene.model_tol)
     mu1 = lambda V, m1, m2: physics.mu1(V, m1, m2, p.V0)  # noqa: E731
-    coords = {d: variable(d, scene.axis(d), AXIS_UNITS[d], AXIS_NAMES[d]) for d in scene.dims}
+    coords = {d: variable(d, scene.axis(d), AXIS_UNITS[d], AXIS_NAMES[d]) if d in AXIS_NAMES
+              else xr.Variable(d, scene.axis(d), scene.axis_attrs(d)) for d in scene.dims}  # k, a, b, Dc, options
     coords.update({
         "chi": variable(*on_grid(scene, ("K_over_M", "D0"), lambda K_over_M, D0: physics.reduced_stiffness(K_over_M, D0,
                                                                                                      p.g)),

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from ..scene.scene import Scene
@@ -27,7 +25,7 @@ def plan_sample(scene: Scene, max_points: int = PLANNED_POINTS) -> tuple[Scene, 
         picked[d] = np.unique(np.linspace(0, n - 1, take).round().astype(int))
         room = max(1, room // picked[d].size)
     values = {d: scene.axis(d)[picked[d]] for d in scene.dims}
-    sample = replace(scene, K_over_M=values["K_over_M"], V=values["V"], axes={d: values[d] for d in scene.dims[2:]})
+    sample = scene.on_values(values)
     sizes = " x ".join(f"{picked[d].size} {'K/M' if d == 'K_over_M' else d}" for d in scene.dims)
     return sample, (f"a subsample of {sizes} spread over the grid (its {scene.n_points:,} points are too many to plan "
                     f"for a dry run): the counts below are the subsample's")

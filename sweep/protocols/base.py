@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -24,10 +25,25 @@ if TYPE_CHECKING:
     from ..scene.scene import Scene
     from ..write.regions import RunTotals
 
-__all__ = ["ChunkCompute", "Options", "Protocol"]
+__all__ = ["AxisSpec", "ChunkCompute", "Options", "Protocol"]
 
 ChunkCompute = Callable[[np.ndarray], dict[str, np.ndarray]]
 """compute(points) -> per-point arrays of one chunk (points: rows of the plan it was made with)."""
+
+
+@dataclass(frozen=True)
+class AxisSpec:
+    """A grid axis that a protocol's options name (:meth:`Protocol.option_axes`), e.g. a history's hold time."""
+
+    units: str
+    """The axis's unit, from the option that names it (e.g. "s" for a hold)."""
+    long_name: str
+    """Words for the Dataset's coordinate."""
+    where: str
+    """Where the options name it, for messages (e.g. "segments[1].hold")."""
+    minimum: float = 0.0
+    """Values must be > minimum (>= minimum where ``inclusive``)."""
+    inclusive: bool = False
 
 
 class Options(Mapping):
@@ -115,6 +131,13 @@ class Protocol(ABC):
         """Whether the protocol runs ``model`` ("auto": both models) with ``state_law``."""
         wanted = ("quasistatic", "inertial") if model == "auto" else (model,)
         return all((m, state_law) in self.models for m in wanted)
+
+    def option_axes(self, options: Mapping[str, Any]) -> dict[str, AxisSpec]:
+        """The grid axes that ``options`` name (the scene's options, checked or as given: a value that is not
+        understood names none): axis name -> its unit, long name and bound. The scene accepts these names in
+        ``Scene.axes`` (tables of a scene file) beside the friction parameters, refuses one that clashes with a
+        parameter, and refuses a named axis it is not given. None by default."""
+        return {}
 
     @abstractmethod
     def check(self, scene: Scene) -> None:

@@ -20,10 +20,10 @@ from ..errors import InputError
 from ..integrate.models.state_laws import STATE_LAWS as _LAWS
 from ..integrate.solvers import METHODS
 from ..protocols.base import Options
-from .params import FrictionParams, require_finite, require_positive
+from .params import LAB_NAMES, FrictionParams, K_over_M_from_k, require_finite, require_positive
 from .presets import presets
 
-__all__ = ["Scene", "PROTOCOLS", "DEFAULT_ATOL", "EXTRA_AXES", "AXIS_UNITS",
+__all__ = ["Scene", "PROTOCOLS", "DEFAULT_ATOL", "EXTRA_AXES", "LAB_AXES", "AXIS_UNITS",
            "default_scene", "load_scene"]
 
 PROTOCOLS = protocols.names()
@@ -45,9 +45,23 @@ TAU_MAX = 1e250
 """Largest reduced time that can be asked for (float64 carries tau up to ~1e308)."""
 EXTRA_AXES = ("A", "m1", "m2", "D0")
 """Friction parameters a stop scene may sweep beside (K/M, V) (Scene.axes), in the order of the Dataset's dims."""
-AXIS_UNITS = {"K_over_M": "s-2", "V": "m s-1", "A": "1", "m1": "1", "m2": "1", "D0": "m"}
-POSITIVE_AXES = ("K_over_M", "V", "A", "D0")
-"""Axes whose values must be > 0 (the others, m1 and m2, only finite)."""
+LAB_AXES = ("a", "b", "Dc")
+"""The laboratory's friction parameters as axes (docs/physics.md 7b: A = a, m1 = b - a, D0 = Dc at m2 = 0), each point
+with its own; where ``a`` is an axis, m1 = b - a follows it (b held, or b's axis)."""
+STIFFNESS_AXIS = "k"
+"""The laboratory's stiffness k [1/m] as the first axis instead of K_over_M (K/M = k g; sweep.scene.params)."""
+AXIS_UNITS = {"K_over_M": "s-2", "V": "m s-1", "A": "1", "m1": "1", "m2": "1", "D0": "m", "a": "1", "b": "1",
+              "Dc": "m", "k": "m-1"}
+POSITIVE_AXES = ("K_over_M", "V", "A", "D0", "a", "Dc", "k")
+"""Axes whose values must be > 0 (the others, m1, m2 and b, only finite)."""
+LAB_AXIS_NAMES = {"a": "direct-effect coefficient a (= A)", "b": "evolution coefficient b (m1 = b - a)",
+                  "Dc": "critical slip distance Dc (= D0)",
+                  "k": "stiffness k, friction per metre of load-point displacement (K/M = k g)"}
+"""long_name of the laboratory's axes (the paper's are in sweep.assemble.dataset.AXIS_NAMES)."""
+_SOURCES = {"K_over_M": ("k",), "A": ("a",), "m1": ("a", "b"), "D0": ("Dc",)}
+"""The laboratory's axes each paper parameter follows where they are axes."""
+PARAMETER_NAMES = frozenset({"K_over_M", "V", *EXTRA_AXES, *LAB_AXES, STIFFNESS_AXIS, *LAB_NAMES, "m0", "g"})
+"""Names an axis of a protocol's options may not take (the scene's parameters)."""
 
 
 def _plain(value: Any) -> Any:
@@ -88,8 +102,9 @@ class Scene:
         decided (docs/physics.md 3b; quasi-static model, sweep/integrate/models/driven.py).
     params : FrictionParams
         Friction law; see :data:`sweep.presets`.
-    K_over_M : array [s-2]
-        Spring stiffness over slider mass; strictly increasing, > 0.
+    K_over_M : array [s-2] or None
+        Spring stiffness over slider mass; strictly increasing, > 0. None where ``axes`` gives the laboratory's
+        stiffness ``k`` [1/m] instead (K/M = k g; the Dataset's first dim is then ``k``).
     V : array [m s-1]
         Driving velocity before the stop; strictly increasing, > 0.
     rtol : float
@@ -141,9 +156,13 @@ class Scene:
         formulation (the fast paths of the aging law rest on its identity xi + ln psi = s).
     axes : mapping, optional
         Further axes of the grid, stop protocol only: {name: values} for any of A, m1, m2 [1] and D0 [m]
-        (:data:`EXTRA_AXES`; strictly increasing, A and D0 > 0). Each replaces that parameter of ``params``: the
-        Dataset's dims are then K_over_M, V and those names in the order of EXTRA_AXES, every point with its own
-        parameters (e.g. a grid over (A, m1) at one (K/M, V)). TOML: tables [A], [m1], ... like [K_over_M].
+        (:data:`EXTRA_AXES`; strictly increasing, A and D0 > 0), or the laboratory's a, b [1] and Dc [m]
+        (:data:`LAB_AXES`: A = a, m1 = b - a, D0 = Dc per point, at m2 = 0; never beside the paper's), and ``k``
+        [1/m] instead of K_over_M. Each replaces that parameter of ``params``: the Dataset's dims are then K_over_M
+        (or k), V and those names in the order of EXTRA_AXES, LAB_AXES, every point with its own parameters (e.g. a
+        grid over (A, m1) at one (K/M, V)). A protocol's options may name further axes (a history's
+        ``hold = "t_hold"``: Protocol.option_axes), which follow, in the order the options name them.
+        TOML: tables [A], [m1], [k], [t_hold], ... like [K_over_M].
     simulated_hopf_line : bool
         Also locate the Hopf line of the scene's model by simulation at each V (coordinate
         ``K_over_M_c_simulated``, drawn on the maps next to the analytic line; sweep.analysis.hopf.with_simulated_line).
@@ -158,7 +177,7 @@ class Scene:
 
     protocol: str
     params: FrictionParams
-    K_over_M: np.ndarray
+    K_over_M: np.ndarray | None
     V: np.ndarray
     rtol: float = 1e-6
     atol: Mapping[str, float] = field(default_factory=dict)
@@ -185,7 +204,16 @@ class Scene:
         protocol = protocols.get(self.protocol)
         if not isinstance(self.params, FrictionParams):
             raise InputError(f"params must be a sweep.FrictionParams, got {type(self.params).__name__}")
-        set_("K_over_M", _axis("K_over_M", self.K_over_M))
+        if self.K_over_M is None:
+            if not isinstance(self.axes, Mapping) or STIFFNESS_AXIS not in self.axes:
+                raise InputError("K_over_M is missing: give K_over_M [s-2] or the laboratory's stiffness as "
+                                 "axes={'k': [...]} [1/m]")
+            set_("K_over_M", _axis(STIFFNESS_AXIS, self.axes[STIFFNESS_AXIS]) * self.params.g)
+        elif isinstance(self.axes, Mapping) and STIFFNESS_AXIS in self.axes:
+            raise InputError("the stiffness is given twice: give K_over_M [s-2] or the axis k [1/m] "
+                             "(K/M = k g), not both (K_over_M=None with axes={'k': ...})")
+        else:
+            set_("K_over_M", _axis("K_over_M", self.K_over_M))
         set_("V", _axis("V", self.V))
         rtol = require_positive("rtol", self.rtol)
         if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
@@ -222,31 +250,66 @@ class Scene:
         for name in PROTOCOL_FIELDS:  # the protocol's own fields, as checked, also where they always were
             if name in self.options:
                 set_(name, self.options[name])
+        self._check_axes()  # before the protocol's check, which may read the axes its options name
         protocol.check(self)
         if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, (int, np.integer)) or self.max_steps < 1:
             raise InputError(f"max_steps must be an integer >= 1, got {_plain(self.max_steps)!r}")
         if not isinstance(self.simulated_hopf_line, (bool, np.bool_)):
             raise InputError(f"simulated_hopf_line must be true or false, got {self.simulated_hopf_line!r}")
         set_("simulated_hopf_line", bool(self.simulated_hopf_line))
-        self._check_axes()
+        if self.axes and self.simulated_hopf_line:
+            raise InputError(f"simulated_hopf_line needs one parameter set (it is located per V); leave it false "
+                             f"with axes {list(self.axes)}")
 
     def _check_axes(self) -> None:
+        """The axes: the friction parameters' (paper's or laboratory's, never both), k, and those the protocol's
+        options name (Protocol.option_axes), in the order of :attr:`dims`."""
+        protocol = protocols.get(self.protocol)
+        declared = protocol.option_axes(self.options)
+        allowed = (*EXTRA_AXES, *LAB_AXES, STIFFNESS_AXIS)
         if not isinstance(self.axes, Mapping):
-            raise InputError(f"axes must be a mapping {{name: values}} with names from {list(EXTRA_AXES)}, got "
+            raise InputError(f"axes must be a mapping {{name: values}} with names from {list(allowed)}, got "
                              f"{type(self.axes).__name__}")
-        unknown = [n for n in self.axes if n not in EXTRA_AXES]
+        for name, spec in declared.items():
+            if name in PARAMETER_NAMES:
+                raise InputError(f"{spec.where} names axis {name!r}, which is a parameter of the scene: choose "
+                                 f"another name (e.g. {name + '_axis'!r})")
+        unknown = [n for n in self.axes if n not in allowed and n not in declared]
         if unknown:
-            raise InputError(f"axes has unknown name(s) {unknown}; allowed: {list(EXTRA_AXES)} (K_over_M and V are "
-                             f"the scene's own axes)")
-        axes = {n: _axis(n, self.axes[n]) for n in EXTRA_AXES if n in self.axes}
-        if axes and not protocols.get(self.protocol).extra_axes:
+            named = f"; the options name {list(declared)}" if declared else ""
+            raise InputError(f"axes has unknown name(s) {unknown} (no parameter, and no option names them); allowed: "
+                             f"{list(allowed)}{named} (K_over_M and V are the scene's own axes)")
+        missing = [n for n in declared if n not in self.axes]
+        if missing:
+            spec = declared[missing[0]]
+            raise InputError(f"{spec.where} names axis {missing[0]!r}, which the scene does not give: add a table "
+                             f"[{missing[0]}] (values or start/stop/num, in {spec.units}) or axes={{{missing[0]!r}: "
+                             f"[...]}}")
+        friction = [n for n in (*EXTRA_AXES, *LAB_AXES) if n in self.axes]
+        if friction and not protocol.extra_axes:
             offered = [name for name in protocols.names() if protocols.get(name).extra_axes]
             names = " and ".join(map(repr, offered))
-            raise InputError(f"axes {list(axes)}: extra axes are offered for protocol {names} "
-                             f"only, got protocol {self.protocol!r}")
-        if axes and self.simulated_hopf_line:
-            raise InputError(f"simulated_hopf_line needs one parameter set (it is located per V); leave it false "
-                             f"with axes {list(axes)}")
+            raise InputError(f"axes {friction}: extra axes are offered for protocol {names} only, got protocol "
+                             f"{self.protocol!r}")
+        lab = [n for n in LAB_AXES if n in self.axes]
+        paper = [n for n in EXTRA_AXES if n in self.axes]
+        if lab and paper:
+            raise InputError(f"axes mix the paper's {paper} and the laboratory's {lab} friction parameters: give "
+                             f"one set (a = A, b = A + m1, Dc = D0 at m2 = 0)")
+        if lab and self.params.m2 != 0.0:
+            raise InputError(f"axes {lab} are the laboratory's parameters, which describe m2 = 0 only; params has "
+                             f"m2 = {self.params.m2!r} (give the paper's axes A, m1, D0, or params with m2 = 0)")
+        axes = {n: _axis(n, self.axes[n]) for n in (*EXTRA_AXES, *LAB_AXES, STIFFNESS_AXIS) if n in self.axes}
+        for name, spec in declared.items():
+            arr = _axis(name, self.axes[name])
+            low = arr.min()
+            if low < spec.minimum or (low == spec.minimum and not spec.inclusive):
+                op = ">=" if spec.inclusive else ">"
+                raise InputError(f"axis {name} ({spec.where}) must be {op} {spec.minimum:g} {spec.units}, got min "
+                                 f"{_plain(low)!r}")
+            axes[name] = arr
+        if STIFFNESS_AXIS in axes:  # k first: it is the grid's first dim
+            axes = {STIFFNESS_AXIS: axes.pop(STIFFNESS_AXIS), **axes}
         object.__setattr__(self, "axes", axes)
 
     def _protocol_fields(self, protocol, given: dict[str, Any]) -> dict[str, Any]:
@@ -290,46 +353,74 @@ class Scene:
 
     @property
     def dims(self) -> tuple[str, ...]:
-        """Names of the grid's axes: (K_over_M, V) and the extra axes, in the order of the Dataset's dims."""
-        return ("K_over_M", "V") + tuple(self.axes)
+        """Names of the grid's axes: (K_over_M or k, V) and the extra axes, in the order of the Dataset's dims."""
+        rest = tuple(d for d in self.axes if d != STIFFNESS_AXIS)
+        return (STIFFNESS_AXIS if STIFFNESS_AXIS in self.axes else "K_over_M", "V") + rest
 
     @property
     def shape(self) -> tuple[int, ...]:
         return tuple(self.axis(d).size for d in self.dims)
 
     def axis(self, name: str) -> np.ndarray:
-        """The values of grid axis ``name`` (one of :attr:`dims`)."""
+        """The values of grid axis ``name`` (one of :attr:`dims`; K_over_M also where the grid's first axis is k)."""
         return self.K_over_M if name == "K_over_M" else self.V if name == "V" else self.axes[name]
 
+    def axis_attrs(self, name: str) -> dict[str, str]:
+        """units and long_name of a grid axis other than the paper's (K_over_M, V, A, m1, m2, D0: the Dataset's
+        own words): the laboratory's, with how it maps, and those the protocol's options name."""
+        if name in LAB_AXIS_NAMES:
+            maps = {"k": f"K_over_M = k g, g = {self.params.g!r} m s-2", "a": "A = a", "Dc": "D0 = Dc",
+                    "b": "m1 = b - a (m2 = 0)"}[name]
+            return {"units": AXIS_UNITS[name], "long_name": LAB_AXIS_NAMES[name], "comment": maps}
+        spec = protocols.get(self.protocol).option_axes(self.options)[name]
+        return {"units": spec.units, "long_name": spec.long_name}
+
     def broadcast(self, name: str, dims: tuple[str, ...] | None = None) -> np.ndarray | float:
-        """K_over_M, V or a friction parameter (A, m1, m2, D0, V0, g) shaped to broadcast over ``dims`` (default
-        :attr:`dims`; axes of the grid only): an axis among ``dims`` as an array with ones on the other dims, any
-        other parameter as the number of ``params``."""
+        """K_over_M, V or a friction parameter (A, m1, m2, D0, V0, g; a, b, Dc), or an axis of the options, shaped
+        to broadcast over ``dims`` (default :attr:`dims`; axes of the grid only): an axis among ``dims`` as an
+        array with ones on the other dims, a parameter that follows the laboratory's axes (K_over_M = k g, A = a,
+        m1 = b - a, D0 = Dc) computed from them, any other parameter as the number of ``params``."""
         dims = self.dims if dims is None else dims
         if name in dims:
             shape = [1] * len(dims)
             shape[dims.index(name)] = -1
             return self.axis(name).reshape(shape)
+        if any(d in dims for d in _SOURCES.get(name, ())):
+            if name == "m1":  # b held where it is not an axis
+                return self.broadcast("b", dims) - self.broadcast("A", dims)
+            return (K_over_M_from_k(self.broadcast("k", dims), self.params.g) if name == "K_over_M"
+                    else self.broadcast(_SOURCES[name][0], dims))
+        if name in LAB_AXES:
+            return float(self.params.to_lab()[name])
         return float(getattr(self.params, name))
 
     def on_dims(self, names: Sequence[str]) -> tuple[str, ...]:
-        """The grid dims among ``names`` (what a quantity of those parameters varies along), in grid order."""
-        return tuple(d for d in self.dims if d in names)
+        """The grid dims among ``names`` (what a quantity of those parameters varies along; a paper parameter also
+        along the laboratory's axes it follows), in grid order."""
+        wanted = set(names).union(*(_SOURCES.get(n, ()) for n in names))
+        return tuple(d for d in self.dims if d in wanted)
 
     def at_points(self, name: str, points: np.ndarray) -> np.ndarray | float:
         """K_over_M, V or a friction parameter at the flat grid indices ``points`` (C order over :attr:`dims`): an
-        array where ``name`` is an axis, else the number of ``params``."""
-        if name not in self.dims:
-            return float(getattr(self.params, name))
-        return self.axis(name)[np.unravel_index(np.asarray(points), self.shape)[self.dims.index(name)]]
+        array where ``name`` varies over the grid, else the number of ``params``."""
+        dims = self.on_dims((name,))
+        if not dims:
+            return self.broadcast(name)
+        index = np.unravel_index(np.asarray(points), self.shape)
+        value = self.broadcast(name, dims)
+        return value[tuple(index[self.dims.index(d)] for d in dims)]
 
     def sub_grid(self, block: Sequence[slice]) -> Scene:
         """The same scene over the block ``block`` of its grid (one slice per dim of :attr:`dims`): a chunk of a run
         (sweep/run/layout.py). Every point's inputs are computed from its own axis values, so a point has the same
         numbers in the sub-grid as in the whole grid."""
-        values = {d: self.axis(d)[s] for d, s in zip(self.dims, block)}
-        return replace(self, K_over_M=values["K_over_M"], V=values["V"],
-                       axes={d: values[d] for d in self.dims[2:]})
+        return self.on_values({d: self.axis(d)[s] for d, s in zip(self.dims, block)})
+
+    def on_values(self, values: Mapping[str, np.ndarray]) -> Scene:
+        """The same scene over the axis values ``values`` ({dim: values} for every dim of :attr:`dims`)."""
+        first = self.dims[0]
+        return replace(self, K_over_M=values["K_over_M"] if first == "K_over_M" else None, V=values["V"],
+                       axes={d: values[d] for d in self.dims if d not in ("K_over_M", "V")})
 
     @property
     def time_resolved(self) -> bool:
@@ -396,7 +487,10 @@ def _times(name: str, values: Sequence[float]) -> np.ndarray:
     return arr
 
 
-def _axis_from_toml(name: str, spec: Any) -> np.ndarray:
+def _axis_from_toml(name: str, spec: Any, positive: bool | None = None) -> np.ndarray:
+    """An axis from its table (values, or start/stop/num with spacing "log" by default where its values are > 0:
+    ``positive``, by default the friction parameters' and K/M's, V's)."""
+    positive = name in POSITIVE_AXES if positive is None else positive
     if not isinstance(spec, Mapping):
         raise InputError(f"[{name}] must be a table with start/stop/num[/spacing] or values")
     extra = set(spec) - {"start", "stop", "num", "spacing", "values"}
@@ -409,11 +503,11 @@ def _axis_from_toml(name: str, spec: Any) -> np.ndarray:
     missing = {"start", "stop", "num"} - set(spec)
     if missing:
         raise InputError(f"[{name}] is missing {sorted(missing)}")
-    spacing = spec.get("spacing", "log" if name in POSITIVE_AXES else "linear")
+    spacing = spec.get("spacing", "log" if positive else "linear")
     start, stop = require_finite(f"{name}.start", spec["start"]), require_finite(f"{name}.stop", spec["stop"])
     if spacing == "log" and min(start, stop) <= 0:
         raise InputError(f"{name}.start and {name}.stop must be > 0 for spacing \"log\", got {start!r}, {stop!r}"
-                         + ("" if name in POSITIVE_AXES else '; use spacing = "linear"'))
+                         + ("" if positive else '; use spacing = "linear"'))
     num = spec["num"]
     if isinstance(num, bool) or not isinstance(num, int) or num < 1:
         raise InputError(f"{name}.num must be an integer >= 1, got {num!r}")
@@ -424,15 +518,26 @@ def _axis_from_toml(name: str, spec: Any) -> np.ndarray:
     raise InputError(f'{name}.spacing must be "log" or "linear", got {spacing!r}')
 
 
-SCENE_KEYS = ({f.name for f in fields(Scene)} - {"axes", "options"}) | {"preset"} | set(EXTRA_AXES)
-"""Keys of a scene TOML: the Scene's fields (its extra axes as tables [A], [m1], [m2], [D0]) and ``preset``."""
+SCENE_KEYS = ({f.name for f in fields(Scene)} - {"axes", "options"}) | {"preset"} | set(EXTRA_AXES) | set(LAB_AXES) \
+    | {STIFFNESS_AXIS}
+"""Keys of a scene TOML: the Scene's fields (its extra axes as tables [A], [m1], [m2], [D0], [a], [b], [Dc], [k])
+and ``preset``; the tables of axes that a protocol's options name are allowed beside them (:func:`_option_axes`)."""
+
+
+def _option_axes(cfg: Mapping[str, Any]) -> dict[str, Any]:
+    """The axes that the options of a scene file's protocol name (Protocol.option_axes; none for a protocol that
+    is not known, which the Scene refuses)."""
+    name = cfg.get("protocol", "stop")
+    if not isinstance(name, str) or name not in protocols.names():
+        return {}
+    return protocols.get(name).option_axes(cfg)
 
 
 def _check_keys(cfg: Mapping[str, Any], also: frozenset[str] = frozenset()) -> None:
     """InputError naming the keys of a scene file that no command knows (a misspelt ``rtoll`` is never ignored);
     ``also``: the keys of the command reading it (``sweep hopf``: :data:`HOPF_KEYS`)."""
     allowed = SCENE_KEYS | also | option_keys()
-    unknown = set(cfg) - allowed
+    unknown = set(cfg) - allowed - set(_option_axes(cfg))
     if unknown:
         raise InputError(f"unknown key(s) {sorted(unknown)} in scene; allowed: {sorted(allowed)}")
 
@@ -450,26 +555,62 @@ def scene_from_mapping(cfg: Mapping[str, Any]) -> Scene:
     """Build a Scene from a parsed TOML mapping (same fields as :class:`Scene`, plus ``preset``; the fields of its
     protocol's options as top-level keys)."""
     _check_keys(cfg)
-    for required in ("K_over_M", "V"):
-        if required not in cfg:
-            raise InputError(f"scene is missing the [{required}] axis table")
+    if "K_over_M" not in cfg and STIFFNESS_AXIS not in cfg:
+        raise InputError("scene is missing the [K_over_M] axis table (or the laboratory's stiffness [k] in 1/m)")
+    if "V" not in cfg:
+        raise InputError("scene is missing the [V] axis table")
     params = _params_from(cfg)
-    kwargs = {k: v for k, v in cfg.items() if k not in ("preset", "params", "K_over_M", "V", *EXTRA_AXES)}
+    declared = _option_axes(cfg)
+    grid = ("preset", "params", "K_over_M", "V", *EXTRA_AXES, *LAB_AXES, STIFFNESS_AXIS, *declared)
+    kwargs = {k: v for k, v in cfg.items() if k not in grid}
     options = {k: kwargs.pop(k) for k in (option_keys() - set(SCENE_DEFAULTS)) & set(kwargs)}
     if options:
         kwargs["options"] = options
-    axes = {n: _axis_from_toml(n, cfg[n]) for n in EXTRA_AXES if n in cfg}
+    axes = {n: _axis_from_toml(n, cfg[n]) for n in (*EXTRA_AXES, *LAB_AXES, STIFFNESS_AXIS) if n in cfg}
+    axes.update({n: _axis_from_toml(n, cfg[n], positive=not spec.inclusive) for n, spec in declared.items()
+                 if n in cfg})
     if axes:
         kwargs["axes"] = axes
     if "trajectory_tau" in kwargs and isinstance(kwargs["trajectory_tau"], Mapping):
         t = kwargs["trajectory_tau"]
         kwargs["trajectory_tau"] = (t.get("min"), t.get("max"), t.get("num"))
-    return Scene(params=params, K_over_M=_axis_from_toml("K_over_M", cfg["K_over_M"]),
+    K_over_M = _axis_from_toml("K_over_M", cfg["K_over_M"]) if "K_over_M" in cfg else None
+    return Scene(params=params, K_over_M=K_over_M,
                  V=_axis_from_toml("V", cfg["V"]), **{"protocol": "stop", **kwargs})  # protocol may be in kwargs
 
 
+PAPER_ONLY = ("A", "m1", "m2", "D0", "m0")
+"""[params] keys of the paper's law alone (V0 and g are shared with the laboratory's)."""
+
+
 def _params_from(cfg: Mapping[str, Any]) -> FrictionParams:
-    """FrictionParams from ``preset`` and/or a ``[params]`` table of a parsed TOML mapping."""
+    """FrictionParams from ``preset`` and/or a ``[params]`` table of a parsed TOML mapping: the paper's (A, m1, m2,
+    D0, m0) or the laboratory's (a, b, Dc, mu0; FrictionParams.from_lab), never a mix; V0 and g with either."""
+    given = cfg.get("params", {})
+    if not isinstance(given, Mapping):
+        raise InputError(f"[params] must be a table of friction parameters, got {given!r}")
+    lab = sorted(set(given) & (set(LAB_NAMES) - {"V0"}))
+    if lab:
+        paper = sorted(set(given) & set(PAPER_ONLY))
+        if paper:
+            raise InputError(f"[params] mixes the paper's {paper} and the laboratory's {lab} names: give one set "
+                             f"(A, m1, m2, D0, m0 or a, b, Dc, mu0; V0 and g with either)")
+        base = {}
+        if "preset" in cfg:
+            preset = _params_from({"preset": cfg["preset"]})
+            try:
+                base = preset.to_lab() | {"g": preset.g}
+            except InputError as exc:
+                raise InputError(f"[params] gives the laboratory's {lab} over preset {cfg['preset']!r}, whose {exc}"
+                                 ) from None
+        values = {**base, **given}
+        missing = [n for n in ("a", "b", "Dc") if n not in values]
+        if missing:
+            raise InputError(f"[params] in the laboratory's names needs a, b and Dc; missing {missing}")
+        unknown = sorted(set(values) - {*LAB_NAMES, "g"})
+        if unknown:
+            raise InputError(f"[params] has unknown key(s) {unknown} (laboratory's fields: a, b, Dc, mu0, V0, g)")
+        return FrictionParams.from_lab(**values)
     if "preset" in cfg:
         if cfg["preset"] not in presets:
             import difflib

@@ -65,7 +65,8 @@ def read_sweep_file(path: str | os.PathLike, load: bool = True) -> tuple[xr.Data
     except FileNotFoundError as exc:
         raise InputError(str(exc)) from None
     kind = file_kind(ds)
-    if kind != "hopf" and not {"K_over_M", "V"} <= set(ds.dims):  # one point (sweep.solve_point) saved as 0-d
+    # one point (sweep.solve_point) saved as 0-d; a grid's first axis is K_over_M or the laboratory's k
+    if kind != "hopf" and not any({first, "V"} <= set(ds.dims) for first in ("K_over_M", "k")):
         ds = ds.expand_dims(("K_over_M", "V"))
     return ds, kind
 

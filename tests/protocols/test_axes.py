@@ -128,7 +128,7 @@ def test_toml_tables_of_extra_axes():
     (dict(axes={"A": [0.01, 0.005]}), ["A must be strictly increasing"]),
     (dict(axes={"D0": [-1e-6, 1e-6]}), ["D0 must be > 0"]),
     (dict(axes={"m1": [0.0, np.nan]}), ["m1 contains NaN"]),
-    (dict(axes={"A": [0.01]}, protocol="driven"), ["protocol 'stop' only", "'driven'"]),
+    (dict(axes={"A": [0.01]}, protocol="driven"), ["protocol 'stop' and 'history' only", "'driven'"]),
     (dict(axes={"A": [0.01]}, simulated_hopf_line=True), ["simulated_hopf_line", "axes ['A']"]),
 ])
 def test_bad_extra_axes_are_refused_naming_the_field(kw, words):

@@ -14,7 +14,7 @@ from ...accuracy import TIGHTER
 from ...plan.plan import point_params
 from ...scene.scene import Scene
 from ...status import Status
-from .segments import reduced_durations, segment_ratios
+from .segments import reduced_durations, segment_values
 
 __all__ = ["DEFAULT_CHUNK", "OBSERVABLES", "HistoryPlan", "history_chunk", "history_plan", "read_off"]
 
@@ -41,7 +41,7 @@ class HistoryPlan:
     durations: np.ndarray
     """Reduced durations V t_j/D0, (points, segments)."""
     ratios: np.ndarray
-    """Load-point velocity / V per segment."""
+    """Load-point velocity / V, (points, segments) (a V_ratio axis makes it differ between points)."""
     state_law: str
     rtol: float
     max_steps: int
@@ -54,7 +54,7 @@ class HistoryPlan:
 
     def take(self, rows: np.ndarray) -> HistoryPlan:
         return replace(self, k=self.k[rows], a=self.a[rows], b=self.b[rows], A=self.A[rows],
-                       mu_ref=self.mu_ref[rows], durations=self.durations[rows])
+                       mu_ref=self.mu_ref[rows], durations=self.durations[rows], ratios=self.ratios[rows])
 
     def describe(self) -> dict[str, str]:
         return {"model": f"quasistatic, {self.state_law} law",
@@ -72,9 +72,10 @@ def history_plan(scene: Scene) -> HistoryPlan:
     V, D0 = flat("V"), flat("D0")
     p = scene.params
     mu_ref = physics.mu_d(V, p.m0, flat("m1"), flat("m2"), p.V0)
+    table = segment_values(scene.options.segments, flat, V.size)  # per point: a segment's number may be an axis
     return HistoryPlan(k=k, a=a, b=b, A=pts.A, mu_ref=np.asarray(mu_ref, float),
-                       durations=reduced_durations(scene.options.segments, V, D0),
-                       ratios=segment_ratios(scene.options.segments), state_law=scene.state_law, rtol=scene.rtol,
+                       durations=reduced_durations(table, V, D0),
+                       ratios=table["V_ratio"], state_law=scene.state_law, rtol=scene.rtol,
                        max_steps=int(scene.max_steps), perturbation=float(scene.options.perturbation),
                        chunk_size=DEFAULT_CHUNK)
 
@@ -83,14 +84,24 @@ def _run(plan: HistoryPlan, points: np.ndarray, tol: float) -> dict[str, np.ndar
     from ...integrate.history import history_batch
     from ...integrate.models.history import LAW_CODES
 
-    n, m = points.size, plan.ratios.size
+    n, m = points.size, plan.ratios.shape[1]
     rec = {name: np.full((n, m), np.nan) for name in ("s_start", "s_end", "s_peak")}
     rec["steady"] = np.zeros((n, m), np.int8)
     status, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
-    k = plan.k[points]
-    history_batch(k, plan.a[points], plan.b[points], LAW_CODES[plan.state_law], k * plan.perturbation,
-                  plan.ratios, np.ascontiguousarray(plan.durations[points]), tol, plan.max_steps, rec["s_start"],
-                  rec["s_end"], rec["s_peak"], rec["steady"], status, steps)
+    ratios = plan.ratios[points]
+    # the kernel takes one ratio per segment for all its points: one call per distinct row (a V_ratio axis's values)
+    rows, group = np.unique(ratios, axis=0, return_inverse=True)
+    for g in range(rows.shape[0]):
+        sel = np.flatnonzero(group.reshape(-1) == g)
+        k = plan.k[points[sel]]
+        out = {name: np.ascontiguousarray(rec[name][sel]) for name in rec}
+        st, sp = np.zeros(sel.size, np.int8), np.zeros(sel.size, np.int64)
+        history_batch(k, plan.a[points[sel]], plan.b[points[sel]], LAW_CODES[plan.state_law], k * plan.perturbation,
+                      np.ascontiguousarray(rows[g]), np.ascontiguousarray(plan.durations[points[sel]]), tol,
+                      plan.max_steps, out["s_start"], out["s_end"], out["s_peak"], out["steady"], st, sp)
+        for name in rec:
+            rec[name][sel] = out[name]
+        status[sel], steps[sel] = st, sp
     return {**rec, "status": status, "steps": steps}
 
 
@@ -100,8 +111,8 @@ def read_off(rec: dict[str, np.ndarray], ratios: np.ndarray, a: np.ndarray, b: n
     from the previous segment where both end in steady sliding; the peak after a hold above the steady friction at
     the reslide velocity; the relaxation during a hold (NaN where a segment has no such value)."""
     A_, a_, b_ = A[:, None], a[:, None], b[:, None]
-    r = ratios[None, :]
-    prev = np.concatenate([[np.nan], ratios[:-1]])[None, :]
+    r = np.atleast_2d(ratios)  # (points, segments), or (segments,) shared by every point
+    prev = np.concatenate([np.full((r.shape[0], 1), np.nan), r[:, :-1]], axis=1)
     steady = rec["steady"].astype(bool)
     both = steady & np.concatenate([np.zeros_like(steady[:, :1]), steady[:, :-1]], axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -119,7 +130,7 @@ def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dic
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
         loose, tight = (_run(plan, points, plan.rtol / TIGHTER**e) for e in (1, 2))
-        args = (plan.ratios, plan.a[points], plan.b[points], plan.A[points], plan.mu_ref[points])
+        args = (plan.ratios[points], plan.a[points], plan.b[points], plan.A[points], plan.mu_ref[points])
         values, looser = read_off(tight, *args), read_off(loose, *args)
         status = np.where(tight["status"] != Status.OK, tight["status"], loose["status"]).astype(np.int8)
         out: dict[str, np.ndarray] = {"status": status, "steps": tight["steps"] + loose["steps"]}

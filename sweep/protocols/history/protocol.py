@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ...errors import InputError
-from ..base import ChunkCompute, Options, Protocol
+from ..base import AxisSpec, ChunkCompute, Options, Protocol
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -25,6 +25,10 @@ __all__ = ["HISTORY_METHODS", "PROTOCOL", "HistoryProtocol"]
 
 HISTORY_METHODS = ("auto", "dp5")
 """Methods a history scene accepts: its stepper is the adaptive dp5."""
+
+FILE_NAMES = frozenset({"segment", "V_ratio", "duration", "load_point_displacement", "status", "steps", "model",
+                        "chi", "mu1", "chi_c", "chi_c_quasistatic", "gamma", "mu_t", "t"})
+"""Names of a history file's coordinates and variables besides the observables, which an axis may not take."""
 
 
 class HistoryProtocol(Protocol):
@@ -40,6 +44,7 @@ class HistoryProtocol(Protocol):
     file_per_point = 80
     core_seconds_per_point = 1e-3
     warm_up_timed = False
+    extra_axes = True
 
     @property
     def models(self) -> frozenset[tuple[str, str]]:
@@ -66,19 +71,34 @@ class HistoryProtocol(Protocol):
             raise InputError(f"perturbation must be in [-1, 1] (reduced spring stretch), got {pert!r}")
         return Options({"segments": segments, "perturbation": float(pert)})
 
+    def option_axes(self, options: Mapping[str, Any]) -> dict[str, AxisSpec]:
+        """The axes that the segments name (``hold = "t_hold"``): unit from the key (segments.AXIS_UNITS)."""
+        from .segments import AXIS_WORDS, segment_axes
+
+        out = {}
+        for name, (unit, where, positive) in segment_axes(options.get("segments", ())).items():
+            if name in FILE_NAMES or name.removesuffix("_error") in self.observables:
+                raise InputError(f"{where} names axis {name!r}, which is a name of the history file's coordinates "
+                                 f"or variables: choose another name (e.g. {'t_' + name!r})")
+            key = where.rsplit(".", 1)[1]
+            out[name] = AxisSpec(unit, AXIS_WORDS[key] + f" ({where})", where, 0.0, inclusive=not positive)
+        return out
+
     def check(self, scene: Scene) -> None:
         from ... import physics
 
         if scene.method not in HISTORY_METHODS:
             raise InputError(f"protocol 'history' runs the adaptive dp5 stepper: method must be one of "
                              f"{list(HISTORY_METHODS)}, got {scene.method!r}")
-        p = scene.params
-        r_max = max(seg["V_ratio"] for seg in scene.options.segments)
-        G = physics.inertia_number(r_max * float(np.max(scene.V)), p.D0, p.g) / p.A
+        # the fastest segment over the grid: each segment's V_ratio (a number or an axis's largest value) x max V
+        r_max = max(float(np.max(scene.axes[r])) if isinstance(r, str) else r
+                    for r in (seg["V_ratio"] for seg in scene.options.segments))
+        v_max = r_max * float(np.max(scene.V))
+        G = float(np.max(physics.inertia_number(v_max, scene.broadcast("D0"), scene.params.g) / scene.broadcast("A")))
         if scene.model == "auto" and G > scene.model_tol:
             raise InputError(f"protocol 'history' has the quasi-static model only, and inertia matters at the fastest "
                              f"segment (gamma/A = {G:.3g} > model_tol = {scene.model_tol:g} at "
-                             f"{r_max:g} x V = {r_max * float(np.max(scene.V)):.3g} m/s): lower V or raise model_tol")
+                             f"{r_max:g} x V = {v_max:.3g} m/s): lower V or raise model_tol")
 
     def toml_lines(self, scene: Scene) -> list[str]:
         from ..base import toml_value

@@ -49,13 +49,25 @@ def history_coords(scene: Scene) -> dict[str, xr.Variable]:
     coords = grid_coords(scene)
     coords["V"].attrs["long_name"] = "reference velocity V (each segment's load point moves at V_ratio x V)"
     coords["segment"] = variable("segment", np.arange(len(segs)), "1", "segment of the load history")
-    coords["V_ratio"] = variable("segment", np.array([s["V_ratio"] for s in segs]), "1",
-                                 "load-point velocity of the segment over V (0: hold)")
-    coords["duration"] = variable("segment", np.array([s.get("duration", np.nan) for s in segs]), "s",
-                                  "duration of the segment (NaN: given by its load-point displacement)")
-    coords["load_point_displacement"] = variable("segment", np.array([s.get("displacement", np.nan) for s in segs]),
-                                                 "m", "load-point displacement of the segment (NaN: given by its "
-                                                 "duration)")
+
+    def column(key: str) -> tuple[np.ndarray, dict[str, str]]:
+        """The segments' numbers for ``key`` (NaN where an axis gives it per point, which a comment names)."""
+        values = [s.get(key, np.nan) for s in segs]
+        named = {i: v for i, v in enumerate(values) if isinstance(v, str)}
+        attrs = {"comment": "NaN where an axis of the grid gives it per point: " + ", ".join(
+            f"segment {i} -> {name}" for i, name in named.items())} if named else {}
+        return np.array([np.nan if isinstance(v, str) else v for v in values], float), attrs
+
+    ratio, ratio_attrs = column("V_ratio")
+    coords["V_ratio"] = variable("segment", ratio, "1", "load-point velocity of the segment over V (0: hold)",
+                                 **ratio_attrs)
+    duration, duration_attrs = column("duration")
+    coords["duration"] = variable("segment", duration, "s",
+                                  "duration of the segment (NaN: given by its load-point displacement)",
+                                  **duration_attrs)
+    disp, disp_attrs = column("displacement")
+    coords["load_point_displacement"] = variable("segment", disp, "m", "load-point displacement of the segment "
+                                                 "(NaN: given by its duration)", **disp_attrs)
     return coords
 
 
