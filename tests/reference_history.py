@@ -98,3 +98,55 @@ def history_reference_at(A, m1, m2, D0, K_over_M, velocities, durations, times, 
                 i += 1
         start = end
     return out
+
+
+def inertial_reference_at(A, m1, m2, D0, K_over_M, velocities, durations, times, m0=0.3, V0=1e-6, g=G, stretch=0.0,
+                          rtol=1e-10):
+    """The history with inertia (PHYSICS.md 7: M x'' = K (x_lp - x) - M g mu(x', phi), aging law), in physical
+    units: the spring's force per normal load f = K (x_lp - x)/(M g) (the friction a laboratory measures), the
+    slider's ln v and ln phi,
+
+        df/dt = (K/(M g)) (v_lp - v),   d ln v/dt = g (f - mu(v, phi))/v,   dphi/dt = 1 - v phi/D0,
+        mu(v, phi) = mu_d(D0/phi) + A ln(v phi/D0),
+
+    from steady sliding at velocities[0] (v, phi = D0/v, f = mu_d(v) + k_lab ``stretch``), integrated with Radau
+    at ``rtol`` in pieces that end at the sample times and segment ends. Returns (f at ``times``, per segment
+    (f_start, f_end, f_peak) with the peaks from events df/dt = 0, falling)."""
+    k_lab = K_over_M / g
+
+    def mu_d(v):
+        lv = np.log(v / V0)
+        return m0 - m1 * lv + m2 * lv * lv
+
+    def rhs(t, y, v_lp):
+        f, lv, lphi = y
+        v, phi = np.exp(lv), np.exp(lphi)
+        mu = mu_d(D0 / phi) + A * (lv + lphi - np.log(D0))
+        return [k_lab * (v_lp - v), g * (f - mu) / v, (1.0 - v * phi / D0) / phi]
+
+    def rising(t, y, v_lp):
+        return v_lp - np.exp(y[1])
+
+    rising.direction = -1
+    times = np.asarray(times, float)
+    v1 = velocities[0]
+    y = np.array([mu_d(v1) + k_lab * stretch, np.log(v1), np.log(D0 / v1)])
+    out, segs = np.full(times.size, np.nan), []
+    i, start = 0, 0.0
+    for v_lp, end in zip(velocities, np.cumsum(durations)):
+        while i < times.size and times[i] <= start:
+            out[i] = y[0]
+            i += 1
+        f_start, peak, t0 = y[0], max(y[0], -np.inf), start
+        for stop in [*times[(times > start) & (times < end)], end]:
+            sol = solve_ivp(rhs, (t0, stop), y, method="Radau", rtol=rtol, atol=[1e-14, 1e-10, 1e-10], args=(v_lp,),
+                            events=rising, first_step=min(stop - t0, 1e-9))
+            assert sol.success, sol.message
+            peak = max([peak, *(ye[0] for ye in sol.y_events[0])])
+            y, t0 = sol.y[:, -1], stop
+            while i < times.size and times[i] <= t0:
+                out[i] = y[0]
+                i += 1
+        segs.append((f_start, y[0], max(peak, y[0])))
+        start = end
+    return out, segs

@@ -11,6 +11,15 @@ units of A, s = (mu - mu_d(V))/A = chi z/A (z the reduced spring stretch beyond 
 
 Steady sliding at r V: u = -ln r, w = ln r, s = -a ln r + b (ln r)^2. The log-velocity w is a function of the state,
 so a hold (r = 0, w -> -inf) and a reslide are the same smooth equations.
+
+With inertia (G = gamma/A > 0, gamma = V^2/(g D0); Newton's law M x'' = K (x_lp - x) - M g mu(x', phi), PHYSICS.md 7)
+s is the spring's force, the friction the laboratory measures, and the slider's friction lags it by the inertial
+term: G xi'' = s - a u - b u^2 - u - w = P, so w = ln xi' becomes a third state,
+
+    w' = P e^-w / G,    s' = k (r - e^w),    u' = e^-u - e^w (aging)
+
+relaxing at the rate e^-w/G (stiff for small G and at small slip velocity, in every hold):
+:func:`inertial_history_system` gives the rates and the analytic Jacobian for Rosenbrock steps.
 """
 
 from __future__ import annotations
@@ -23,7 +32,7 @@ from ...jitcache import pin_module
 from ..solvers.fastmath import FAST
 from ..solvers.vmath import EXP_MAX
 
-__all__ = ["AGING", "SLIP", "LAW_CODES", "history_rates", "steady_state"]
+__all__ = ["AGING", "SLIP", "LAW_CODES", "history_rates", "inertial_history_system", "steady_state"]
 
 AGING, SLIP = 0, 1
 LAW_CODES = {"aging": AGING, "slip": SLIP}
@@ -42,6 +51,22 @@ def history_rates(s, u, r, k, a, b, law):
     else:
         du = math.exp(min(-u, EXP_MAX)) - e
     return ds, du, w
+
+
+@njit(inline="always", fastmath=FAST, error_model="numpy")
+def inertial_history_system(t, y, p, f, J, ft, jacobian):
+    """The inertial history equations (aging law) in y = (s, u, w) with p = (k, a, b, G, r): rates into f and, when
+    ``jacobian``, df/dy into J (autonomous: ft = 0), for sweep.integrate.solvers.rosenbrock_step.make_rodas3_step."""
+    k, a, b, g, r = p
+    s, u, w = y[0], y[1], y[2]
+    balance = s - u * (a + b * u) - u
+    e, e_u, c = math.exp(min(w, EXP_MAX)), math.exp(min(-u, EXP_MAX)), math.exp(min(-w, EXP_MAX)) / g
+    f[0], f[1], f[2] = k * (r - e), e_u - e, (balance - w) * c
+    if jacobian:
+        J[0, 0], J[0, 1], J[0, 2] = 0.0, 0.0, -k * e
+        J[1, 0], J[1, 1], J[1, 2] = 0.0, -e_u, -e
+        J[2, 0], J[2, 1], J[2, 2] = c, -(a + 2.0 * b * u + 1.0) * c, -(1.0 + balance - w) * c
+        ft[0], ft[1], ft[2] = 0.0, 0.0, 0.0
 
 
 @njit(inline="always", fastmath=FAST, error_model="numpy")

@@ -1,0 +1,45 @@
+"""The load-history driver with inertia (sweep/integrate/history_inertial.py) against the independent scipy reference
+of tests/reference_history.py (inertial_reference_at: Newton's law in physical units, Radau at rtol 1e-10), on a
+step up, a hold and a reslide where inertia changes the friction by ~1 A."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from reference_history import history_reference_at, inertial_reference_at
+
+from sweep.integrate.history_inertial import history_inertial_batch
+from sweep.status import Status
+
+A, M1, M2, D0, M0, V0 = 0.01, 0.005, 0.0, 1e-6, 0.6, 1e-6
+K_LAB = 2e4  # [1/m]; k_c = (b - a)/Dc = 5e3: steady sliding stable
+VEL, DUR = np.array([1e-4, 3e-4, 0.0, 1e-4]), np.array([0.05, 0.05, 0.2, 0.1])  # gamma/A = 0.10 at 1e-4 m/s
+
+
+def run(times, tol, vel=VEL, dur=DUR, m2=M2):
+    V = vel[0]
+    scale, G = V / D0, V**2 / (9.81 * D0) / A
+    mu1 = M1 - 2 * m2 * np.log(V / V0)
+    n = vel.size
+    rec = [np.full((1, n), np.nan) for _ in range(3)]
+    steady, s_out = np.zeros((1, n), np.int8), np.full((1, times.size), np.nan)
+    status, steps = np.zeros(1, np.int8), np.zeros(1, np.int64)
+    history_inertial_batch(np.array([K_LAB * D0 / A]), np.array([mu1 / A]), np.array([m2 / A]), np.array([G]),
+                           np.zeros(1), (vel / V)[None, :].copy(), (dur * scale)[None, :].copy(), np.array([scale]),
+                           times, tol, 10**6, *rec, steady, s_out, status, steps)
+    mu_ref = M0 - M1 * np.log(V / V0) + m2 * np.log(V / V0) ** 2
+    return status[0], mu_ref + A * s_out[0], [mu_ref + A * r[0] for r in rec]
+
+
+@pytest.mark.parametrize("m2", [0.0, 0.002])
+def test_inertial_history_against_the_reference(m2):
+    t = np.sort(np.concatenate([np.linspace(0, DUR.sum(), 31), np.random.default_rng(0).uniform(0, DUR.sum(), 30)]))
+    ref, segs = inertial_reference_at(A, M1, m2, D0, K_LAB * 9.81, VEL, DUR, t, m0=M0)
+    quasistatic = history_reference_at(A, M1, m2, D0, K_LAB * 9.81, VEL, DUR, t, m0=M0)
+    assert np.abs(ref - quasistatic).max() > 0.2 * A  # inertia matters here (1.1 A, 0.28 A)
+    for tol, bound in ((1e-7, 3e-6), (1e-9, 3e-8)):  # samples: Hermite interpolation, ~10x the step's local error
+        status, mu, (start, end, peak) = run(t, tol, m2=m2)
+        assert status == Status.OK
+        assert np.abs(mu - ref).max() <= bound * A
+        for got, col in ((start, 0), (end, 1), (peak, 2)):
+            assert np.abs(got - [s[col] for s in segs]).max() <= bound * A / 3
