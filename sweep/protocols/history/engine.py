@@ -1,11 +1,12 @@
 """The plan of a history scene and its chunks: per point the reduced inputs, two runs of the load-history driver
 (sweep/integrate/history.py) at local tolerances rtol/TIGHTER and rtol/TIGHTER^2, and the observables read off the
-tighter run, each with the difference to the looser run as its error estimate."""
+tighter run, each with the difference to the looser run as its error estimate; where the scene asks for mu_t, two
+more runs of the dense-output driver for mu at the times t_obs (sweep/protocols/history/sampled.py)."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -14,6 +15,7 @@ from ...accuracy import TIGHTER
 from ...plan.plan import point_params
 from ...scene.scene import Scene
 from ...status import Status
+from .sampled import friction_samples
 from .segments import reduced_durations, segment_values
 
 __all__ = ["DEFAULT_CHUNK", "OBSERVABLES", "HistoryPlan", "history_chunk", "history_plan", "read_off"]
@@ -47,6 +49,10 @@ class HistoryPlan:
     max_steps: int
     perturbation: float
     chunk_size: int
+    scale: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """V/D0 per point [1/s]: reduced time per second."""
+    t_obs: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """Times [s] from the history's start of the observable mu_t (empty: not asked for)."""
 
     @property
     def n_points(self) -> int:
@@ -54,7 +60,8 @@ class HistoryPlan:
 
     def take(self, rows: np.ndarray) -> HistoryPlan:
         return replace(self, k=self.k[rows], a=self.a[rows], b=self.b[rows], A=self.A[rows],
-                       mu_ref=self.mu_ref[rows], durations=self.durations[rows], ratios=self.ratios[rows])
+                       mu_ref=self.mu_ref[rows], durations=self.durations[rows], ratios=self.ratios[rows],
+                       scale=self.scale[rows])
 
     def describe(self) -> dict[str, str]:
         return {"model": f"quasistatic, {self.state_law} law",
@@ -77,7 +84,8 @@ def history_plan(scene: Scene) -> HistoryPlan:
                        durations=reduced_durations(table, V, D0),
                        ratios=table["V_ratio"], state_law=scene.state_law, rtol=scene.rtol,
                        max_steps=int(scene.max_steps), perturbation=float(scene.options.perturbation),
-                       chunk_size=DEFAULT_CHUNK)
+                       chunk_size=DEFAULT_CHUNK, scale=V / D0,
+                       t_obs=np.asarray(scene.options.get("t_obs", ()) if "mu_t" in scene.observables else (), float))
 
 
 def _run(plan: HistoryPlan, points: np.ndarray, tol: float) -> dict[str, np.ndarray]:
@@ -125,8 +133,19 @@ def read_off(rec: dict[str, np.ndarray], ratios: np.ndarray, a: np.ndarray, b: n
             "delta_mu_relax": np.where(r == 0, A_ * (rec["s_start"] - rec["s_end"]), np.nan)}
 
 
+def _add_samples(out: dict[str, np.ndarray], samples: dict[str, np.ndarray]) -> None:
+    """mu_t and its error into a chunk's outputs; a point's status becomes the samples' where it was ok, or where
+    the samples' run failed (max_steps, step_underflow) and the records' only missed the tolerance."""
+    out["mu_t"], out["mu_t_error"] = samples["mu_t"], samples["mu_t_error"]
+    failed = np.isin(samples["status"], (Status.MAX_STEPS, Status.STEP_UNDERFLOW))
+    take = (out["status"] == Status.OK) | ((out["status"] == Status.ERROR_ABOVE_TOL) & failed)
+    out["status"] = np.where(take, samples["status"], out["status"]).astype(np.int8)
+    out["steps"] = out["steps"] + samples["steps"]
+
+
 def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dict[str, np.ndarray]]:
-    """compute(points) -> per-point arrays (observables and their errors (points, segments); status, steps)."""
+    """compute(points) -> per-point arrays (observables and their errors (points, segments); mu_t and its error
+    (points, times) where asked for; status, steps)."""
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
         loose, tight = (_run(plan, points, plan.rtol / TIGHTER**e) for e in (1, 2))
@@ -141,6 +160,8 @@ def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dic
             above |= np.any(err > plan.rtol * (np.abs(values[name]) + plan.A[points, None]), axis=1)
             out[name], out[f"{name}_error"] = values[name], err
         out["status"] = np.where((status == Status.OK) & above, np.int8(Status.ERROR_ABOVE_TOL), status)
+        if plan.t_obs.size:
+            _add_samples(out, friction_samples(plan, points, plan.scale[points], plan.t_obs))
         return out
 
     return compute

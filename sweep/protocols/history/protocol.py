@@ -27,7 +27,7 @@ HISTORY_METHODS = ("auto", "dp5")
 """Methods a history scene accepts: its stepper is the adaptive dp5."""
 
 FILE_NAMES = frozenset({"segment", "V_ratio", "duration", "load_point_displacement", "status", "steps", "model",
-                        "chi", "mu1", "chi_c", "chi_c_quasistatic", "gamma", "mu_t", "t"})
+                        "chi", "mu1", "chi_c", "chi_c_quasistatic", "gamma", "mu_t", "t", "t_obs"})
 """Names of a history file's coordinates and variables besides the observables, which an axis may not take."""
 
 
@@ -35,10 +35,10 @@ class HistoryProtocol(Protocol):
     name = "history"
     title = "history scene"
     marker = "mu_end"
-    observables = ("mu_end", "delta_mu_ss", "delta_mu_peak", "delta_mu_relax")
+    observables = ("mu_end", "delta_mu_ss", "delta_mu_peak", "delta_mu_relax", "mu_t")
     always = "mu_end"
-    default_observables = observables
-    option_fields = MappingProxyType({"segments": (), "perturbation": 0.0})
+    default_observables = observables[:4]
+    option_fields = MappingProxyType({"segments": (), "perturbation": 0.0, "t_obs": ()})
     default_chunk = 256
     memory_per_point = 400
     file_per_point = 80
@@ -59,9 +59,11 @@ class HistoryProtocol(Protocol):
         return ("quasistatic" if model == "auto" else model, state_law) in self.models
 
     def make_options(self, scene: Scene, given: Mapping[str, Any]) -> Options:
-        """The history scene's own fields: ``segments`` (sweep/protocols/history/segments.py) and the initial spring
-        stretch ``perturbation`` beyond steady sliding (reduced by D0, as the driven scene's; 0 by default)."""
+        """The history scene's own fields: ``segments`` (sweep/protocols/history/segments.py), the initial spring
+        stretch ``perturbation`` beyond steady sliding (reduced by D0, as the driven scene's; 0 by default) and the
+        times ``t_obs`` [s] from the history's start of the observable mu_t."""
         from ...scene.params import require_finite
+        from ...scene.scene import _times
         from .segments import check_segments
 
         options = dict(super().make_options(scene, given))
@@ -69,7 +71,10 @@ class HistoryProtocol(Protocol):
         pert = require_finite("perturbation", options["perturbation"])
         if abs(pert) > 1.0:
             raise InputError(f"perturbation must be in [-1, 1] (reduced spring stretch), got {pert!r}")
-        return Options({"segments": segments, "perturbation": float(pert)})
+        t_obs = _times("t_obs", options["t_obs"])
+        if "mu_t" in scene.observables and t_obs.size == 0:
+            raise InputError("observable 'mu_t' needs t_obs: the times from the history's start [s], e.g. [0, 10, 60]")
+        return Options({"segments": segments, "perturbation": float(pert), "t_obs": tuple(t_obs.tolist())})
 
     def option_axes(self, options: Mapping[str, Any]) -> dict[str, AxisSpec]:
         """The axes that the segments name (``hold = "t_hold"``): unit from the key (segments.AXIS_UNITS)."""

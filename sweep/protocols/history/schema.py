@@ -40,6 +40,12 @@ def history_variables(scene: Scene, out: dict[str, np.ndarray]) -> dict[str, xr.
                                   ancillary_variables=f"{name}_error")
             data[f"{name}_error"] = variable(seg_dims, per_seg(out[f"{name}_error"]), "1",
                                              f"estimated absolute numerical error of {name} (pair of tolerances)")
+    if "mu_t" in scene.observables:  # mu at the times t_obs (sweep/protocols/history/sampled.py)
+        per_t = lambda a: a.reshape((*scene.shape, len(scene.options.t_obs)))  # noqa: E731
+        data["mu_t"] = variable((*dims, "t_obs"), per_t(out["mu_t"]), "1", "friction coefficient at the time t_obs "
+                                "(NaN past the point's history)", ancillary_variables="mu_t_error")
+        data["mu_t_error"] = variable((*dims, "t_obs"), per_t(out["mu_t_error"]), "1",
+                                      "estimated absolute numerical error of mu_t (pair of tolerances)")
     return data
 
 
@@ -49,6 +55,9 @@ def history_coords(scene: Scene) -> dict[str, xr.Variable]:
     coords = grid_coords(scene)
     coords["V"].attrs["long_name"] = "reference velocity V (each segment's load point moves at V_ratio x V)"
     coords["segment"] = variable("segment", np.arange(len(segs)), "1", "segment of the load history")
+    if "mu_t" in scene.observables:
+        coords["t_obs"] = variable("t_obs", np.asarray(scene.options.t_obs, float), "s",
+                                   "time from the start of the load history")
 
     def column(key: str) -> tuple[np.ndarray, dict[str, str]]:
         """The segments' numbers for ``key`` (NaN where an axis gives it per point, which a comment names)."""
