@@ -25,7 +25,7 @@ from ..write.read import KINDS, file_kind  # noqa: F401 (re-exported: sweep.plot
 from .curves import draw_curve, draw_hopf, draw_hopf_gap, draw_psi, draw_regime_curve, draw_xi, trajectory_points
 from .maps import draw_map, draw_regime_map
 from .slices import extra_dims, plot_slices
-from .style import caption, figure_legend, new_figure, save
+from .style import caption, figure_legend, file_params, new_figure, save
 
 __all__ = ["file_kind", "plot_file", "plot_hopf", "plot_landscape", "plot_regimes", "plot_trajectories"]
 
@@ -44,7 +44,18 @@ def plot_file(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = No
     if kind == "hopf":
         check_map_variable(ds, variable)
         return [plot_hopf(ds, path)]
-    return protocols.get(kind).draw(ds, path, variable)
+    return protocols.get(kind).draw(as_K_over_M(ds), path, variable)
+
+
+def as_K_over_M(ds: xr.Dataset) -> xr.Dataset:
+    """A file over the laboratory's stiffness k [1/m] as one over K/M = k g [s-2] (g of its scene), which the
+    pictures' axes and maps speak; any other file as it is."""
+    if "k" not in ds.dims:
+        return ds
+    g = float(file_params(ds).get("g", 9.81))
+    km = xr.Variable("k", ds["k"].values * g, {"units": "s-2", "long_name": "spring stiffness over slider mass K/M "
+                                                 "(= k g)"})
+    return ds.assign_coords(k=km).rename({"k": "K_over_M"})
 
 
 def check_map_variable(ds: xr.Dataset, variable: str | None) -> None:

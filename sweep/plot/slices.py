@@ -29,10 +29,10 @@ GRID = ("K_over_M", "V")
 
 
 def extra_dims(ds: xr.Dataset, variable: str = "xi_inf") -> tuple[str, ...]:
-    """The grid dims of ``variable`` beyond (K_over_M, V) (the scene's extra axes)."""
-    from ..scene.scene import EXTRA_AXES
+    """The grid dims of ``variable`` beyond (K_over_M, V) (the scene's extra axes: the paper's or the laboratory's)."""
+    from ..scene.scene import EXTRA_AXES, LAB_AXES
 
-    return tuple(d for d in ds[variable].dims if d in EXTRA_AXES)
+    return tuple(d for d in ds[variable].dims if d in EXTRA_AXES + LAB_AXES)
 
 
 def _picks(n: int) -> np.ndarray:

@@ -285,7 +285,7 @@ class Scene:
             raise InputError(f"{spec.where} names axis {missing[0]!r}, which the scene does not give: add a table "
                              f"[{missing[0]}] (values or start/stop/num, in {spec.units}) or axes={{{missing[0]!r}: "
                              f"[...]}}")
-        friction = [n for n in (*EXTRA_AXES, *LAB_AXES) if n in self.axes]
+        friction = [n for n in (*EXTRA_AXES, *LAB_AXES, STIFFNESS_AXIS) if n in self.axes]
         if friction and not protocol.extra_axes:
             offered = [name for name in protocols.names() if protocols.get(name).extra_axes]
             names = " and ".join(map(repr, offered))
