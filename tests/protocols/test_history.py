@@ -135,7 +135,9 @@ def test_bad_segments_are_refused_in_one_line(segments, words):
     assert words in str(info.value) and "\n" not in str(info.value)
 
 
-def test_auto_model_refused_where_inertia_matters():
-    with pytest.raises(InputError, match="quasi-static model only"):
-        sweep.Scene(protocol="history", params=P, K_over_M=[K], V=[1e-4], options={"segments": [
+def test_auto_model_refused_where_inertia_matters_without_an_inertial_law():
+    """The slip law has no inertial model: model "auto" is refused where inertia matters (the aging law runs it:
+    tests/protocols/test_history_inertial.py)."""
+    with pytest.raises(InputError, match="no inertial model for the slip law"):
+        sweep.Scene(protocol="history", params=P, K_over_M=[K], V=[1e-4], state_law="slip", options={"segments": [
             {"V_ratio": 1, "duration": 1.0}]})

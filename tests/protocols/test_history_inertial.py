@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 from reference_history import history_reference_at, inertial_reference_at
 
+import sweep
+from sweep.errors import InputError
 from sweep.integrate.history_inertial import history_inertial_batch
 from sweep.status import Status
 
@@ -43,3 +45,24 @@ def test_inertial_history_against_the_reference(m2):
         assert np.abs(mu - ref).max() <= bound * A
         for got, col in ((start, 0), (end, 1), (peak, 2)):
             assert np.abs(got - [s[col] for s in segs]).max() <= bound * A / 3
+
+
+def test_scene_runs_inertia_where_it_matters():
+    """model "auto": inertia at the point whose fastest segment has gamma/A > model_tol, quasi-static at the other;
+    each point's friction that of its model's reference; mu_t from the inertial run as well."""
+    params = sweep.FrictionParams(A=A, m1=M1, m2=M2, D0=D0, m0=M0, V0=V0)
+    segments = [{"V_ratio": 1, "duration": 0.05}, {"V_ratio": 3, "duration": 0.05}, {"hold": 0.2},
+                {"V_ratio": 1, "duration": 0.1}]
+    t_obs = [0.0, 0.06, 0.12, 0.31, 0.4]
+    ds = sweep.run_sweep(sweep.Scene(protocol="history", params=params, K_over_M=[K_LAB * 9.81], V=[1e-6, 1e-4],
+                                     rtol=1e-6, model="auto", observables=("mu_end", "delta_mu_peak", "mu_t"),
+                                     t_obs=t_obs, options={"segments": segments})).isel(K_over_M=0)
+    assert ds["model"].values.tolist() == [0, 1] and (ds["status"] == Status.OK).all()
+    for j, V in enumerate((1e-6, 1e-4)):
+        vel = V * np.array([1, 3, 0, 1])
+        reference = inertial_reference_at if j else (lambda *a, **kw: (history_reference_at(*a, **kw), None))
+        ref, _ = reference(A, M1, M2, D0, K_LAB * 9.81, vel, DUR, np.array(t_obs), m0=M0)
+        assert np.abs(ds["mu_t"].values[j] - ref).max() <= 1e-5 * A
+    with pytest.raises(InputError, match="model 'quasistatic' only"):
+        sweep.Scene(protocol="history", params=params, K_over_M=[K_LAB * 9.81], V=[1e-4], model="inertial",
+                    state_law="slip", options={"segments": segments})

@@ -15,7 +15,8 @@ from ...accuracy import TIGHTER
 from ...plan.plan import point_params
 from ...scene.scene import Scene
 from ...status import Status
-from .sampled import friction_samples
+from .inertial import inertial_points, run_inertial
+from .sampled import friction_samples, read_samples
 from .segments import reduced_durations, segment_values
 
 __all__ = ["DEFAULT_CHUNK", "OBSERVABLES", "HistoryPlan", "history_chunk", "history_plan", "read_off"]
@@ -53,6 +54,11 @@ class HistoryPlan:
     """V/D0 per point [1/s]: reduced time per second."""
     t_obs: np.ndarray = field(default_factory=lambda: np.zeros(0))
     """Times [s] from the history's start of the observable mu_t (empty: not asked for)."""
+    G: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """gamma/A at the grid's V per point (gamma = V^2/(g D0))."""
+    inertial: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    """Per point: run with inertia (sweep.protocols.history.inertial.inertial_points)."""
+    model: str = "quasistatic"
 
     @property
     def n_points(self) -> int:
@@ -61,10 +67,13 @@ class HistoryPlan:
     def take(self, rows: np.ndarray) -> HistoryPlan:
         return replace(self, k=self.k[rows], a=self.a[rows], b=self.b[rows], A=self.A[rows],
                        mu_ref=self.mu_ref[rows], durations=self.durations[rows], ratios=self.ratios[rows],
-                       scale=self.scale[rows])
+                       scale=self.scale[rows], G=self.G[rows], inertial=self.inertial[rows])
 
     def describe(self) -> dict[str, str]:
-        return {"model": f"quasistatic, {self.state_law} law",
+        models = {"quasistatic": "quasistatic", "inertial": "inertial (RODAS3 on (s, u, ln xi'), I control)",
+                  "auto": "per point: inertial (RODAS3) where some segment's gamma/A exceeds model_tol, else "
+                          "quasistatic"}
+        return {"model": f"{models[self.model]}, {self.state_law} law",
                 "method": f"dp5 (adaptive, I control) on (s = (mu - mu_d(V))/A, u = ln psi), segment by segment, at "
                           f"local tolerances rtol/{TIGHTER:g} and rtol/{TIGHTER**2:g}: the tighter run's values, their "
                           f"difference as error estimate",
@@ -85,7 +94,9 @@ def history_plan(scene: Scene) -> HistoryPlan:
                        ratios=table["V_ratio"], state_law=scene.state_law, rtol=scene.rtol,
                        max_steps=int(scene.max_steps), perturbation=float(scene.options.perturbation),
                        chunk_size=DEFAULT_CHUNK, scale=V / D0,
-                       t_obs=np.asarray(scene.options.get("t_obs", ()) if "mu_t" in scene.observables else (), float))
+                       t_obs=np.asarray(scene.options.get("t_obs", ()) if "mu_t" in scene.observables else (), float),
+                       G=pts.G, inertial=inertial_points(scene.model, pts.G, table["V_ratio"], scene.model_tol),
+                       model=scene.model)
 
 
 def _run(plan: HistoryPlan, points: np.ndarray, tol: float) -> dict[str, np.ndarray]:
@@ -148,20 +159,39 @@ def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dic
     (points, times) where asked for; status, steps)."""
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
-        loose, tight = (_run(plan, points, plan.rtol / TIGHTER**e) for e in (1, 2))
-        args = (plan.ratios[points], plan.a[points], plan.b[points], plan.A[points], plan.mu_ref[points])
-        values, looser = read_off(tight, *args), read_off(loose, *args)
-        status = np.where(tight["status"] != Status.OK, tight["status"], loose["status"]).astype(np.int8)
-        out: dict[str, np.ndarray] = {"status": status, "steps": tight["steps"] + loose["steps"]}
-        above = np.zeros(points.size, bool)
-        for name in OBSERVABLES:
-            err = np.abs(values[name] - looser[name])
-            err = np.where(np.isnan(values[name]), np.nan, np.where(np.isnan(err), np.inf, err))
-            above |= np.any(err > plan.rtol * (np.abs(values[name]) + plan.A[points, None]), axis=1)
-            out[name], out[f"{name}_error"] = values[name], err
-        out["status"] = np.where((status == Status.OK) & above, np.int8(Status.ERROR_ABOVE_TOL), status)
-        if plan.t_obs.size:
-            _add_samples(out, friction_samples(plan, points, plan.scale[points], plan.t_obs))
+        inert = plan.inertial[points]
+        parts = [(rows, _outputs(plan, points[rows], run)) for rows, run in
+                 ((np.flatnonzero(~inert), _run), (np.flatnonzero(inert), run_inertial)) if rows.size]
+        if not parts:
+            return {**_outputs(plan, points, run_inertial), "model": np.zeros(0, np.int8)}
+        out = {name: np.empty((points.size, *x.shape[1:]), x.dtype) for name, x in parts[0][1].items()}
+        for rows, part in parts:
+            for name, x in part.items():
+                out[name][rows] = x
+        out["model"] = inert.astype(np.int8)
         return out
 
     return compute
+
+
+def _outputs(plan: HistoryPlan, points: np.ndarray, run: Callable) -> dict[str, np.ndarray]:
+    """The chunk's outputs for ``points`` from two runs of ``run`` (quasi-static :func:`_run` or
+    sweep.protocols.history.inertial.run_inertial, which also samples s at t_obs)."""
+    loose, tight = (run(plan, points, plan.rtol / TIGHTER**e) for e in (1, 2))
+    args = (plan.ratios[points], plan.a[points], plan.b[points], plan.A[points], plan.mu_ref[points])
+    values, looser = read_off(tight, *args), read_off(loose, *args)
+    status = np.where(tight["status"] != Status.OK, tight["status"], loose["status"]).astype(np.int8)
+    out: dict[str, np.ndarray] = {"status": status, "steps": tight["steps"] + loose["steps"]}
+    above = np.zeros(points.size, bool)
+    for name in OBSERVABLES:
+        err = np.abs(values[name] - looser[name])
+        err = np.where(np.isnan(values[name]), np.nan, np.where(np.isnan(err), np.inf, err))
+        above |= np.any(err > plan.rtol * (np.abs(values[name]) + plan.A[points, None]), axis=1)
+        out[name], out[f"{name}_error"] = values[name], err
+    out["status"] = np.where((status == Status.OK) & above, np.int8(Status.ERROR_ABOVE_TOL), status)
+    if plan.t_obs.size and "s_t" in tight:
+        _add_samples(out, read_samples(loose["s_t"], tight["s_t"], loose["status"], tight["status"],
+                                       plan.A[points], plan.mu_ref[points], plan.rtol, 0))
+    elif plan.t_obs.size:
+        _add_samples(out, friction_samples(plan, points, plan.scale[points], plan.t_obs))
+    return out

@@ -48,14 +48,15 @@ class HistoryProtocol(Protocol):
 
     @property
     def models(self) -> frozenset[tuple[str, str]]:
-        """Quasi-static with every state law of the registry (no inertial model yet)."""
+        """Quasi-static with every state law of the registry; inertial with the aging law."""
         from ...integrate.models.history import LAW_CODES
 
-        return frozenset({("quasistatic", law) for law in LAW_CODES})
+        return frozenset({("quasistatic", law) for law in LAW_CODES} | {("inertial", "aging")})
 
     def supports(self, model: str, state_law: str) -> bool:
-        """Model "auto" runs where the quasi-static model is enough (:meth:`check` refuses a scene where inertia
-        would matter), so it is supported wherever the quasi-static model is."""
+        """Model "auto" runs the inertial model where some segment's gamma/A exceeds model_tol and the quasi-static
+        one elsewhere; with a law that has no inertial model it runs where the quasi-static model is enough
+        (:meth:`check` refuses a scene where inertia would matter)."""
         return ("quasistatic" if model == "auto" else model, state_law) in self.models
 
     def make_options(self, scene: Scene, given: Mapping[str, Any]) -> Options:
@@ -100,10 +101,10 @@ class HistoryProtocol(Protocol):
                     for r in (seg["V_ratio"] for seg in scene.options.segments))
         v_max = r_max * float(np.max(scene.V))
         G = float(np.max(physics.inertia_number(v_max, scene.broadcast("D0"), scene.params.g) / scene.broadcast("A")))
-        if scene.model == "auto" and G > scene.model_tol:
-            raise InputError(f"protocol 'history' has the quasi-static model only, and inertia matters at the fastest "
-                             f"segment (gamma/A = {G:.3g} > model_tol = {scene.model_tol:g} at "
-                             f"{r_max:g} x V = {v_max:.3g} m/s): lower V or raise model_tol")
+        if scene.model == "auto" and G > scene.model_tol and ("inertial", scene.state_law) not in self.models:
+            raise InputError(f"protocol 'history' has no inertial model for the {scene.state_law} law, and inertia "
+                             f"matters at the fastest segment (gamma/A = {G:.3g} > model_tol = {scene.model_tol:g} at "
+                             f"{r_max:g} x V = {v_max:.3g} m/s): lower V, raise model_tol or use the aging law")
 
     def toml_lines(self, scene: Scene) -> list[str]:
         from ..base import toml_value

@@ -10,7 +10,7 @@ import numpy as np
 from ...accuracy import TIGHTER
 from ...status import Status
 
-__all__ = ["friction_samples", "two_runs"]
+__all__ = ["friction_samples", "read_samples", "two_runs"]
 
 
 def two_runs(k, a, b, A, mu_ref, state_law: str, s_kick, ratios, durations, scale, times, rtol: float,
@@ -31,6 +31,13 @@ def two_runs(k, a, b, A, mu_ref, state_law: str, s_kick, ratios, durations, scal
                             rtol / TIGHTER**e, int(max_steps), s_out, status, steps)
         runs.append((s_out, status, steps))
     (s_loose, st_loose, n_loose), (s_tight, st_tight, n_tight) = runs
+    return read_samples(s_loose, s_tight, st_loose, st_tight, A, mu_ref, rtol, n_loose + n_tight)
+
+
+def read_samples(s_loose, s_tight, st_loose, st_tight, A, mu_ref, rtol: float, steps) -> dict[str, np.ndarray]:
+    """mu_t, mu_t_error (sets, times), status and steps from the s samples of a looser and a tighter run (any driver)
+    and their statuses: mu = mu_ref + A s of the tighter run, the error the difference to the looser (inf where
+    only the looser failed), error_above_tol where an error exceeds rtol (|mu| + A)."""
     mu = mu_ref[:, None] + A[:, None] * s_tight
     error = np.abs(A[:, None] * (s_tight - s_loose))
     error[np.isnan(error) & np.isfinite(mu)] = np.inf  # the looser run failed there: no estimate
@@ -38,7 +45,7 @@ def two_runs(k, a, b, A, mu_ref, state_law: str, s_kick, ratios, durations, scal
     with np.errstate(invalid="ignore"):
         above = np.any(error > rtol * (np.abs(mu) + A[:, None]), axis=1)
     status[(status == Status.OK) & above] = Status.ERROR_ABOVE_TOL
-    return {"mu_t": mu, "mu_t_error": error, "status": status, "steps": n_loose + n_tight}
+    return {"mu_t": mu, "mu_t_error": error, "status": status, "steps": steps}
 
 
 def friction_samples(plan, points: np.ndarray, scale: np.ndarray, t_obs: np.ndarray) -> dict[str, np.ndarray]:

@@ -33,7 +33,7 @@ def history_variables(scene: Scene, out: dict[str, np.ndarray]) -> dict[str, xr.
     per_seg = lambda a: a.reshape((*scene.shape, n_seg))  # noqa: E731
     data = {"status": variable(dims, grid(out["status"]), "1", "numerical status of the point", **flag_attrs()),
             "steps": variable(dims, grid(out["steps"]), "1", "accepted and rejected steps of the point (both runs)"),
-            "model": variable(dims, np.zeros(scene.shape, np.int8), "1", "model used for the point", **MODEL_FLAG)}
+            "model": variable(dims, grid(out["model"]), "1", "model used for the point", **MODEL_FLAG)}
     for name in OBSERVABLES:
         if name in scene.observables:
             data[name] = variable(seg_dims, per_seg(out[name]), "1", NAMES[name],
@@ -85,6 +85,7 @@ def history_attributes(scene: Scene, seconds: float, description: dict[str, str]
     """The global attributes of a history sweep's file (``description``: its plan's)."""
     attrs = global_attrs(scene, "Friction under a piecewise load history (velocity steps, holds) of the "
                          "Baumberger-Gauthier spring-block model (history scene)",
-                         "quasi-static model; errors: difference of runs at rtol/10 and rtol/100", history, seconds)
+                         "quasi-static or inertial model per point (variable model); errors: difference of runs "
+                         "at rtol/10 and rtol/100", history, seconds)
     attrs.update({f"plan_{k}": v for k, v in description.items()})
     return attrs
