@@ -2,6 +2,8 @@
 """The engine side by side with the tools a user would pick instead (issue 17): numbalsoda, diffrax, scipy.
 
     python benchmarks/peers.py [--quick] [--out benchmarks/results/peers.json] [--no-png]
+    python benchmarks/peers.py --driven [--quick] [--models quasistatic,auto] [--out ...]   (the driven scene:
+                                                                  benchmarks/_peers_driven.py, issue 35)
 
 Every tool solves the SAME points of the default scene (sweep.default_scene() with model="quasistatic":
 sample2, K/M 1e3..1e6 s^-2 (200) x V 0.1..100 um/s (100)) and of its costly corner (chi/A <= 0.1 and mu1 < 0, a
@@ -598,6 +600,10 @@ def print_table(result):
 
 
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if "--driven" in argv:  # the driven scene's peers (issue 35): benchmarks/_peers_driven.py
+        import _peers_driven
+        return _peers_driven.main([a for a in argv if a != "--driven"])
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="tiny grids (every 10th K/M and V), 12-point subsample, "
                                                          "3 tolerances, 1 repeat: checks that the script works")
