@@ -103,3 +103,27 @@ def test_a_table_that_no_segment_names_is_an_unknown_key():
     with pytest.raises(InputError, match=r"unknown key\(s\) \['t_hold'\]"):
         sweep.load_scene('protocol = "history"\npreset = "sample2"\n[K_over_M]\nvalues = [3e5]\n[V]\nvalues = [1e-6]\n'
                          '[[segments]]\nV_ratio = 1\nduration = 1.0\n[t_hold]\nvalues = [1.0]\n')
+
+
+def test_sweep_plot_draws_the_segments_the_healing_and_mu_t(tmp_path):
+    """``sweep plot`` of a (k x t_hold) file with mu_t: one figure; the healing rate it labels is the slope of
+    Delta mu_peak over log10 t_h; a per-segment --variable is drawn, any other refused in one line."""
+    from sweep.cli import main
+    from sweep.plot.history import healing_rate, hold_axes
+
+    lab = sweep.FrictionParams.from_lab(a=0.007, b=0.0195, Dc=0.7e-6)
+    sc = sweep.Scene(protocol="history", params=lab, K_over_M=None, V=[V], model="quasistatic",
+                     axes={"k": [5e4, 1e5], "t_hold": [1.0, 10.0, 100.0]},
+                     observables=["mu_end", "delta_mu_peak", "mu_t"],
+                     options={"segments": SHS, "t_obs": [0.0, 20.0, 40.0, 80.0]})
+    out = tmp_path / "h.nc"
+    sweep.run_sweep(sc, progress=False, output=out)
+    ds = sweep.open(out)
+    assert hold_axes(ds) == {"t_hold": 1}
+    png = tmp_path / "h.png"
+    assert main(["plot", str(out), "-o", str(png)]) == 0 and png.stat().st_size > 10_000
+    assert main(["plot", str(out), "-o", str(tmp_path / "p.png"), "--variable", "delta_mu_peak"]) == 0
+    assert main(["plot", str(out), "-o", str(tmp_path / "x.png"), "--variable", "mu_t"]) == 2
+    t = np.array([1.0, 10.0, 100.0, 1000.0])
+    assert healing_rate(t, 0.004 + 0.02 * np.log10(t)) == pytest.approx(0.02, rel=1e-12)
+    assert np.isnan(healing_rate(t, np.array([np.nan, 1.0, np.nan, np.nan])))

@@ -153,8 +153,11 @@ class HistoryProtocol(Protocol):
         return [f"{key:>28}: {text}" for key, text in describe.items()]
 
     def draw(self, ds: xr.Dataset, path: str | Path, variable: str | None = None) -> list[Path]:
-        """Not drawn yet: mu at the segments' ends over the grid is the next picture to add."""
-        raise InputError("protocol 'history' has no picture yet; read the file with sweep.open")
+        """One figure (sweep/plot/history.py): mu at each segment's end over the grid's first axis; Delta mu_peak
+        against log10 of the hold time where a hold's duration is an axis; mu(t) where the file has mu_t."""
+        from ...plot.history import plot_history
+
+        return [plot_history(ds, path, variable)]
 
 
 PROTOCOL = HistoryProtocol()
