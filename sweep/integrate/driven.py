@@ -252,15 +252,23 @@ def _largest(size, v):
     return size
 
 
+@functools.cache
+def scalar_parts(law: str, with_inertia: bool):
+    """(rhs, advance, extremum) of one variant, made once per process: the driver below and the lanes
+    (sweep/integrate/lanes_driven.py, which locate their extrema with this ``extremum``) share them."""
+    rhs = make_driven_rhs(STATE_LAWS[law].rate, with_inertia)
+    variant = (law, "inertial" if with_inertia else "quasistatic")
+    advance = _make_advance(rhs, with_inertia, variant)
+    return rhs, advance, _make_extremum(rhs, advance, variant)
+
+
 def _make_simulate(law: str, with_inertia: bool):
     """simulate(p, settings) -> DrivenResult for one state law, compiled for the quasi-static model only
     (``with_inertia`` False: the stiff stepper is not compiled into the loop, which was 18 % slower with it, and
     compiling takes half the time) or for both."""
-    rhs = make_driven_rhs(STATE_LAWS[law].rate, with_inertia)
+    rhs, advance, extremum = scalar_parts(law, with_inertia)
     n = _size(with_inertia)
     variant = (law, "inertial" if with_inertia else "quasistatic")
-    advance = _make_advance(rhs, with_inertia, variant)
-    extremum = _make_extremum(rhs, advance, variant)
 
     @njit(cache=cached(with_inertia), fastmath=FAST, error_model="numpy")
     def simulate(p, settings):

@@ -5,21 +5,35 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import numba
 import numpy as np
 
 from ...accuracy import driven_stepper_rtol
 from ...integrate.batch import driven_batch
 from ...integrate.driven import DrivenOutputs, DrivenSettings, Regime
+from ...integrate.lanes_driven import LANES, DrivenJob, DrivenPoints, driven_lanes
 from ...plan.plan import Plan
 from ...scene.scene import Scene
 
-__all__ = ["driven_chunk"]
+__all__ = ["LANE_LAWS", "driven_chunk"]
+
+LANE_LAWS = frozenset({"aging"})
+"""State laws whose quasi-static points run in lanes (sweep/integrate/lanes_driven.py); the others, and every
+inertial point, run one point per thread (sweep/integrate/driven.py)."""
+
+
+def lane_groups(n: int) -> int:
+    """Groups of points for the lanes (each stepped by one thread, LANES in flight): up to 4 per thread for the
+    load balance (a driven point costs 100 to 1e6 steps), at least 4 x LANES points a group."""
+    threads = numba.get_num_threads()
+    return max(1, min(4 * threads, max(threads, n // (4 * LANES))))
 
 
 def driven_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, np.ndarray]]:
     """compute(points) -> per-point arrays of a driven ``scene`` (points: indices into ``plan``, a chunk's share or
-    the whole plan): one simulation per point with the plan's model, and with model="auto" a second one with inertia
-    where the quasi-static run broke down (regime runaway)."""
+    the whole plan): one simulation per point with the plan's model (quasi-static points in lanes where the state law
+    has them, :data:`LANE_LAWS`), and with model="auto" a second one with inertia where the quasi-static run broke
+    down (regime runaway)."""
     settings = DrivenSettings(scene.perturbation, driven_stepper_rtol(scene.rtol), scene.max_cycles, scene.max_steps)
 
     def simulate(points: np.ndarray, inertial: np.ndarray) -> dict[str, np.ndarray]:
@@ -27,7 +41,12 @@ def driven_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, n
         k, a, b, g = plan.k[points], plan.a[points], plan.b[points], plan.G[points] * inertial
         for with_inertia in (False, True):  # each kernel variant compiled only where a point needs it
             where = np.flatnonzero((g > 0.0) == with_inertia)
-            if where.size:
+            if not where.size:
+                continue
+            if not with_inertia and scene.state_law in LANE_LAWS:
+                _, run_batch = driven_lanes()
+                run_batch(DrivenPoints(k, a, b), DrivenJob(where, *settings), lane_groups(where.size), out)
+            else:
                 driven_batch(scene.state_law, with_inertia)(where, k, a, b, g, settings, out)
         return out._asdict()
 

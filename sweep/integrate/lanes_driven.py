@@ -1,0 +1,355 @@
+"""Quasi-static driven points in lockstep lanes (issue 35): every lane its own point, step, accept/reject and cycle
+bookkeeping, as the adaptive stop lanes (:mod:`sweep.integrate.lanes_adaptive`) do for the stop scene.
+
+The equations, the stepper and the rules are those of the one-point driver :mod:`sweep.integrate.driven` (its
+module docstring): the quasi-static driven equations in (z, u) with the aging law (docs/physics.md 3b), Dormand-Prince
+5(4) with the PI controller, the local error max(|e_z|, |e_u|) / (rtol max(largest |z| met, |z_new|, |u_new|)), the
+cycle history cut at the maxima of z, and the regime decision (:func:`sweep.integrate.driven._decide`). What differs
+is how the work is laid out. One pass of the lane loops is one *attempt* of every lane: the six stage loops (one
+loop per stage, for the reason of :func:`sweep.integrate.lanes_adaptive._stage_loops`), then a closing loop with the
+error norm, the accept mask, the next step and the commit of the accepted state, all straight-line code (selects,
+not branches) that LLVM vectorises. The closing loop also raises a lane's *attention* flag where the scalar
+bookkeeping must look: an accepted step across an extremum of z (z' changes sign), past the runaway threshold
+W_RUNAWAY, below DECAYED (or, the first time, 0.1) x perturbation, the step budget spent, or a rejected step below
+the step floor. Those steps (a few per cycle of some hundred) are left uncommitted for the short scalar loop that
+follows every attempt: it locates the extremum with the one-point driver's own Newton on exact partial dp5 steps
+(:func:`sweep.integrate.driven.scalar_parts`), books the cycle, decides, and hands a finished lane its next point.
+
+Where the arithmetic differs from the one-point driver: the exponentials are :func:`sweep.integrate.solvers.vmath.
+exp_f64` (<= 2.3e-16 relative, vectorisable; the driver calls libm) and the controller's powers are exp2 of
+:func:`sweep.integrate.lanes_adaptive._log2_approx` (0.5 %: a step factor needs no more). Steps therefore differ
+from the driver's at the tolerance's level, and so do growth rates and amplitudes (within their estimates;
+tests/integrate/test_lanes_driven.py). A point's numbers do not depend on its lane or neighbours.
+
+Only the quasi-static model with the aging law runs here (the scalar driver runs the slip law and the inertial model).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from ..accuracy import DECAYED, W_RUNAWAY
+from ..jitcache import pin, pin_module
+from .batch import lanes_in_threads
+from .driven import (
+    BREAKDOWN,
+    H_FLOOR,
+    H_START,
+    HISTORY,
+    MAX_STEPS,
+    OK,
+    STEP_UNDERFLOW,
+    DrivenParams,
+    Regime,
+    _decide,
+    _linear_amplitude,
+    scalar_parts,
+)
+from .lanes_adaptive import _log2_approx
+from .solvers import DP5
+from .solvers.controllers import ERR_FLOOR, MAX_FACTOR, MIN_FACTOR, NONFINITE_FACTOR, PI_CONTROLLER, SAFETY
+from .solvers.fastmath import FAST
+from .solvers.rosenbrock_step import scratch
+from .solvers.vmath import EXP_MAX, exp_f64
+
+__all__ = ["LANES", "DrivenJob", "DrivenPoints", "driven_lanes"]
+
+LANES = 16
+"""Points in flight per thread."""
+
+# lane fields, each LANES wide at offset F * LANES of one flat array
+_K, _A, _B, _H, _Z, _U, _DZ, _DU, _TAU, _SIZE, _LOGPREV, _REJ, _ATTN, _ACC = range(14)
+_ZE, _UE, _DZE, _DUE, _LWE, _HN, _LERR, _NSTEP, _TENTH, _WPEAK = range(14, 24)
+_STAGES = 24
+"""Stage j = 2..6 of the step under way: dz_j at _STAGES + 2 (j - 2), du_j next to it."""
+_N_FIELDS = _STAGES + 2 * 5
+_LN2 = math.log(2.0)
+_Q1 = DP5.error_order + 1
+_DP5_STAGES = DP5.stages
+
+
+@njit(inline="always", fastmath=FAST, error_model="numpy")
+def rate(z, u, k, a, b):
+    """(z', u', ln xi') of the quasi-static driven equations with the aging law
+    (:func:`sweep.integrate.models.driven.make_driven_rhs`), with the vectorisable exponential."""
+    lw = k * z - u * (a + b * u) - u
+    e = exp_f64(min(lw, EXP_MAX))
+    return 1.0 - e, exp_f64(min(-u, EXP_MAX)) - e, lw
+
+
+def _attempt_source() -> str:
+    """Source of attempt_all(st, rtol, pert, max_steps): one dp5 attempt of every lane (module docstring)."""
+    _, A, b, e = DP5.arrays()
+    W = LANES
+    f = lambda field: f"st[{field * W} + l]"  # noqa: E731
+
+    def d(comp: int, j: int) -> str:  # the derivative of stage j (1-based): first in locals, then stage fields
+        if j == 1:
+            return ("dz1", "du1")[comp]
+        if j == 7:
+            return ("dze", "due")[comp]
+        return f(_STAGES + 2 * (j - 2) + comp)
+
+    def combo(weights, comp: int, count: int) -> str:
+        return " + ".join(f"{float(weights[j])!r} * {d(comp, j + 1)}" for j in range(count) if weights[j] != 0.0)
+
+    head = ["    for l in range(W):",
+            f"        k, a, bb, h = {f(_K)}, {f(_A)}, {f(_B)}, {f(_H)}",
+            f"        z1, u1, dz1, du1 = {f(_Z)}, {f(_U)}, {f(_DZ)}, {f(_DU)}"]
+    lines = ["def attempt_all(st, rtol, pert, max_steps):"]
+    for i in range(2, 7):
+        lines += head + [
+            f"        zi = z1 + h * ({combo(A[i - 1], 0, i - 1)})",
+            f"        ui = u1 + h * ({combo(A[i - 1], 1, i - 1)})",
+            "        dzi, dui, lwi = rate(zi, ui, k, a, bb)",
+            f"        {f(_STAGES + 2 * (i - 2))}, {f(_STAGES + 2 * (i - 2) + 1)} = dzi, dui"]
+    lines += head + [
+        f"        ze = z1 + h * ({combo(b, 0, 6)})",
+        f"        ue = u1 + h * ({combo(b, 1, 6)})",
+        "        dze, due, lwe = rate(ze, ue, k, a, bb)",
+        f"        ez = h * ({combo(e, 0, 7)})",
+        f"        eu = h * ({combo(e, 1, 7)})",
+        f"        size, tau, logprev, rej = {f(_SIZE)}, {f(_TAU)}, {f(_LOGPREV)}, {f(_REJ)}",
+        # the driver's norm: NaN anywhere (a stage beyond the exponent clamp) rejects with the non-finite factor
+        "        finite = ze == ze and ue == ue and ez == ez and eu == eu",
+        "        err = max(abs(ez), abs(eu)) / (rtol * max(size, max(abs(ze), abs(ue))))",
+        "        err = err if finite else one",
+        "        accept = finite and err <= one",
+        "        lerr = _log2_approx(max(err, err_floor))",
+        "        f_pi = min(max_factor, max(min_factor, safety * exp_f64(pi_now * lerr + pi_prev * logprev)))",
+        "        f_pi = min(f_pi, one) if rej > half else f_pi",
+        "        f_i = min(one, max(min_factor, safety * exp_f64(i_now * lerr)))",
+        "        hn = h * (f_pi if accept else (f_i if finite else nonfinite_factor))",
+        # where the scalar bookkeeping must look (module docstring)
+        "        norm = max(abs(ze), abs(ue))",
+        "        turn = (dz1 > zero and dze <= zero) or (dz1 < zero and dze >= zero)",
+        f"        first_tenth = norm < tenth * pert and {f(_TENTH)} == zero",
+        "        event = turn or lwe > w_runaway or norm < decayed * pert or first_tenth",
+        f"        n = {f(_NSTEP)} + one",
+        "        attn = (accept and event) or n >= max_steps or (not accept and hn < h_floor * (one + tau))",
+        "        commit = accept and not attn",
+        f"        {f(_NSTEP)} = n",
+        f"        {f(_Z)}, {f(_U)} = (ze, ue) if commit else (z1, u1)",
+        f"        {f(_DZ)}, {f(_DU)} = (dze, due) if commit else (dz1, du1)",
+        f"        {f(_TAU)} = tau + h if commit else tau",
+        f"        {f(_SIZE)} = max(size, abs(ze)) if commit else size",
+        f"        {f(_WPEAK)} = max({f(_WPEAK)}, lwe) if commit else {f(_WPEAK)}",
+        f"        {f(_LOGPREV)} = lerr if commit else logprev",
+        f"        {f(_H)} = h if (accept and attn) else hn",
+        f"        {f(_REJ)} = zero if commit else (one if not accept else rej)",
+        f"        {f(_ATTN)} = one if attn else zero",
+        f"        {f(_ACC)} = one if accept else zero",
+        f"        {f(_ZE)}, {f(_UE)}, {f(_DZE)}, {f(_DUE)}, {f(_LWE)} = ze, ue, dze, due, lwe",
+        f"        {f(_HN)}, {f(_LERR)} = hn, lerr",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+@functools.cache
+def _attempt():
+    """attempt_all(st, rtol, pert, max_steps), compiled (inlined by LLVM into the lane driver)."""
+    namespace = {"rate": rate, "exp_f64": exp_f64, "_log2_approx": _log2_approx, "W": LANES, "one": 1.0,
+                 "zero": 0.0, "half": 0.5, "tenth": 0.1, "decayed": DECAYED, "w_runaway": W_RUNAWAY,
+                 "h_floor": H_FLOOR, "err_floor": ERR_FLOOR, "safety": SAFETY, "max_factor": MAX_FACTOR,
+                 "min_factor": MIN_FACTOR, "nonfinite_factor": NONFINITE_FACTOR,
+                 # err^(-alpha/q1) err_prev^(beta/q1) and err^(-1/q1) as exp of multiples of log2
+                 "pi_now": -_LN2 * PI_CONTROLLER.alpha / _Q1, "pi_prev": _LN2 * PI_CONTROLLER.beta / _Q1,
+                 "i_now": -_LN2 / _Q1, "__name__": __name__}
+    exec(compile(_attempt_source(), "<sweep.integrate.lanes_driven: dp5>", "exec"), namespace)
+    return pin(njit(forceinline=True, fastmath=FAST, error_model="numpy")(namespace["attempt_all"]), "dp5")
+
+
+class DrivenPoints(NamedTuple):
+    """Reduced parameters of the flat points (k = chi/A, a = mu1/A, b = m2/A)."""
+
+    k: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+
+
+class DrivenJob(NamedTuple):
+    """The points to run (indices into :class:`DrivenPoints` and the outputs) and the scene's settings
+    (:class:`sweep.integrate.driven.DrivenSettings`)."""
+
+    point: np.ndarray
+    perturbation: float
+    rtol: float
+    max_cycles: int
+    max_steps: int
+
+
+class _Lanes(NamedTuple):
+    """Per-lane cycle bookkeeping (scalar: touched at extrema only)."""
+
+    amp: np.ndarray
+    per: np.ndarray
+    grow: np.ndarray
+    z_min: np.ndarray
+    t_max_prev: np.ndarray
+    amp_first: np.ndarray
+    a_start: np.ndarray
+    norm_tenth: np.ndarray
+    t_tenth: np.ndarray
+    cycles: np.ndarray
+
+
+@functools.cache
+def _make_kernels():
+    attempt_all = _attempt()
+    _, _, extremum = scalar_parts("aging", False)
+    W = LANES
+
+    @njit(inline="always", fastmath=FAST, error_model="numpy")
+    def load(st, bk, lane, k, a, b, pert):
+        st[_K * W + lane], st[_A * W + lane], st[_B * W + lane] = k, a, b
+        st[_Z * W + lane], st[_U * W + lane] = pert, 0.0
+        dz, du, _ = rate(pert, 0.0, k, a, b)
+        st[_DZ * W + lane], st[_DU * W + lane] = dz, du
+        st[_H * W + lane] = H_START / (1.0 + k)
+        st[_TAU * W + lane], st[_SIZE * W + lane] = 0.0, pert
+        st[_LOGPREV * W + lane] = _log2_approx(1e-4)  # the driver's first err_prev
+        st[_REJ * W + lane], st[_NSTEP * W + lane], st[_TENTH * W + lane] = 0.0, 0.0, 0.0
+        st[_WPEAK * W + lane] = -math.inf
+        for i in range(HISTORY):
+            bk.amp[lane, i], bk.per[lane, i], bk.grow[lane, i] = math.nan, math.nan, math.nan
+        bk.z_min[lane], bk.t_max_prev[lane], bk.amp_first[lane] = math.inf, math.nan, math.nan
+        bk.a_start[lane] = _linear_amplitude(DrivenParams(k, a, b, 0.0), pert)
+        bk.norm_tenth[lane], bk.t_tenth[lane], bk.cycles[lane] = math.nan, math.nan, 0
+
+    @njit(inline="always", fastmath=FAST, error_model="numpy")
+    def finish(out, i, regime, status, grow, per, amplitude, cycles, steps, w_peak):
+        out.regime[i], out.status[i], out.growth_rate[i], out.period[i] = regime, status, grow, per
+        out.amplitude[i], out.cycles[i], out.steps[i], out.peak_w[i] = amplitude, cycles, steps, w_peak
+
+    @njit(fastmath=FAST, error_model="numpy")
+    def look(st, bk, lane, i, job, out, y0, K, ys, yt, err_v, work, dyt):
+        """The scalar bookkeeping of a lane whose attention flag is up (the driver's loop body after the error
+        test); True where the point is finished (its outputs written)."""
+        pert = job.perturbation
+        tau, h = st[_TAU * W + lane], st[_H * W + lane]
+        steps = int(st[_NSTEP * W + lane])
+        amp, per, grow = bk.amp[lane], bk.per[lane], bk.grow[lane]
+        cycles = bk.cycles[lane]
+        w_peak = st[_WPEAK * W + lane]
+        if st[_ACC * W + lane] == 0.0:  # rejected: below the step floor, or the budget spent
+            if st[_H * W + lane] < H_FLOOR * (1.0 + tau):
+                finish(out, i, Regime.UNDECIDED, STEP_UNDERFLOW, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
+                return True
+        else:
+            ze, ue, dz1, lw1 = st[_ZE * W + lane], st[_UE * W + lane], st[_DZE * W + lane], st[_LWE * W + lane]
+            w_peak = max(w_peak, lw1)
+            if lw1 > W_RUNAWAY:
+                finish(out, i, Regime.RUNAWAY, BREAKDOWN, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
+                return True
+            norm = max(abs(ze), abs(ue))
+            if norm < DECAYED * pert:
+                if not math.isfinite(grow[-1]):
+                    grow[-1] = math.log(norm / bk.norm_tenth[lane]) / (tau + h - bk.t_tenth[lane])
+                finish(out, i, Regime.STEADY, OK, grow[-1], per[-1], 0.0, cycles, steps, w_peak)
+                return True
+            if norm < 0.1 * pert and not math.isfinite(bk.t_tenth[lane]):
+                bk.norm_tenth[lane], bk.t_tenth[lane] = norm, tau + h
+                st[_TENTH * W + lane] = 1.0
+            dz = st[_DZ * W + lane]
+            p = DrivenParams(st[_K * W + lane], st[_A * W + lane], st[_B * W + lane], 0.0)
+            y0[0], y0[1] = st[_Z * W + lane], st[_U * W + lane]
+            if dz > 0.0 and dz1 <= 0.0:  # a maximum of z: a cycle ends
+                dt, z_top = extremum(False, y0, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
+                t_peak = tau + dt
+                if bk.z_min[lane] < math.inf and math.isfinite(bk.t_max_prev[lane]):
+                    cycles += 1
+                    bk.cycles[lane] = cycles
+                    for m in range(HISTORY - 1):
+                        amp[m], per[m], grow[m] = amp[m + 1], per[m + 1], grow[m + 1]
+                    amp[-1], per[-1] = 0.5 * (z_top - bk.z_min[lane]), t_peak - bk.t_max_prev[lane]
+                    grow[-1] = math.log(amp[-1] / amp[-2]) / per[-1] if amp[-2] > 0.0 else math.nan
+                    if cycles == 1:
+                        bk.amp_first[lane] = amp[-1]
+                    regime = _decide(amp, grow, pert, bk.amp_first[lane], bk.a_start[lane], cycles)
+                    if regime != Regime.UNDECIDED:
+                        amplitude = 0.0 if regime == Regime.STEADY else amp[-1]
+                        finish(out, i, regime, OK, grow[-1], per[-1], amplitude, cycles, steps, w_peak)
+                        return True
+                    if cycles >= job.max_cycles:
+                        finish(out, i, Regime.UNDECIDED, OK, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
+                        return True
+                bk.t_max_prev[lane] = t_peak
+            elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
+                bk.z_min[lane] = extremum(False, y0, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
+            # the accepted step, committed
+            st[_Z * W + lane], st[_U * W + lane] = ze, ue
+            st[_DZ * W + lane], st[_DU * W + lane] = dz1, st[_DUE * W + lane]
+            st[_TAU * W + lane] = tau + h
+            st[_SIZE * W + lane] = max(st[_SIZE * W + lane], abs(ze))
+            st[_WPEAK * W + lane] = w_peak
+            st[_LOGPREV * W + lane] = st[_LERR * W + lane]
+            st[_H * W + lane] = st[_HN * W + lane]
+            st[_REJ * W + lane] = 0.0
+        if steps >= job.max_steps:
+            finish(out, i, Regime.UNDECIDED, MAX_STEPS, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
+            return True
+        return False
+
+    @njit(cache=True, nogil=True, fastmath=FAST, error_model="numpy")
+    def run_lanes(pts, job, runs, out):
+        """The points job.point[runs] to their regimes, into ``out`` (a DrivenOutputs over all points)."""
+        st = np.zeros(_N_FIELDS * W)
+        bk = _Lanes(np.full((W, HISTORY), np.nan), np.full((W, HISTORY), np.nan), np.full((W, HISTORY), np.nan),
+                    np.full(W, math.inf), np.full(W, np.nan), np.full(W, np.nan), np.full(W, np.nan),
+                    np.full(W, np.nan), np.full(W, np.nan), np.zeros(W, np.int64))
+        lane_point = np.full(W, -1, np.int64)
+        y0, ys, yt, err_v, dyt = np.empty(2), np.empty(2), np.empty(2), np.empty(2), np.empty(2)
+        K = np.empty((_DP5_STAGES, 2))
+        work = scratch(2)
+        pert, rtol = job.perturbation, job.rtol
+        max_steps = float(job.max_steps)
+        queued, busy = 0, 0
+        for lane in range(W):
+            if queued < runs.size:
+                i = job.point[runs[queued]]
+                load(st, bk, lane, pts.k[i], pts.a[i], pts.b[i], pert)
+                lane_point[lane] = i
+                queued += 1
+                busy += 1
+            else:
+                load(st, bk, lane, 1.0, 0.5, 0.0, pert)  # an idle dummy (steady sliding, stable)
+        while busy > 0:
+            attempt_all(st, rtol, pert, max_steps)
+            for lane in range(W):
+                if st[_ATTN * W + lane] == 0.0:
+                    continue
+                i = lane_point[lane]
+                if i < 0:  # an idle dummy: restart it, never look
+                    load(st, bk, lane, 1.0, 0.5, 0.0, pert)
+                    continue
+                if not look(st, bk, lane, i, job, out, y0, K, ys, yt, err_v, work, dyt):
+                    continue
+                if queued < runs.size:
+                    i = job.point[runs[queued]]
+                    load(st, bk, lane, pts.k[i], pts.a[i], pts.b[i], pert)
+                    lane_point[lane] = i
+                    queued += 1
+                else:
+                    load(st, bk, lane, 1.0, 0.5, 0.0, pert)
+                    lane_point[lane] = -1
+                    busy -= 1
+
+    for kernel in (load, finish, look, run_lanes):
+        pin(kernel, "aging", "quasistatic", W)
+    return run_lanes, lanes_in_threads(run_lanes, W)
+
+
+def driven_lanes():
+    """(run_lanes, run_batch): quasi-static driven points with the aging law in lanes. run_batch(pts, job, groups,
+    out) runs every point of ``job`` (:class:`DrivenJob`, over :class:`DrivenPoints`) into ``out``
+    (:class:`sweep.integrate.driven.DrivenOutputs`, indexed by point) in ``groups`` strided groups on
+    numba.get_num_threads() threads (:func:`sweep.integrate.batch.lanes_in_threads`)."""
+    return _make_kernels()
+
+
+pin_module(__name__)
