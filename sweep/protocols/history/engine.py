@@ -15,6 +15,7 @@ from ...accuracy import TIGHTER
 from ...plan.plan import point_params
 from ...scene.scene import Scene
 from ...status import Status
+from .healing import healing_rate, hold_before, is_series
 from .inertial import inertial_points, run_inertial
 from .sampled import friction_samples, read_samples
 from .segments import reduced_durations, segment_values
@@ -59,6 +60,8 @@ class HistoryPlan:
     inertial: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
     """Per point: run with inertia (sweep.protocols.history.inertial.inertial_points)."""
     model: str = "quasistatic"
+    healing: bool = False
+    """Whether the chunk yields the healing rate beta (the history is a slide-hold-slide series, healing.is_series)."""
 
     @property
     def n_points(self) -> int:
@@ -96,7 +99,8 @@ def history_plan(scene: Scene) -> HistoryPlan:
                        chunk_size=DEFAULT_CHUNK, scale=V / D0,
                        t_obs=np.asarray(scene.options.get("t_obs", ()) if "mu_t" in scene.observables else (), float),
                        G=pts.G, inertial=inertial_points(scene.model, pts.G, table["V_ratio"], scene.model_tol),
-                       model=scene.model)
+                       model=scene.model,
+                       healing="delta_mu_peak" in scene.observables and is_series(scene.options.segments))
 
 
 def _run(plan: HistoryPlan, points: np.ndarray, tol: float) -> dict[str, np.ndarray]:
@@ -156,7 +160,8 @@ def _add_samples(out: dict[str, np.ndarray], samples: dict[str, np.ndarray]) -> 
 
 def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dict[str, np.ndarray]]:
     """compute(points) -> per-point arrays (observables and their errors (points, segments); mu_t and its error
-    (points, times) where asked for; status, steps)."""
+    (points, times) where asked for; the healing rate beta and its error of a slide-hold-slide series; model,
+    status, steps)."""
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
         inert = plan.inertial[points]
@@ -169,6 +174,9 @@ def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dic
             for name, x in part.items():
                 out[name][rows] = x
         out["model"] = inert.astype(np.int8)
+        if plan.healing:
+            t_hold = hold_before(plan.ratios[points], plan.durations[points] / plan.scale[points, None])
+            out["beta"], out["beta_error"] = healing_rate(out["delta_mu_peak"], out["delta_mu_peak_error"], t_hold)
         return out
 
     return compute

@@ -11,6 +11,7 @@ from ...assemble.dataset import global_attrs, grid_coords, variable
 from ...scene.scene import Scene
 from ...status import MODEL_FLAG, flag_attrs
 from .engine import OBSERVABLES
+from .healing import is_series
 
 __all__ = ["history_attributes", "history_coords", "history_variables"]
 
@@ -40,6 +41,11 @@ def history_variables(scene: Scene, out: dict[str, np.ndarray]) -> dict[str, xr.
                                   ancillary_variables=f"{name}_error")
             data[f"{name}_error"] = variable(seg_dims, per_seg(out[f"{name}_error"]), "1",
                                              f"estimated absolute numerical error of {name} (pair of tolerances)")
+    if "delta_mu_peak" in scene.observables and is_series(scene.options.segments):  # healing.py
+        data["beta"] = variable(dims, grid(out["beta"]), "1", "healing rate d delta_mu_peak / d log10 t_hold (least "
+                                "squares over the point's holds)", ancillary_variables="beta_error")
+        data["beta_error"] = variable(dims, grid(out["beta_error"]), "1", "estimated absolute numerical error of "
+                                      "beta (from delta_mu_peak_error)")
     if "mu_t" in scene.observables:  # mu at the times t_obs (sweep/protocols/history/sampled.py)
         per_t = lambda a: a.reshape((*scene.shape, len(scene.options.t_obs)))  # noqa: E731
         data["mu_t"] = variable((*dims, "t_obs"), per_t(out["mu_t"]), "1", "friction coefficient at the time t_obs "
