@@ -133,7 +133,7 @@ def _dry_run(scene, size, output: Path) -> int:
     from .write.targets import check_free_space, existing_folder
 
     protocol = protocols.get(scene.protocol)
-    axes = " x ".join(f"{n} {name}" for n, name in zip(scene.shape, ("K/M", "V", *scene.dims[2:])))
+    axes = " x ".join(f"{n} {'K/M' if d == 'K_over_M' else d}" for n, d in zip(scene.shape, scene.dims))
     print(f"{'grid':>28}: {axes} = {scene.n_points:,} points, "
           + (f"rtol {scene.rtol:g}, " if protocol.warm_up_timed else "")
           + f"observables {', '.join(scene.observables)}")
@@ -227,7 +227,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
     print(f"  source: {ds.attrs.get('source', '?')}")
     print(f"  history: {ds.attrs.get('history', '?')}")
     print("  dims: " + ", ".join(f"{k}={v}" for k, v in ds.sizes.items()))
-    for name in ("K_over_M", "V"):
+    for name in ds["status"].dims if "status" in ds.data_vars else ("K_over_M", "V"):  # the grid's axes
         if name in ds.dims:
             c = ds[name]
             print(f"  {name}: {float(c.min()):.4g} .. {float(c.max()):.4g} [{c.attrs.get('units', '?')}]")

@@ -126,7 +126,7 @@ def check_fits(scene: Scene, size: RunSize) -> None:
     split = (f"split the K_over_M axis into {math.ceil(n_k / k_rows)} scenes of at most {k_rows} values each (one "
              f"file each)" if k_rows >= 1 else
              f"split the grid into scenes of at most {fit:,} points each (one file each)")
-    shape = " x ".join(f"{n} {name}" for n, name in zip(scene.shape, ("K/M", "V", *scene.dims[2:])))
+    shape = " x ".join(f"{n} {'K/M' if d == 'K_over_M' else d}" for n, d in zip(scene.shape, scene.dims))
     raise InputError(f"the grid of {size.points:,} points ({shape}) needs ~{human_bytes(size.memory)} of "
                      f"memory (estimated from its shape), {human_bytes(available)} available: {split}, or give it an "
                      f"output file (output=..., whose run holds only its chunks in memory), or run it on a machine "
