@@ -44,7 +44,7 @@ def plot_file(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = No
     if kind == "hopf":
         check_map_variable(ds, variable)
         return [plot_hopf(ds, path)]
-    return protocols.get(kind).draw(ds if kind == "history" else as_K_over_M(ds), path, variable)  # history: any axes
+    return protocols.get(kind).draw(ds, path, variable)
 
 
 def as_K_over_M(ds: xr.Dataset) -> xr.Dataset:

@@ -98,3 +98,17 @@ def test_driven_scene_and_hopf_line_accept_lab_params(tmp_path):
     path.write_text('[params]\n' + LAB + GRID)
     params, V, _ = hopf_config(path)
     assert params == sc.params and list(V) == [1e-6, 2e-6]
+
+
+def test_stop_files_over_k_and_over_a_b_are_drawn(tmp_path):
+    """sweep plot of a stop file over k draws its maps over K/M = k g; over (a, b) its slices."""
+    from sweep.cli import main
+
+    lab = sweep.FrictionParams.from_lab(a=0.007, b=0.0195, Dc=0.7e-6)
+    for name, kw in (("k", dict(K_over_M=None, axes={"k": [1e3, 1e4]})),
+                     ("ab", dict(K_over_M=[1e4, 2e4], axes={"a": [0.005, 0.007], "b": [0.01, 0.02]}))):
+        sc = sweep.Scene(protocol="stop", params=lab, V=[1e-6, 2e-6], **kw)
+        out = tmp_path / f"{name}.nc"
+        sweep.run_sweep(sc, progress=False, output=out)
+        assert main(["plot", str(out), "-o", str(tmp_path / f"{name}.png")]) == 0
+        assert (tmp_path / f"{name}.png").stat().st_size > 10_000

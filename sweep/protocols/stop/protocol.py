@@ -259,9 +259,10 @@ class StopProtocol(Protocol):
     def draw(self, ds: xr.Dataset, path: str | Path, variable: str | None = None) -> list[Path]:
         """The relaxation landscape (slices along the extra axes where the file has them) and, where the file holds
         transients, the transients of up to six points."""
-        from ...plot.files import has_trajectories, plot_extra_axes, plot_landscape, plot_trajectories
+        from ...plot.files import as_K_over_M, has_trajectories, plot_extra_axes, plot_landscape, plot_trajectories
         from ...plot.slices import extra_dims
 
+        ds = as_K_over_M(ds)  # a grid over the laboratory's k [1/m] is drawn over K/M = k g
         if extra_dims(ds):
             return plot_extra_axes(ds, Path(path), variable)
         pictures = self.picture_paths(path, has_trajectories(ds), ds.sizes.get("K_over_M", 1) * ds.sizes.get("V", 1),
