@@ -44,6 +44,7 @@ KEYS = {
     "end_to_end": {"benchmark", "quick", "machine", "scene", "runs", "best", "ratio_total_over_kernel", "target"},
     "error_coverage": {"benchmark", "quick", "machine", "rows"},
     "fit": {"benchmark", "machine", "settings", "one_curve", "many_curves", "scipy", "ratio_per_curve", "side_by_side"},
+    "history": {"benchmark", "quick", "machine", "shs_point", "forward", "grid", "targets"},
     "hopf": {"benchmark", "quick", "machine", "line", "inertial_line", "inertial_driven_deep_stick_slip",
              "driven_grid", "driven_grid_auto"},
     "models": {"benchmark", "quick", "machine", "cost", "accuracy_inertia_scene_model_tol_1e-2",
