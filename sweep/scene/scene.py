@@ -209,7 +209,8 @@ class Scene:
                 raise InputError("K_over_M is missing: give K_over_M [s-2] or the laboratory's stiffness as "
                                  "axes={'k': [...]} [1/m]")
             set_("K_over_M", _axis(STIFFNESS_AXIS, self.axes[STIFFNESS_AXIS]) * self.params.g)
-        elif isinstance(self.axes, Mapping) and STIFFNESS_AXIS in self.axes:
+        elif isinstance(self.axes, Mapping) and STIFFNESS_AXIS in self.axes and not _same_numbers(
+                self.K_over_M, np.multiply(self.axes[STIFFNESS_AXIS], self.params.g)):  # (a replace()d scene's own)
             raise InputError("the stiffness is given twice: give K_over_M [s-2] or the axis k [1/m] "
                              "(K/M = k g), not both (K_over_M=None with axes={'k': ...})")
         else:
@@ -478,6 +479,13 @@ def _differs(value: Any, default: Any) -> bool:
         return not np.array_equal(np.asarray(value, dtype=object), np.asarray(default, dtype=object))
     except (TypeError, ValueError):
         return True
+
+
+def _same_numbers(x: Any, y: Any) -> bool:
+    try:
+        return bool(np.array_equal(np.asarray(x, float), np.asarray(y, float)))
+    except (TypeError, ValueError):
+        return False
 
 
 def _times(name: str, values: Sequence[float]) -> np.ndarray:

@@ -112,3 +112,12 @@ def test_stop_files_over_k_and_over_a_b_are_drawn(tmp_path):
         sweep.run_sweep(sc, progress=False, output=out)
         assert main(["plot", str(out), "-o", str(tmp_path / f"{name}.png")]) == 0
         assert (tmp_path / f"{name}.png").stat().st_size > 10_000
+
+
+def test_a_scene_over_k_survives_dataclasses_replace():
+    import dataclasses
+
+    sc = sweep.Scene(protocol="stop", params=sweep.FrictionParams.from_lab(a=0.007, b=0.0195, Dc=1e-6),
+                     K_over_M=None, V=[1e-6], axes={"k": [1e3, 1e4]})
+    again = dataclasses.replace(sc, rtol=1e-5)
+    assert again.dims == ("k", "V") and np.array_equal(again.K_over_M, sc.K_over_M) and again.rtol == 1e-5
