@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from reference_history import history_reference_at
+from reference_history import history_reference_at, inertial_reference_at
 
 import sweep
 from sweep.errors import InputError
@@ -97,11 +97,28 @@ def test_steady_sliding_stays_at_mu_ss_and_a_step_reaches_the_analytic_jump():
 def test_status_flags_inertia_and_step_budget():
     p = params_of(LAB, 1e3)
     # gamma/A = v^2/(g D0 A) at 30 um/s: 9e-4 with D0 = 10 um, 0.9 with D0 = 10 nm (k > (b - a)/Dc: stable)
-    fast = friction_at({**p, "D0": [1e-5, 1e-8], "K_over_M": [1e3 * 9.81, 1e6 * 9.81]},
-                       LoadHistory(np.array([1e-5, 3e-5]), np.array([1.0, 1.0])), [0.0, 2.0])
-    assert fast.status.tolist() == [Status.OK, Status.QUASISTATIC_BREAKDOWN]
+    sets = {**p, "D0": [1e-5, 1e-8], "K_over_M": [1e3 * 9.81, 1e6 * 9.81]}
+    load = LoadHistory(np.array([1e-5, 3e-5]), np.array([1.0, 1.0]))
+    fast = friction_at(sets, load, [0.0, 2.0])
+    assert fast.status.tolist() == [Status.OK, Status.OK] and fast.model.tolist() == [0, 1]
+    slip = friction_at(sets, load, [0.0, 2.0], state_law="slip")  # no inertial slip law: flagged
+    assert slip.status.tolist() == [Status.OK, Status.QUASISTATIC_BREAKDOWN] and slip.model.tolist() == [0, 0]
     short = friction_at(p, SHS, [0.0, 50.0, SHS.total], max_steps=20)
     assert short.status.tolist() == [Status.MAX_STEPS] and np.isnan(short.mu[0, -1])
+
+
+def test_inertial_sets_against_newtons_law():
+    """Where gamma/A > INERTIA_LIMIT the set runs with inertia: against Newton's law integrated by Radau
+    (tests/reference_history.inertial_reference_at), a step up, a hold and a reslide at gamma/A = 0.1..0.9."""
+    fp = sweep.FrictionParams(A=0.01, m1=0.005, m2=0.0, D0=1e-6, m0=0.6)
+    load = LoadHistory(np.array([1e-4, 3e-4, 0.0, 1e-4]), np.array([0.05, 0.05, 0.2, 0.1]))
+    t = sample_times(load, 40, seed=4)
+    ref, _ = inertial_reference_at(fp.A, fp.m1, fp.m2, fp.D0, 2e4 * 9.81, load.velocities, load.durations, t,
+                                   m0=fp.m0)
+    out = friction_at(params_of(fp, 2e4), load, t, rtol=1e-6)
+    assert out.model.tolist() == [1] and out.status.tolist() == [Status.OK]
+    assert np.abs(out.mu[0] - ref).max() <= 1e-6 * fp.A * 3
+    assert np.abs(out.mu[0] - ref).max() <= out.error.max()
 
 
 @pytest.mark.parametrize(("kwargs", "field"), [

@@ -25,8 +25,9 @@ __all__ = ["INERTIA_LIMIT", "PARAMS", "FrictionSamples", "LoadHistory", "frictio
 PARAMS = ("A", "m1", "m2", "D0", "m0", "V0", "K_over_M")
 """The parameters friction_at needs (``g`` optional, 9.81 m s-2)."""
 INERTIA_LIMIT = 0.01
-"""gamma/A = v^2/(g D0 A) at the fastest segment above which inertia would matter: such a set's status is
-quasistatic_breakdown (its values are the quasi-static model's, kept for inspection)."""
+"""gamma/A = v^2/(g D0 A) at the fastest segment above which inertia matters: such a set runs the inertial model
+(aging law); with the slip law, which has none, its status is quasistatic_breakdown (quasi-static values kept for
+inspection)."""
 RTOL_RANGE = (1e-10, 1e-2)
 
 
@@ -85,6 +86,8 @@ class FrictionSamples:
     the fastest segment)."""
     steps: np.ndarray
     """(n_sets,) accepted and rejected steps of both runs."""
+    model: np.ndarray | None = None
+    """(n_sets,) int8: 0 the quasi-static model, 1 the inertial one (sweep.status.MODEL_FLAG)."""
 
 
 def _params(params: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
@@ -130,11 +133,12 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
     ``params``: A, m1, m2 [1], D0 [m], m0 [1], V0 [m/s] (paper eqs. 1, 6), K_over_M [s-2] (and g [m s-2], 9.81
     unless given), each a number or an array; they broadcast to (n_sets,). The history starts in steady sliding at
     velocities[0] with the spring stretched ``stretch`` [m] beyond it (mu raised by K/(M g) x stretch). The
-    quasi-static equations of docs/physics.md 7b; ``state_law`` "aging" or "slip". ``rtol``: the relative accuracy
-    asked of mu in units of (|mu| + A); ``max_steps``: the step budget of one run over all segments.
+    quasi-static equations of docs/physics.md 7b, or with inertia (aging law) for the sets where gamma/A at the
+    fastest segment exceeds INERTIA_LIMIT (``model`` of the result); ``state_law`` "aging" or "slip". ``rtol``: the
+    relative accuracy asked of mu in units of (|mu| + A); ``max_steps``: the step budget of one run over all
+    segments.
     """
     from ...integrate.models.history import LAW_CODES
-    from .sampled import two_runs
 
     if state_law not in LAW_CODES:
         raise InputError(f"state_law must be one of {sorted(LAW_CODES)}, got {state_law!r}")
@@ -162,8 +166,37 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
     durations = np.tile(load.durations, (A.size, 1))
     mu_ref = np.asarray(physics.mu_d(V, p["m0"], p["m1"], p["m2"], p["V0"]), float).reshape(-1)
 
-    out = two_runs(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, times, rtol, max_steps)
+    G = V**2 / (p["g"] * p["D0"]) / A  # gamma/A at V
+    inertial = G * np.max(ratios[0]) ** 2 > INERTIA_LIMIT
+    quasistatic = np.flatnonzero(~inertial if state_law == "aging" else np.ones(A.size, bool))
+    out = {"mu_t": np.full((A.size, times.size), np.nan), "mu_t_error": np.full((A.size, times.size), np.nan),
+           "status": np.zeros(A.size, np.int8), "steps": np.zeros(A.size, np.int64)}
+    for rows, run in ((quasistatic, _quasistatic), (np.setdiff1d(np.arange(A.size), quasistatic), _inertial)):
+        if rows.size:
+            part = run(k[rows], a[rows], b[rows], A[rows], mu_ref[rows], state_law, s_kick[rows], ratios[rows],
+                       durations[rows], scale[rows], G[rows], times, rtol, max_steps)
+            for name, x in part.items():
+                out[name][rows] = x
     status = out["status"]
-    gamma = np.max(load.velocities) ** 2 / (p["g"] * p["D0"])
-    status[(status == Status.OK) & (gamma / A > INERTIA_LIMIT)] = Status.QUASISTATIC_BREAKDOWN
-    return FrictionSamples(mu=out["mu_t"], error=out["mu_t_error"], status=status, steps=out["steps"])
+    if state_law != "aging":
+        status[(status == Status.OK) & inertial] = Status.QUASISTATIC_BREAKDOWN
+    model = (inertial & (state_law == "aging")).astype(np.int8)
+    return FrictionSamples(mu=out["mu_t"], error=out["mu_t_error"], status=status, steps=out["steps"], model=model)
+
+
+def _quasistatic(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, G, times, rtol, max_steps):
+    from .sampled import two_runs
+
+    return two_runs(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, times, rtol, max_steps)
+
+
+def _inertial(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, G, times, rtol, max_steps):
+    """The inertial pair (aging law) at rtol/TIGHTER and rtol/TIGHTER^2, read off as the quasi-static pair."""
+    from ...accuracy import TIGHTER
+    from .inertial import inertial_samples
+    from .sampled import read_samples
+
+    reduced = np.ascontiguousarray(durations * scale[:, None])
+    (s1, st1, n1), (s2, st2, n2) = (inertial_samples(k, a, b, G, s_kick, ratios, reduced, scale, times,
+                                                     rtol / TIGHTER**e, max_steps) for e in (1, 2))
+    return read_samples(s1, s2, st1, st2, A, mu_ref, rtol, n1 + n2)

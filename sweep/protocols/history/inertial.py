@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["inertial_points", "run_inertial"]
+__all__ = ["inertial_points", "inertial_samples", "run_inertial"]
 
 
 def inertial_points(model: str, G: np.ndarray, ratios: np.ndarray, model_tol: float) -> np.ndarray:
@@ -39,3 +39,20 @@ def run_inertial(plan, points: np.ndarray, tol: float) -> dict[str, np.ndarray]:
                            np.ascontiguousarray(plan.t_obs, dtype=float), tol, plan.max_steps, rec["s_start"],
                            rec["s_end"], rec["s_peak"], rec["steady"], rec["s_t"], status, steps)
     return {**rec, "status": status, "steps": steps}
+
+
+def inertial_samples(k, a, b, G, s_kick, ratios, durations, scale, times, tol: float, max_steps: int
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """s at the sorted physical ``times`` [s] of one inertial run per set (k, a, b, G = gamma/A at the reference
+    velocity V, s_kick, scale = V/D0 per set; ratios and reduced durations (sets, segments)) at the local tolerance
+    ``tol``: (s (sets, times), status, steps)."""
+    from ...integrate.history_inertial import history_inertial_batch
+
+    n, m = k.size, ratios.shape[1]
+    rec = [np.full((n, m), np.nan) for _ in range(3)]
+    s_out = np.full((n, times.size), np.nan)
+    status, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
+    history_inertial_batch(k, a, b, G, s_kick, ratios, durations, scale, np.ascontiguousarray(times, dtype=float),
+                           tol, int(max_steps), *rec, np.zeros((n, m), np.int8), s_out, status, steps)
+    return s_out, status, steps
+
