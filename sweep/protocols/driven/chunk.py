@@ -44,8 +44,11 @@ def driven_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, n
             if not where.size:
                 continue
             if not with_inertia and scene.state_law in LANE_LAWS:
+                # nearest the line first (|mu1 - chi| small: slow transients, the longest points), so that they do
+                # not run alone at the end of a lane batch; a point's numbers do not depend on its lane or order
+                first = where[np.argsort(np.abs(a[where] - k[where]), kind="stable")]
                 _, run_batch = driven_lanes()
-                run_batch(DrivenPoints(k, a, b), DrivenJob(where, *settings), lane_groups(where.size), out)
+                run_batch(DrivenPoints(k, a, b), DrivenJob(first, *settings), lane_groups(where.size), out)
             else:
                 driven_batch(scene.state_law, with_inertia)(where, k, a, b, g, settings, out)
         return out._asdict()
