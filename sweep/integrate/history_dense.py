@@ -1,6 +1,7 @@
 """Load-history driver with dense output (docs/physics.md 7b): the friction of one point at given times of its
-history, from the Dormand-Prince 5(4) continuous extension, and the batch loop over parameter sets
-(sweep.protocols.history.forward).
+history, from the Dormand-Prince 5(4) continuous extension, with the per-segment records of
+sweep/integrate/history.py from the same steps; and the batch loop over parameter sets (a history scene's mu_t,
+sweep.protocols.history.forward).
 
 The equations, state (s, u), stepper, error norm and controller are those of :mod:`sweep.integrate.history`; the
 steps are not shortened to meet the sample times (only each segment's last step is cut to the segment's end). Inside
@@ -26,7 +27,7 @@ from numba import njit
 
 from ..jitcache import pin_module
 from . import history as dp
-from .history import H_FLOOR, MAX_FACTOR, MAX_STEPS, MIN_FACTOR, OK, SAFETY, STEP_UNDERFLOW
+from .history import H_FLOOR, MAX_FACTOR, MAX_STEPS, MIN_FACTOR, OK, SAFETY, STEADY_TOL, STEP_UNDERFLOW, _peak_in_step
 from .models.history import history_rates, steady_state
 from .solvers.fastmath import FAST
 
@@ -71,14 +72,18 @@ def _dense(y0, y1, hf1, hf7, dd, theta):
 
 
 @njit(fastmath=FAST, error_model="numpy")
-def history_dense_point(k, a, b, law, s_kick, ratios, durations, scale, times, tol, max_steps, s_out):
+def history_dense_point(k, a, b, law, s_kick, ratios, durations, scale, times, tol, max_steps, s_start, s_end, s_peak,
+                        steady, s_out):
     """Integrate one point through its segments (``ratios`` r_j; physical ``durations`` [s], reduced by ``scale``
     = V/D0 [1/s]) at the local tolerance ``tol`` from steady sliding at r_0 with s raised by ``s_kick``; writes s at
     the sorted physical ``times`` [s] from the history's start into ``s_out`` (NaN from a failure on, and at times
-    past the history's end by more than 1e-12 of its length) and returns (status, steps)."""
+    past the history's end by more than 1e-12 of its length), fills the per-segment records as
+    sweep.integrate.history.history_point does (same steps, so the same values) and returns (status, steps)."""
     n, m = ratios.size, times.size
     for i in range(m):
         s_out[i] = np.nan
+    for j in range(n):
+        s_start[j], s_end[j], s_peak[j], steady[j] = np.nan, np.nan, np.nan, 0
     s, u = steady_state(ratios[0], a, b)
     s += s_kick
     steps = 0
@@ -96,7 +101,9 @@ def history_dense_point(k, a, b, law, s_kick, ratios, durations, scale, times, t
         r, T = ratios[j], durations[j] * scale
         end = start + durations[j]
         final = j == n - 1
-        ds, du, _ = history_rates(s, u, r, k, a, b, law)
+        ds, du, w = history_rates(s, u, r, k, a, b, law)
+        s_start[j] = s
+        peak = s
         while i < m and times[i] <= start and (times[i] < end or final):  # samples at the segment's start
             s_out[i] = s
             i += 1
@@ -117,6 +124,8 @@ def history_dense_point(k, a, b, law, s_kick, ratios, durations, scale, times, t
                 if h < H_FLOOR * (1.0 + t):
                     return STEP_UNDERFLOW, steps
                 continue
+            if ds > 0.0 and ds_new <= 0.0:
+                peak = max(peak, _peak_in_step(s, u, ds, du, h, r, k, a, b, law))
             t_next = T if last else t + h
             # the samples inside this step (all the rest of the segment's on its last step)
             while i < m and (((times[i] - start) * scale <= t_next) or last) and (times[i] <= end or final):
@@ -125,19 +134,26 @@ def history_dense_point(k, a, b, law, s_kick, ratios, durations, scale, times, t
                 i += 1
             t = t_next
             s, u, ds, du = s_new, u_new, ds_new, du_new
+            peak = max(peak, s)
             if not last:
                 h *= min(MAX_FACTOR, max(MIN_FACTOR, SAFETY * max(err, 1e-10) ** -0.2))
+        w = history_rates(s, u, r, k, a, b, law)[2]
+        s_end[j], s_peak[j] = s, peak
+        if r > 0.0 and abs(w - math.log(r)) <= STEADY_TOL and abs(u + math.log(r)) <= STEADY_TOL:
+            steady[j] = 1
         start = end
     return OK, steps
 
 
 @njit(nogil=True, cache=True, fastmath=FAST, error_model="numpy")
-def history_dense_batch(k, a, b, law, s_kick, ratios, durations, scale, times, tol, max_steps, s_out, status, steps):
+def history_dense_batch(k, a, b, law, s_kick, ratios, durations, scale, times, tol, max_steps, s_start, s_end, s_peak,
+                        steady, s_out, status, steps):
     """:func:`history_dense_point` for every parameter set i: its k[i], a[i], b[i], s_kick[i], scale[i], segments
-    ratios[i, :] and physical durations[i, :] [s]; row s_out[i]. The sample times are shared."""
+    ratios[i, :] and physical durations[i, :] [s]; rows of the records and of s_out. The sample times are shared."""
     for i in range(k.size):
         status[i], steps[i] = history_dense_point(k[i], a[i], b[i], law, s_kick[i], ratios[i], durations[i], scale[i],
-                                                  times, tol, max_steps, s_out[i])
+                                                  times, tol, max_steps, s_start[i], s_end[i], s_peak[i], steady[i],
+                                                  s_out[i])
 
 
 pin_module(__name__)

@@ -1,7 +1,8 @@
 """The plan of a history scene and its chunks: per point the reduced inputs, two runs of the load-history driver
 (sweep/integrate/history.py) at local tolerances rtol/TIGHTER and rtol/TIGHTER^2, and the observables read off the
-tighter run, each with the difference to the looser run as its error estimate; where the scene asks for mu_t, two
-more runs of the dense-output driver for mu at the times t_obs (sweep/protocols/history/sampled.py)."""
+tighter run, each with the difference to the looser run as its error estimate; where the scene asks for mu_t, the
+runs are those of the dense-output driver, which also give mu at the times t_obs (sweep/protocols/history/sampled.py),
+and at the points that need inertia those of the inertial driver (sweep/protocols/history/inertial.py)."""
 
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ from ...scene.scene import Scene
 from ...status import Status
 from .healing import healing_rate, hold_before, is_series
 from .inertial import inertial_points, run_inertial
-from .sampled import friction_samples, read_samples
+from .sampled import read_samples, run_sampled
 from .segments import reduced_durations, segment_values
 
 __all__ = ["DEFAULT_CHUNK", "OBSERVABLES", "HistoryPlan", "history_chunk", "history_plan", "read_off"]
@@ -166,7 +167,8 @@ def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dic
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
         inert = plan.inertial[points]
         parts = [(rows, _outputs(plan, points[rows], run)) for rows, run in
-                 ((np.flatnonzero(~inert), _run), (np.flatnonzero(inert), run_inertial)) if rows.size]
+                 ((np.flatnonzero(~inert), run_sampled if plan.t_obs.size else _run),
+                  (np.flatnonzero(inert), run_inertial)) if rows.size]
         if not parts:
             return {**_outputs(plan, points, run_inertial), "model": np.zeros(0, np.int8)}
         out = {name: np.empty((points.size, *x.shape[1:]), x.dtype) for name, x in parts[0][1].items()}
@@ -183,8 +185,9 @@ def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dic
 
 
 def _outputs(plan: HistoryPlan, points: np.ndarray, run: Callable) -> dict[str, np.ndarray]:
-    """The chunk's outputs for ``points`` from two runs of ``run`` (quasi-static :func:`_run` or
-    sweep.protocols.history.inertial.run_inertial, which also samples s at t_obs)."""
+    """The chunk's outputs for ``points`` from two runs of ``run``: quasi-static :func:`_run`, or
+    sweep.protocols.history.sampled.run_sampled where the scene asks for mu_t, or
+    sweep.protocols.history.inertial.run_inertial (both of these also sample s at t_obs)."""
     loose, tight = (run(plan, points, plan.rtol / TIGHTER**e) for e in (1, 2))
     args = (plan.ratios[points], plan.a[points], plan.b[points], plan.A[points], plan.mu_ref[points])
     values, looser = read_off(tight, *args), read_off(loose, *args)
@@ -197,9 +200,7 @@ def _outputs(plan: HistoryPlan, points: np.ndarray, run: Callable) -> dict[str, 
         above |= np.any(err > plan.rtol * (np.abs(values[name]) + plan.A[points, None]), axis=1)
         out[name], out[f"{name}_error"] = values[name], err
     out["status"] = np.where((status == Status.OK) & above, np.int8(Status.ERROR_ABOVE_TOL), status)
-    if plan.t_obs.size and "s_t" in tight:
+    if plan.t_obs.size:
         _add_samples(out, read_samples(loose["s_t"], tight["s_t"], loose["status"], tight["status"],
                                        plan.A[points], plan.mu_ref[points], plan.rtol, 0))
-    elif plan.t_obs.size:
-        _add_samples(out, friction_samples(plan, points, plan.scale[points], plan.t_obs))
     return out

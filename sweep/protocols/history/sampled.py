@@ -1,7 +1,7 @@
-"""Friction at requested times of a history scene (observable ``mu_t`` at the scene's ``t_obs``): per point two runs
-of the dense-output driver (sweep/integrate/history_dense.py) at local tolerances rtol/TIGHTER and rtol/TIGHTER^2,
-the tighter run's mu with the difference to the looser as its error (as the per-segment observables,
-sweep/protocols/history/engine.py)."""
+"""Friction at requested times (observable ``mu_t`` of a history scene at its ``t_obs``; the forward model
+sweep.protocols.history.forward): runs of the dense-output driver (sweep/integrate/history_dense.py) at local
+tolerances rtol/TIGHTER and rtol/TIGHTER^2, the tighter run's mu with the difference to the looser as its error (as
+the per-segment observables, sweep/protocols/history/engine.py, which then come from the same runs)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 from ...accuracy import TIGHTER
 from ...status import Status
 
-__all__ = ["friction_samples", "read_samples", "two_runs"]
+__all__ = ["read_samples", "run_sampled", "two_runs"]
 
 
 def two_runs(k, a, b, A, mu_ref, state_law: str, s_kick, ratios, durations, scale, times, rtol: float,
@@ -22,13 +22,15 @@ def two_runs(k, a, b, A, mu_ref, state_law: str, s_kick, ratios, durations, scal
     from ...integrate.history_dense import history_dense_batch
     from ...integrate.models.history import LAW_CODES
 
-    n, times = k.size, np.ascontiguousarray(times, dtype=float)
+    n, m, times = k.size, ratios.shape[1], np.ascontiguousarray(times, dtype=float)
     runs = []
     for e in (1, 2):
         s_out = np.empty((n, times.size))
         status, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
+        records = [np.empty((n, m)) for _ in range(3)]  # not read here
         history_dense_batch(k, a, b, LAW_CODES[state_law], s_kick, ratios, durations, scale, times,
-                            rtol / TIGHTER**e, int(max_steps), s_out, status, steps)
+                            rtol / TIGHTER**e, int(max_steps), *records, np.zeros((n, m), np.int8), s_out, status,
+                            steps)
         runs.append((s_out, status, steps))
     (s_loose, st_loose, n_loose), (s_tight, st_tight, n_tight) = runs
     return read_samples(s_loose, s_tight, st_loose, st_tight, A, mu_ref, rtol, n_loose + n_tight)
@@ -48,15 +50,25 @@ def read_samples(s_loose, s_tight, st_loose, st_tight, A, mu_ref, rtol: float, s
     return {"mu_t": mu, "mu_t_error": error, "status": status, "steps": steps}
 
 
-def friction_samples(plan, points: np.ndarray, scale: np.ndarray, t_obs: np.ndarray) -> dict[str, np.ndarray]:
-    """:func:`two_runs` for the ``points`` of a history scene's plan (sweep.protocols.history.engine.HistoryPlan;
-    ``scale`` = V/D0 [1/s] per point) at the times ``t_obs`` [s] from the history's start (sorted): NaN past a
-    point's history end."""
-    n, n_seg = points.size, plan.durations.shape[1]
+def run_sampled(plan, points: np.ndarray, tol: float) -> dict[str, np.ndarray]:
+    """One quasi-static run at the local tolerance ``tol`` for the ``points`` of a history plan
+    (sweep.protocols.history.engine.HistoryPlan) that asks for mu_t: the per-segment records s_start, s_end,
+    s_peak, steady (points, segments) of the dense-output driver (the same steps as the records' driver) and s_t,
+    s at t_obs (points, times); status, steps."""
+    from ...integrate.history_dense import history_dense_batch
+    from ...integrate.models.history import LAW_CODES
+
+    n, m = points.size, plan.durations.shape[1]
+    rec = {name: np.full((n, m), np.nan) for name in ("s_start", "s_end", "s_peak")}
+    rec["steady"] = np.zeros((n, m), np.int8)
+    rec["s_t"] = np.full((n, plan.t_obs.size), np.nan)
+    status, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
+    scale = np.ascontiguousarray(plan.scale[points])
     ratios = plan.ratios[points] if plan.ratios.ndim == 2 else plan.ratios
-    ratios = np.ascontiguousarray(np.broadcast_to(ratios, (n, n_seg)), dtype=float)
-    durations = np.ascontiguousarray(plan.durations[points] / scale[:, None])  # physical [s]
+    ratios = np.ascontiguousarray(np.broadcast_to(ratios, (n, m)), dtype=float)
     k = plan.k[points]
-    return two_runs(k, plan.a[points], plan.b[points], plan.A[points], plan.mu_ref[points], plan.state_law,
-                    k * plan.perturbation, ratios, durations, np.ascontiguousarray(scale, dtype=float), t_obs,
-                    plan.rtol, plan.max_steps)
+    history_dense_batch(k, plan.a[points], plan.b[points], LAW_CODES[plan.state_law], k * plan.perturbation, ratios,
+                        np.ascontiguousarray(plan.durations[points] / scale[:, None]), scale,
+                        np.ascontiguousarray(plan.t_obs, dtype=float), tol, plan.max_steps, rec["s_start"],
+                        rec["s_end"], rec["s_peak"], rec["steady"], rec["s_t"], status, steps)
+    return {**rec, "status": status, "steps": steps}
