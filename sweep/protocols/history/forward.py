@@ -2,8 +2,10 @@
 laboratory records (docs/physics.md 7b; sweep.fit builds on :func:`friction_at`).
 
 Each parameter set is reduced with the first segment's velocity V = velocities[0] (section 2: xi = x/D0,
-tau = V t/D0; k = chi/A, a = mu1(V)/A, b = m2/A) and integrated quasi-statically by the dense-output driver
-(sweep/integrate/history_dense.py) in s = (mu - mu_d(V))/A, twice: at local tolerances rtol/10 and rtol/100. The
+tau = V t/D0; k = chi/A, a = mu1(V)/A, b = m2/A) and integrated in s = (mu - mu_d(V))/A twice, at local tolerances
+rtol/10 and rtol/100: quasi-statically by the dense-output dp5 (sweep/integrate/history_dense.py), or, where
+gamma/A at the fastest segment exceeds INERTIA_LIMIT (aging law), with inertia by RODAS3
+(sweep/integrate/history_inertial.py; s is then the spring's force, the friction a laboratory measures). The
 friction is the tighter run's mu = mu_d(V) + A s; its error estimate the difference of the two runs.
 """
 
