@@ -66,3 +66,21 @@ def test_scene_runs_inertia_where_it_matters():
     with pytest.raises(InputError, match="model 'quasistatic' only"):
         sweep.Scene(protocol="history", params=params, K_over_M=[K_LAB * 9.81], V=[1e-4], model="inertial",
                     state_law="slip", options={"segments": segments})
+
+
+def test_one_long_hold_with_inertia_is_the_inertial_stop():
+    """Slide at V, then an (effectively) infinite hold, with inertia at gamma/A = 0.2: Delta mu_relax is the
+    inertial stop scene's chi xi_inf (its own driver: RODAS3 in contact-age time with the plunge's time map,
+    docs/physics.md 3a), 15 % above the quasi-static value (measured agreement 5e-12)."""
+    params = sweep.FrictionParams(A=0.007, m1=0.0125, m2=0.0, D0=0.7e-6)
+    K, V = 3e5, np.sqrt(0.2 * 9.81 * 0.7e-6 * 0.007)
+    segments = [{"V_ratio": 1, "displacement": 1e-6}, {"hold": 1e8 * params.D0 / V}]
+    relax = {}
+    for model in ("inertial", "quasistatic"):
+        ds = sweep.run_sweep(sweep.Scene(protocol="history", params=params, K_over_M=[K], V=[V], rtol=1e-7,
+                                         model=model, options={"segments": segments})).isel(K_over_M=0, V=0)
+        stop = sweep.run_sweep(sweep.Scene(protocol="stop", params=params, K_over_M=[K], V=[V], rtol=1e-7,
+                                           model=model, observables=["xi_inf"]))
+        relax[model] = float(ds.delta_mu_relax[1])
+        assert relax[model] == pytest.approx(float(stop.stress_relaxation[0, 0]), abs=1e-7 * params.A)
+    assert relax["inertial"] > 1.1 * relax["quasistatic"]
