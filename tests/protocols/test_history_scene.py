@@ -92,6 +92,7 @@ def test_an_axis_scene_gives_the_same_numbers_whatever_the_chunking():
     ([{"V_ratio": "r", "duration": 1.0}], {"r": [0.0, 1.0]}, "must be > 0 1"),
     ([SHS[0], {"V_ratio": "r", "duration": 1.0}], {"r": [-1.0, 1.0]}, "must be >= 0 1"),
     ([SHS[0], {"hold": "t hold"}], {}, "names an axis: use letters"),
+    ([SHS[0], {"hold": "beta"}], {"beta": [1.0]}, "a name of the history file"),
 ])
 def test_bad_axes_of_segments_are_refused_in_one_line(segments, axes, words):
     with pytest.raises(InputError) as info:
@@ -152,3 +153,18 @@ def test_the_user_guides_load_history_examples_run():
     exec(pythons[0], namespace)
     step = namespace["ds"].delta_mu_ss.values.reshape(-1)[1]
     assert step == pytest.approx((0.007 - 0.0195) * np.log(10), abs=1e-6)
+
+
+def test_the_healing_rate_of_a_series_whose_holds_are_axes_is_the_slope_over_each_points_holds():
+    """beta per point (H1's healing.py) over holds given by two axes: the least-squares slope of that point's own
+    peaks against log10 of its own hold times."""
+    from sweep.plot.history import healing_rate
+
+    segs = [SHS[0], {"hold": "t1"}, SHS[2], {"hold": "t2"}, SHS[2]]
+    ds = sweep.run_sweep(scene(segs, {"t1": [1.0, 10.0], "t2": [100.0, 1000.0]}), progress=False)
+    ds = ds.isel(K_over_M=0, V=0)
+    for i, t1 in enumerate([1.0, 10.0]):
+        for j, t2 in enumerate([100.0, 1000.0]):
+            peaks = ds.delta_mu_peak.values[i, j, [2, 4]]
+            want = healing_rate(np.array([t1, t2]), peaks)
+            assert ds.beta.values[i, j] == pytest.approx(want, rel=1e-12)

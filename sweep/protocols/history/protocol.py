@@ -27,7 +27,8 @@ HISTORY_METHODS = ("auto", "dp5")
 """Methods a history scene accepts: its stepper is the adaptive dp5."""
 
 FILE_NAMES = frozenset({"segment", "V_ratio", "duration", "load_point_displacement", "status", "steps", "model",
-                        "chi", "mu1", "chi_c", "chi_c_quasistatic", "gamma", "mu_t", "t", "t_obs"})
+                        "chi", "mu1", "chi_c", "chi_c_quasistatic", "gamma", "beta", "beta_error", "mu_t", "t",
+                        "t_obs"})
 """Names of a history file's coordinates and variables besides the observables, which an axis may not take."""
 
 
