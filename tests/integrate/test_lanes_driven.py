@@ -72,7 +72,8 @@ def test_lanes_keep_the_one_point_drivers_regimes_on_a_grid():
 
 
 def test_a_points_numbers_do_not_depend_on_its_lane_or_neighbours():
-    """The same points in another order, in several groups, and alone give the same bits."""
+    """The same points in another order, in several groups, and alone give the same bits (alone, a point runs in
+    the quarter-width attempt, in a full batch mostly in the full one: lanes_driven.WIDTHS)."""
     rng = np.random.default_rng(7)
     base = np.array(list(CASES.values()) * (LANES // 2))
     k, a, b = (base[:, i] * rng.uniform(0.9, 1.1, len(base)) for i in range(3))
