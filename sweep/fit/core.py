@@ -20,6 +20,7 @@ estimates, and ``engine_error`` reports the largest, in units of the noise, with
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import logging
 import time
@@ -83,25 +84,36 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
             progress: Callable[[str], None] | None = None) -> FitOutcome:
     """The stages of :func:`fit`, returning the raw :class:`FitOutcome`."""
     say = progress or log.info
-    space = make_space(free, _params(params), bounds, start)
+    records = _records(data)
+    if records:  # the third kind of data: its own space and forward model (sweep.fit.record_forward)
+        from .record_forward import RECORD_FREE, RecordStack, make_record_space, record_k
+
+        if tuple(free) == ("A", "m1", "m2"):  # the default of stop data: a record fit's is a, b, Dc
+            free = ("a", "b", "Dc")
+        space = make_record_space(free, _params(params), record_k(records), bounds, start)
+    else:
+        space = make_space(free, _params(params), bounds, start)
     problems = make_problems(data, space, per_data_set)
     rtol, global_rtol = _rtol("rtol", rtol), _rtol("global_rtol", global_rtol)
     if not (isinstance(poor, (int, float)) and 0 < poor):
         raise InputError(f"poor must be > 0 (relative half-width of a 95 % interval above which a parameter is "
                          f"poorly constrained), got {poor!r}")
-    check_problems(problems)
+    if not records:
+        check_problems(problems)
     # the forward model's kernels (the sampled lanes; the per-point path for parameter sets without a finite relaxed
     # slip): on a machine without numba's cache, ~1 min of compiling before the first round, said at once
-    announce_if_cold(families=["time-resolved lanes", "time-resolved stop"])
+    if not records:
+        announce_if_cold(families=["time-resolved lanes", "time-resolved stop"])
     rounds, seconds = {}, {}
     n_sets = len(problems) * (int(np.prod([a.size for a in grid_axes(space)])) + 1)
     say(f"global stage: {len(problems)} problem(s), {n_sets} parameter sets on the grid")
     t0 = time.perf_counter()
-    stack = ProblemStack(problems, global_rtol, estimates=False)
+    stack = (RecordStack if records else ProblemStack)(problems, global_rtol, estimates=False)
     # a cold cache: the per-point path (the grid's sets without a finite relaxed slip) compiles in a second process
     # while this one compiles the sampled lanes (~45 s and ~18 s on 2 cores, one after the other without it)
-    with compiled_aside(f"from sweep.fit.forward import warm_up_per_point; warm_up_per_point({global_rtol!r}, "
-                        f"{rtol!r})"):
+    aside = "" if records else (f"from sweep.fit.forward import warm_up_per_point; "
+                                f"warm_up_per_point({global_rtol!r}, {rtol!r})")
+    with compiled_aside(aside) if aside else contextlib.nullcontext():
         globals_ = search_all(stack)
     rounds["global"], seconds["global"] = stack.rounds, time.perf_counter() - t0
 
@@ -147,9 +159,18 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
     if line is not None:
         warnings.warn(line, PlausibilityWarning, stacklevel=user_stacklevel())
     settings = {"free": list(space.names), "rtol": rtol, "global_rtol": global_rtol, "poor": poor,
-                "per_data_set": bool(per_data_set), "params": _params(params).as_dict()}
+                "per_data_set": bool(per_data_set), "params": _params(params).as_dict(),
+                **({"kind": "records", "fixed": {n: space.values[n] for n in RECORD_FREE}} if records else {})}
     return FitOutcome(problems, space, globals_, fits, s2, covs, crit, profs, ivs, labels, rounds, seconds, settings,
                       engine_error, verdicts)
+
+
+def _records(data) -> list:
+    """The data's records (sweep.fit.records.Record), [] for stop data."""
+    from .records import Record
+
+    items = [data] if not isinstance(data, (list, tuple)) else list(data)
+    return [d for d in items if isinstance(d, Record)]
 
 
 def _solved_noise_variance(solved: np.ndarray, p: int, noise_given: bool) -> float:

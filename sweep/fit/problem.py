@@ -15,6 +15,7 @@ import numpy as np
 
 from ..errors import InputError
 from .data import Curve, Data, RelaxedSlips
+from .records import Record
 from .space import ParamSpace
 
 __all__ = ["Problem", "make_problems"]
@@ -59,7 +60,8 @@ class Problem:
     @property
     def observed(self) -> np.ndarray:
         """The data, concatenated in residual order [m]."""
-        return np.concatenate([d.x if isinstance(d, Curve) else d.dx_inf for d in self.data])
+        return np.concatenate([d.x if isinstance(d, Curve) else d.mu if isinstance(d, Record) else d.dx_inf
+                               for d in self.data])
 
     @property
     def noise(self) -> np.ndarray:
@@ -102,14 +104,16 @@ class Problem:
 
 def make_problems(data: Sequence[Data], space: ParamSpace, per_data_set: bool) -> list[Problem]:
     """Group the data sets into problems: by their ``sample`` name (shared parameters), or one per data set."""
-    if isinstance(data, (Curve, RelaxedSlips)):
+    if isinstance(data, (Curve, RelaxedSlips, Record)):
         data = [data]
     data = list(data)
     if not data:
         raise InputError("data is empty: give at least one Curve or RelaxedSlips")
     for i, d in enumerate(data):
-        if not isinstance(d, (Curve, RelaxedSlips)):
-            raise InputError(f"data[{i}] must be a sweep.fit Curve or RelaxedSlips, got {type(d).__name__}")
+        if not isinstance(d, (Curve, RelaxedSlips, Record)):
+            raise InputError(f"data[{i}] must be a sweep.fit Curve, RelaxedSlips or Record, got {type(d).__name__}")
+    if len({isinstance(d, Record) for d in data}) > 1:
+        raise InputError("data mixes records with curves or relaxed slips: fit records in a call of their own")
     groups: dict[str, list[Data]] = {}
     for i, d in enumerate(data):
         groups.setdefault(f"{d.name}#{i}" if per_data_set else d.sample, []).append(d)

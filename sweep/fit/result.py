@@ -30,7 +30,10 @@ _LABELS = LABELS + (NOT_COMPUTED,)
 LABEL_FLAGS = {"flag_values": np.arange(len(_LABELS), dtype=np.int8),
                "flag_meanings": " ".join(lab.replace(" ", "_") for lab in _LABELS)}
 LONG = {"A": "direct-effect coefficient A (eq. 1)", "m1": "slope m1 of mu_d at V0 (eq. 6)",
-        "m2": "curvature m2 of mu_d (eq. 6)", "D0": "memory length D0", "K_over_M_factor": "factor on the nominal K/M"}
+        "m2": "curvature m2 of mu_d (eq. 6)", "D0": "memory length D0", "K_over_M_factor": "factor on the nominal K/M",
+        # a record fit's (the laboratory's law, docs/physics.md 7b)
+        "a": "direct effect a", "b": "evolution effect b", "Dc": "critical slip distance Dc",
+        "mu0": "friction mu0 at V0", "k": "stiffness k = K/(M g)"}
 
 
 def _v(dims, data, units: str | None, long_name: str, **attrs) -> xr.Variable:
@@ -153,13 +156,17 @@ def _data(out: FitOutcome) -> dict[str, xr.Variable]:
         cols["fitted"].append(fitted)
         cols["residual"].append((fitted - pr.observed) / noise)
         cols["noise"].append(noise)
-        factor = out.space.full(f.theta)["K_over_M_factor"][0]
+        factor = out.space.full(f.theta).get("K_over_M_factor", [1.0])[0]
         for d in pr.data:
             n = d.n
             names.append(d.name)
             counts.append(n)
             owner.append(q)
-            if isinstance(d, Curve):
+            if not hasattr(d, "K_over_M"):  # a record (sweep.fit.records): mu(t), no stop's K/M and V
+                cols["t"].append(d.t)
+                cols["K_over_M"].append(np.full(n, np.nan))
+                cols["V"].append(np.full(n, np.nan))
+            elif isinstance(d, Curve):
                 cols["t"].append(d.t)
                 cols["K_over_M"].append(np.full(n, d.K_over_M * factor))
                 cols["V"].append(np.full(n, d.V))

@@ -23,8 +23,9 @@ __all__ = ["FREE", "UNITS", "ParamSpace", "default_bounds", "make_space"]
 
 FREE = ("A", "m1", "m2", "D0", "K_over_M_factor")
 """Parameters a fit may free, in the order they are reported."""
-UNITS = {"A": "1", "m1": "1", "m2": "1", "D0": "m", "K_over_M_factor": "1"}
-POSITIVE = {"A", "D0", "K_over_M_factor"}
+UNITS = {"A": "1", "m1": "1", "m2": "1", "D0": "m", "K_over_M_factor": "1",
+         "a": "1", "b": "1", "Dc": "m", "mu0": "1", "k": "m-1"}  # the last five: a record fit's
+POSITIVE = {"A", "D0", "K_over_M_factor", "a", "Dc", "k"}
 """Parameters that must stay > 0 (gridded in log by the global stage)."""
 
 
@@ -76,7 +77,7 @@ class ParamSpace:
     def full(self, theta: np.ndarray) -> dict[str, np.ndarray]:
         """Every parameter of :data:`FREE` for the rows of ``theta`` (m x p): free ones from theta, others fixed."""
         theta = np.atleast_2d(theta)
-        out = {n: np.full(theta.shape[0], float(self.values[n])) for n in FREE}
+        out = {n: np.full(theta.shape[0], float(v)) for n, v in self.values.items()}  # FREE, or a record fit's
         for j, n in enumerate(self.names):
             out[n] = theta[:, j].astype(float)
         return out

@@ -1,0 +1,126 @@
+"""Records as the fit's third kind of data: their parameter space (the laboratory's a, b, Dc, mu0, k) and the
+:class:`RecordStack`, a :class:`sweep.fit.stack.ProblemStack` whose model values are friction_at's mu(t).
+
+The seam: sweep.fit.core builds a RecordStack instead of a ProblemStack where the data are records; the global
+stage, least squares, profiles, noise estimate and verdicts run unchanged on it (they see residuals only). The model
+of a record is mu(t) of :func:`sweep.protocols.history.forward.friction_at` (quasi-static, aging law, steady sliding
+at the first segment's velocity at the record's first time) with A = a, m1 = b - a, m2 = 0, D0 = Dc, m0 = mu0,
+K/M = k g (docs/physics.md 7b). k: the fit's where free, else the record's own (``Record.k``), else the start's.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..scene.params import FrictionParams, require_finite
+from ..status import Status
+from .problem import Problem
+from .segments import load_history
+from .space import ParamSpace, _pair
+from .stack import ProblemStack
+
+__all__ = ["RECORD_FREE", "RecordStack", "make_record_space"]
+
+RECORD_FREE = ("a", "b", "Dc", "mu0", "k")
+"""Parameters a record fit may free, in the order they are reported (k = K/(M g) [1/m])."""
+
+
+def _default_bounds(name: str, v: Mapping[str, float]) -> tuple[float, float]:
+    """a, Dc, k within a factor 10 of the start; b within 5 max(|b|, a) of it; mu0 within 0.2."""
+    if name in ("a", "Dc", "k"):
+        return v[name] / 10.0, v[name] * 10.0
+    if name == "b":
+        w = 5.0 * max(abs(v["b"]), v["a"])
+        return v["b"] - w, v["b"] + w
+    return v["mu0"] - 0.2, v["mu0"] + 0.2
+
+
+def make_record_space(free: Sequence[str], params: FrictionParams, k: float | None,
+                      bounds: Mapping[str, Sequence[float]] | None = None,
+                      start: Mapping[str, float] | None = None) -> ParamSpace:
+    """The space of a record fit: ``free`` from :data:`RECORD_FREE`, the others at ``params``' laboratory values
+    (FrictionParams.to_lab) and ``k`` [1/m], ``start`` overriding them (InputError naming the field otherwise)."""
+    free = (free,) if isinstance(free, str) else tuple(free)
+    if not free or any(n not in RECORD_FREE for n in free) or len(set(free)) != len(free):
+        raise InputError(f"free must name distinct parameters of a record fit from {list(RECORD_FREE)}, got "
+                         f"{list(free)}")
+    values = {**{n: v for n, v in params.to_lab().items() if n != "V0"}, "k": float(k) if k else np.nan}
+    for name, value in dict(start or {}).items():
+        if name not in RECORD_FREE:
+            raise InputError(f"start names {name!r}; a record fit allows {list(RECORD_FREE)}")
+        values[name] = require_finite(f"start {name}", value)
+    if "k" in free and not np.isfinite(values["k"]):
+        raise InputError("k is free but has no start: give start={'k': value [1/m]} or records with k")
+    for name in dict(bounds or {}):
+        if name not in free:
+            raise InputError(f"bounds name {name!r}, which is not free; free: {list(free)}")
+    lo, hi = [], []
+    for name in free:
+        spec = dict(bounds or {}).get(name)
+        b = _default_bounds(name, values) if spec is None else _pair(name, spec)
+        if not b[0] <= values[name] <= b[1]:
+            raise InputError(f"start {name} = {values[name]!r} lies outside its bounds [{b[0]!r}, {b[1]!r}]")
+        lo.append(b[0])
+        hi.append(b[1])
+    return ParamSpace(names=free, start=np.array([values[n] for n in free]), lower=np.array(lo), upper=np.array(hi),
+                      values=values, V0=params.V0, g=params.g)
+
+
+class RecordStack(ProblemStack):
+    """The problems of a record fit (each a sample's records) for the fit's stages: the index tables of a
+    ProblemStack (observed, weights, one layout per problem) and the model of the module docstring."""
+
+    def __init__(self, problems: Sequence[Problem], rtol: float,
+                 on_round: Callable[[int, int], None] | None = None, estimates: bool = True):
+        self.problems = list(problems)
+        self.space = self.problems[0].space
+        self.rtol, self.on_round, self.rounds, self.estimates = rtol, on_round, 0, estimates
+        self.V0, self.g = self.space.V0, self.space.g
+        self.n_res = np.array([pr.n_residuals for pr in self.problems])
+        self.n_max = int(self.n_res.max())
+        Q = len(self.problems)
+        self.observed, self.weights = np.zeros((Q, self.n_max)), np.zeros((Q, self.n_max))
+        for q, pr in enumerate(self.problems):
+            self.observed[q, :pr.n_residuals], self.weights[q, :pr.n_residuals] = pr.observed, pr.weights
+        self.layout = self.representative = np.arange(Q)
+        self.loads = [[(load_history(d), d.t - d.t[0], d.k) for d in pr.data] for pr in self.problems]
+
+    def _params(self, sets: np.ndarray) -> np.ndarray:
+        """(a, b, Dc, mu0, k) of each parameter set (rows of ``sets``); k NaN where neither fitted nor given."""
+        full = self.space.full(sets)
+        return np.column_stack([full[n] for n in RECORD_FREE])
+
+    def _model(self, layout: np.ndarray, params: np.ndarray, errors: bool = False):
+        """mu (U, n_max) in residual order of U blocks (a problem and a parameter set each), NaN where friction_at
+        did not give status ok; all stable (a record may hold stick-slip); with ``errors`` their estimates."""
+        from ..protocols.history.forward import friction_at
+
+        U = layout.size
+        mu, err = np.full((U, self.n_max), np.nan), np.full((U, self.n_max), np.nan)
+        k_free = "k" in self.space.names
+        for q in np.unique(layout):
+            rows = np.flatnonzero(layout == q)
+            p = params[rows]
+            col = 0
+            for load, t, k_rec in self.loads[q]:
+                k = p[:, 4] if k_free or k_rec is None else np.full(rows.size, k_rec)
+                lab = {"A": p[:, 0], "m1": p[:, 1] - p[:, 0], "m2": np.zeros(rows.size), "D0": p[:, 2],
+                       "m0": p[:, 3], "V0": np.full(rows.size, self.V0), "K_over_M": k * self.g}
+                out = friction_at(lab, load, t, rtol=self.rtol)
+                ok = (out.status == int(Status.OK))[:, None]
+                mu[rows, col:col + t.size] = np.where(ok, out.mu, np.nan)
+                err[rows, col:col + t.size] = np.where(ok, out.error, np.nan)
+                col += t.size
+        self.rounds += 1
+        if self.on_round is not None:
+            self.on_round(self.rounds, U)
+        ok = np.ones(U, bool)
+        return (mu, ok, err) if errors else (mu, ok)
+
+
+def record_k(data) -> float | None:
+    """The first record's k [1/m], the default start of a free k."""
+    return next((d.k for d in data if getattr(d, "k", None)), None)
