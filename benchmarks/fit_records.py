@@ -1,0 +1,114 @@
+"""Fitting laboratory records (issue 34 targets): one 1,000-sample velocity-step record (a, b, Dc, mu0 free, k fixed,
+noise estimated) fitted warm, 100 such records in one call (per record), and scipy's least_squares over solve_ivp
+(LSODA) on the same record from the same start at the same rtol, both with 95 % intervals (sweep: profile
+likelihoods; scipy: from its Jacobian).
+
+    python benchmarks/fit_records.py [--repeats 3] [--out benchmarks/results/fit_records.json]
+
+Targets: one record < 0.5 s warm, 100 records < 10 s, >= 50x scipy.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import least_squares
+from scipy.stats import t as student
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent / "tests"))
+import _common as common  # noqa: E402
+from reference_records import record_reference  # noqa: E402
+
+import sweep  # noqa: E402
+from sweep.fit.records import Record  # noqa: E402
+
+TRUE = (0.01, 0.015, 1e-5, 0.6)
+START = (0.008, 0.012, 2e-5, 0.6)
+K, NOISE, V, DUR = 2e3, 2e-4, (1e-6, 1e-5), (20.0, 40.0)
+RTOL = 1e-6
+
+
+def scipy_model(theta, t, V0=1e-6):
+    """mu(t) of the record by solve_ivp (LSODA, rtol RTOL) per segment, in (mu, ln theta)."""
+    a, b, Dc, mu0 = theta
+    vel = lambda mu, lth: V0 * np.exp((mu - mu0 - b * (np.log(V0 / Dc) + lth)) / a)  # noqa: E731
+
+    def rhs(_, y, v_lp):
+        v = vel(y[0], y[1])
+        return [K * (v_lp - v), (1.0 - v * np.exp(y[1]) / Dc) / np.exp(y[1])]
+
+    y = np.array([mu0 + (a - b) * np.log(V[0] / V0), np.log(Dc / V[0])])
+    out, start = np.empty(t.size), 0.0
+    for s, (v_lp, T) in enumerate(zip(V, DUR)):
+        pick = np.flatnonzero((t >= start) & ((t < start + T) if s < len(V) - 1 else (t <= start + T)))
+        sol = solve_ivp(rhs, (0.0, T), y, method="LSODA", rtol=RTOL, atol=[1e-12, 1e-10], args=(v_lp,),
+                        t_eval=np.append(t[pick] - start, T))
+        out[pick], y, start = sol.y[0, :-1], sol.y[:, -1], start + T
+    return out
+
+
+def scipy_fit(t, mu):
+    scale = np.array(START)
+    res = least_squares(lambda z: scipy_model(z * scale, t) - mu, np.ones(4), method="trf", x_scale=1.0)
+    dof = t.size - 4
+    s2 = 2 * res.cost / dof
+    cov = np.linalg.inv(res.jac.T @ res.jac) * s2
+    half = student.ppf(0.975, dof) * np.sqrt(np.diag(cov))
+    return res.x * scale, half * scale, res.nfev
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--out", default=str(HERE / "results" / "fit_records.json"))
+    args = ap.parse_args(argv)
+    load0 = common.loadavg()
+    rng = np.random.default_rng(0)
+    t = np.sort(np.concatenate(([0.0], rng.uniform(0.0, 60.0, 999))))
+    mu, disp = record_reference(*TRUE, K, list(V), list(DUR), t)
+    records = [Record(t, mu + NOISE * rng.standard_normal(t.size), displacement=disp, k=K, name=f"r{i}")
+               for i in range(100)]
+    params = sweep.FrictionParams.from_lab(*START)
+    free = ("a", "b", "Dc", "mu0")
+    sweep.fit(records[0], free=free, params=params, rtol=RTOL)  # warm: compiled kernels loaded
+    one, many, ref = [], [], []
+    for _ in range(args.repeats):
+        t0 = time.perf_counter()
+        ds1 = sweep.fit(records[0], free=free, params=params, rtol=RTOL)
+        one.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        ds100 = sweep.fit(records, free=free, params=params, rtol=RTOL, per_data_set=True)
+        many.append(time.perf_counter() - t0)
+    t0 = time.perf_counter()
+    best_sp, half_sp, nfev = scipy_fit(t, records[0].mu)
+    ref.append(time.perf_counter() - t0)
+    ok100 = int(np.sum(ds100["fit_status"].values == 0))
+    cover = np.mean([[float(ds100[f"{n}_lower"][q]) <= v <= float(ds100[f"{n}_upper"][q])
+                      for n, v in zip(free, TRUE)] for q in range(100)])
+    result = {
+        "benchmark": "fit_records", "machine": common.machine_info(), "versions": common.versions(),
+        "git_commit": common.git_commit(), "sweep_tree_dirty": common.sweep_tree_dirty(),
+        "loadavg_start_end": [load0, common.loadavg()], "rtol": RTOL, "samples_per_record": int(t.size),
+        "one_record_warm_s": min(one), "one_record_warm_s_all": one,
+        "hundred_records_s": min(many), "hundred_records_s_all": many, "hundred_records_ok": ok100,
+        "hundred_records_coverage_95": float(cover),
+        "scipy_least_squares_s": min(ref), "scipy_nfev": int(nfev), "speedup_vs_scipy": min(ref) / min(one),
+        "sweep_best": {n: float(ds1[n][0]) for n in free},
+        "sweep_half_width_95": {n: float(ds1[f"{n}_upper"][0] - ds1[f"{n}_lower"][0]) / 2 for n in free},
+        "scipy_best": dict(zip(free, map(float, best_sp))), "scipy_half_width_95": dict(zip(free, map(float, half_sp))),
+        "targets": {"one_record_s": 0.5, "hundred_records_s": 10.0, "speedup": 50.0},
+    }
+    Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
+    print(json.dumps({k: v for k, v in result.items() if k not in ("machine", "versions")}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
