@@ -27,6 +27,8 @@ blanks around them. Rows may be irregular in time (any strictly increasing t) an
 
 netCDF: the same names as variables with a ``units`` attribute (a curve: t and x along one dimension, K_over_M and
 V scalar variables; relaxed slips: K_over_M, V, dx_inf along one dimension). Units: :mod:`sweep.fit.units`.
+
+A text file whose header names a time and a friction column is a laboratory record (sweep.fit.records.read_record).
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ import numpy as np
 
 from ..errors import InputError
 from .data import Curve, Data, RelaxedSlips
+from .records import is_record_file, read_record
 from .units import to_si
 
 __all__ = ["read_data"]
@@ -53,6 +56,8 @@ def read_data(path: str | os.PathLike, sample: str | None = None, name: str | No
     where = f"data file {str(path)!r}"
     if path.suffix.lower() in (".nc", ".nc4", ".netcdf"):
         columns, units, meta = _netcdf(path, where)
+    elif is_record_file(path):  # a laboratory record: mu(t) and the load point (sweep.fit.records)
+        return read_record(path, sample=sample, name=name)
     else:
         columns, units, meta = _csv(path, where)
     sample = sample or meta.get("sample", (None, None))[0] or "sample"

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["ROLES", "Record", "read_record"]
+__all__ = ["ROLES", "Record", "is_record_file", "read_record"]
 
 ROLES = ("time", "displacement", "velocity", "mu", "shear", "normal")
 """The columns a record may have (``columns`` maps these to the file's names)."""
@@ -333,3 +333,14 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
     return Record(t, mu, displacement=col("displacement") if "displacement" in found else None,
                   velocity=col("velocity") if "velocity" in found else None, steps=steps, k=k, noise=noise,
                   sample=sample or meta.get("sample", ("sample", ""))[0], name=name or path.stem)
+
+
+def is_record_file(path: str | os.PathLike) -> bool:
+    """Whether a text file's header names a time and a friction column (mu, or shear and normal stress): a record,
+    not a relaxation curve or relaxed slips (sweep.fit.read.read_data hands it to :func:`read_record`)."""
+    try:
+        names = _parse(_lines(Path(path)), "")[0]
+        found = _find(names, None, "")
+    except (InputError, OSError, ValueError):
+        return False
+    return "time" in found and ("mu" in found or {"shear", "normal"} <= found.keys())

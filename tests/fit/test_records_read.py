@@ -115,3 +115,17 @@ def test_record_checks_its_arrays():
         Record(t, np.full(20, 0.6))
     with pytest.raises(InputError, match="first > 0"):
         Record(t, np.full(20, 0.6), steps=[(0.0, 0.0), (0.5, 1e-6)])
+
+
+def test_read_data_and_the_cli_config_take_a_record(tmp_path, vstep):
+    """sweep.fit.read_data (hence ``sweep fit``'s [[data]] file = ...) hands a record file to read_record; a
+    relaxation curve's file is still a Curve."""
+    from sweep.fit import read_data
+
+    t, mu, disp = vstep
+    rows = "\n".join(f"{a:.6f},{d * 1e6:.6f},{m:.6f}" for a, d, m in zip(t, disp, mu))
+    rec = read_data(_write(tmp_path / "rec.csv", "# k = 2 1/mm\ntime [s],lp_disp [um],mu\n" + rows), sample="s")
+    assert isinstance(rec, Record) and rec.k == 2000.0 and rec.sample == "s"
+    curve = read_data(_write(tmp_path / "c.csv", "# K_over_M = 2e5 s-2\n# V = 1 um/s\n# t: s\n# x: um\nt,x\n"
+                             "0.1,0.01\n0.2,0.02\n0.4,0.03\n"))
+    assert type(curve).__name__ == "Curve"
