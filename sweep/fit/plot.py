@@ -15,22 +15,26 @@ MAX_SETS = 8
 
 
 def _data_panel(ax, res_ax, ds: xr.Dataset) -> None:
+    record = '"kind": "records"' in ds.attrs.get("fit_settings", "")  # mu(t) of laboratory records: linear axes
+    scale = 1.0 if record else 1e6
     names = list(dict.fromkeys(ds["datum_set"].values.tolist()))[:MAX_SETS]
     for name in names:
         sel = ds["datum_set"].values == name
         t = ds["datum_t"].values[sel]
         x = t if np.all(np.isfinite(t)) else ds["datum_K_over_M"].values[sel]
         order = np.argsort(x)
-        line, = ax.plot(x[order], 1e6 * ds["observed"].values[sel][order], "o", ms=3, alpha=0.6)
-        ax.plot(x[order], 1e6 * ds["fitted"].values[sel][order], "-", color=line.get_color(), label=name)
-        res_ax.plot(x[order], ds["residual"].values[sel][order], "o", ms=2, color=line.get_color())
-    ax.set_xscale("log")
-    ax.set_ylabel("slip [um]")
+        line, = ax.plot(x[order], scale * ds["observed"].values[sel][order], "o", ms=3 if not record else 1,
+                        alpha=0.6)
+        ax.plot(x[order], scale * ds["fitted"].values[sel][order], "-", color=line.get_color(), label=name)
+        res_ax.plot(x[order], ds["residual"].values[sel][order], "o", ms=2 if not record else 1,
+                    color=line.get_color())
+    ax.set_xscale("linear" if record else "log")
+    ax.set_ylabel("friction mu" if record else "slip [um]")
     ax.set_title("data (points) and fit (lines)")
     ax.legend(fontsize=7)
-    res_ax.set_xscale("log")
+    res_ax.set_xscale("linear" if record else "log")
     res_ax.axhline(0.0, color="k", lw=0.8)
-    res_ax.set_xlabel("t [s] (relaxed slips: K/M [s-2])")
+    res_ax.set_xlabel("t [s] since the record's start" if record else "t [s] (relaxed slips: K/M [s-2])")
     res_ax.set_ylabel("residual / noise")
 
 

@@ -58,3 +58,15 @@ def test_slide_hold_slide_and_step_share_one_parameter_set(vstep):
     assert ds.sizes["sample"] == 1 and int(ds["fit_status"][0]) == 0
     assert _covered(ds).all(), {n: (float(ds[f"{n}_lower"][0]), float(ds[f"{n}_upper"][0])) for n in TRUE}
     assert float(ds["datum_noise"][0]) == pytest.approx(NOISE, rel=0.15)
+
+
+def test_picture_of_a_record_fit(tmp_path, vstep):
+    """plot_fit draws a record fit (data, model, residuals against time, the profiles) into a PNG."""
+    from sweep.fit.plot import plot_fit
+
+    t, mu, disp = vstep
+    rng = np.random.default_rng(13)
+    ds = sweep.fit(Record(t, mu + NOISE * rng.standard_normal(t.size), displacement=disp, k=K),
+                   free=("a", "b", "Dc"), params=START)
+    plot_fit(ds, tmp_path / "rec.png")
+    assert (tmp_path / "rec.png").stat().st_size > 10_000
