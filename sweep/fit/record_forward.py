@@ -6,6 +6,9 @@ stage, least squares, profiles, noise estimate and verdicts run unchanged on it 
 of a record is mu(t) of :func:`sweep.protocols.history.forward.friction_at` (quasi-static, aging law, steady sliding
 at the first segment's velocity at the record's first time) with A = a, m1 = b - a, m2 = 0, D0 = Dc, m0 = mu0,
 K/M = k g (docs/physics.md 7b). k: the fit's where free, else the record's own (``Record.k``), else the start's.
+A record with ``detrend`` adds c x to its model (x its time or displacement from the start) with the slope c that
+minimises its weighted residuals at each parameter set (a linear nuisance parameter projected out: the profiles of
+the other parameters are then profiled over c too; the noise estimate does not yet count it as a parameter).
 """
 
 from __future__ import annotations
@@ -87,6 +90,9 @@ class RecordStack(ProblemStack):
             self.observed[q, :pr.n_residuals], self.weights[q, :pr.n_residuals] = pr.observed, pr.weights
         self.layout = self.representative = np.arange(Q)
         self.loads = [[(load_history(d), d.t - d.t[0], d.k) for d in pr.data] for pr in self.problems]
+        self.trends = [[None if d.detrend is None else (d.t - d.t[0] if d.detrend == "time" else
+                                                         d.displacement - d.displacement[0]) for d in pr.data]
+                       for pr in self.problems]
 
     def _params(self, sets: np.ndarray) -> np.ndarray:
         """(a, b, Dc, mu0, k) of each parameter set (rows of ``sets``); k NaN where neither fitted nor given."""
@@ -105,13 +111,18 @@ class RecordStack(ProblemStack):
             rows = np.flatnonzero(layout == q)
             p = params[rows]
             col = 0
-            for load, t, k_rec in self.loads[q]:
+            for (load, t, k_rec), x in zip(self.loads[q], self.trends[q]):
                 k = p[:, 4] if k_free or k_rec is None else np.full(rows.size, k_rec)
                 lab = {"A": p[:, 0], "m1": p[:, 1] - p[:, 0], "m2": np.zeros(rows.size), "D0": p[:, 2],
                        "m0": p[:, 3], "V0": np.full(rows.size, self.V0), "K_over_M": k * self.g}
                 out = friction_at(lab, load, t, rtol=self.rtol)
                 ok = (out.status == int(Status.OK))[:, None]
-                mu[rows, col:col + t.size] = np.where(ok, out.mu, np.nan)
+                m = np.where(ok, out.mu, np.nan)
+                if x is not None:  # the record's linear trend: its best slope per set, projected out
+                    w2 = self.weights[q, col:col + t.size] ** 2
+                    resid = self.observed[q, col:col + t.size] - m
+                    m = m + np.sum(w2 * x * resid, axis=1, keepdims=True) / np.sum(w2 * x * x) * x
+                mu[rows, col:col + t.size] = m
                 err[rows, col:col + t.size] = np.where(ok, out.error, np.nan)
                 col += t.size
         self.rounds += 1

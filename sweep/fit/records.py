@@ -75,7 +75,9 @@ class Record:
     ``displacement`` [m] or ``velocity`` [m s-1] of the load point per sample (either, or None where ``steps`` is
     given); ``steps``: the history as ((start time [s], velocity [m s-1]), ...) from the first time on, or None
     (found from the displacement, sweep.fit.segments); ``k`` [1/m] the stiffness k = K/(M g) (None: from the fit's
-    parameters); ``noise`` [1] per sample, one number, or None (estimated); ``sample`` and ``name`` as for a Curve."""
+    parameters); ``noise`` [1] per sample, one number, or None (estimated); ``sample`` and ``name`` as for a Curve;
+    ``detrend`` "time" or "displacement": the model carries a linear trend c (t - t[0]) or c (x - x[0]) of its own
+    slope c [1/s or 1/m] per record, the one that fits best at each parameter set (projected out, not reported)."""
 
     t: np.ndarray
     mu: np.ndarray
@@ -86,10 +88,15 @@ class Record:
     noise: np.ndarray | None = None
     sample: str = "sample"
     name: str = "record"
+    detrend: str | None = None
 
     def __post_init__(self) -> None:
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 (frozen)
         where = f"record {self.name!r}"
+        if self.detrend not in (None, "time", "displacement"):
+            raise InputError(f"{where}: detrend must be None, 'time' or 'displacement', got {self.detrend!r}")
+        if self.detrend == "displacement" and self.displacement is None:
+            raise InputError(f"{where}: detrend='displacement' needs the load-point displacement column")
         t = _column(where, "time", self.t)
         step = np.flatnonzero(np.diff(t) <= 0)
         if step.size:

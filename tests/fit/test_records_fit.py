@@ -70,3 +70,15 @@ def test_picture_of_a_record_fit(tmp_path, vstep):
                    free=("a", "b", "Dc"), params=START)
     plot_fit(ds, tmp_path / "rec.png")
     assert (tmp_path / "rec.png").stat().st_size > 10_000
+
+
+def test_detrend_recovers_the_parameters_under_a_linear_drift(vstep):
+    """A drift of 2e-5 per second added to a step record: fitted with detrend="time", the truth is inside the
+    intervals; without, the fit is pulled off (mu0 or b outside its interval)."""
+    t, mu, disp = vstep
+    rng = np.random.default_rng(14)
+    drifted = mu + NOISE * rng.standard_normal(t.size) + 2e-5 * t
+    ok = sweep.fit(Record(t, drifted, displacement=disp, k=K, detrend="time"), free=tuple(TRUE), params=START)
+    assert _covered(ok).all()
+    off = sweep.fit(Record(t, drifted, displacement=disp, k=K), free=tuple(TRUE), params=START)
+    assert not _covered(off).all()
