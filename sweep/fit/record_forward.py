@@ -88,8 +88,16 @@ class RecordStack(ProblemStack):
         self.observed, self.weights = np.zeros((Q, self.n_max)), np.zeros((Q, self.n_max))
         for q, pr in enumerate(self.problems):
             self.observed[q, :pr.n_residuals], self.weights[q, :pr.n_residuals] = pr.observed, pr.weights
-        self.layout = self.representative = np.arange(Q)
         self.loads = [[(load_history(d), d.t - d.t[0], d.k) for d in pr.data] for pr in self.problems]
+        # problems whose records have the same histories, times and k share a layout, hence their model values (the
+        # global grid is solved once for all of them); a detrended record's model depends on its data: its own
+        keys: dict[tuple, int] = {}
+        self.layout = np.array([keys.setdefault(
+            (q,) if any(d.detrend for d in pr.data) else
+            tuple((ld.velocities.tobytes(), ld.durations.tobytes(), t.tobytes(), k) for ld, t, k in self.loads[q]),
+            len(keys)) for q, pr in enumerate(self.problems)], dtype=np.intp)
+        self.representative = np.array([int(np.flatnonzero(self.layout == u)[0]) for u in range(len(keys))],
+                                       dtype=np.intp)
         self.trends = [[None if d.detrend is None else (d.t - d.t[0] if d.detrend == "time" else
                                                          d.displacement - d.displacement[0]) for d in pr.data]
                        for pr in self.problems]
@@ -100,15 +108,15 @@ class RecordStack(ProblemStack):
         return np.column_stack([full[n] for n in RECORD_FREE])
 
     def _model(self, layout: np.ndarray, params: np.ndarray, errors: bool = False):
-        """mu (U, n_max) in residual order of U blocks (a problem and a parameter set each), NaN where friction_at
+        """mu (U, n_max) in residual order of U blocks (a layout and a parameter set each), NaN where friction_at
         did not give status ok; all stable (a record may hold stick-slip); with ``errors`` their estimates."""
         from ..protocols.history.forward import friction_at
 
         U = layout.size
         mu, err = np.full((U, self.n_max), np.nan), np.full((U, self.n_max), np.nan)
         k_free = "k" in self.space.names
-        for q in np.unique(layout):
-            rows = np.flatnonzero(layout == q)
+        for u in np.unique(layout):
+            rows, q = np.flatnonzero(layout == u), self.representative[u]
             p = params[rows]
             col = 0
             for (load, t, k_rec), x in zip(self.loads[q], self.trends[q]):
