@@ -36,11 +36,13 @@ def record_reference(a, b, Dc, mu0, k, velocities, durations, t, law="aging", V0
         end = start + T
         last = s == len(velocities) - 1
         pick = np.flatnonzero((t >= start) & ((t < end) if not last else (t <= end * (1 + 1e-12))))
-        tau = np.append(np.clip(t[pick] - start, 0.0, T), T)  # the segment's end: where the next one starts
+        tau = np.clip(t[pick] - start, 0.0, T)
+        if tau.size == 0 or tau[-1] < T:
+            tau = np.append(tau, T)  # the segment's end: where the next one starts
         sol = solve_ivp(rhs, (0.0, T), y, method="Radau", rtol=rtol, atol=[1e-14, 1e-12], args=(v_lp,),
                         t_eval=tau, first_step=min(T, 1e-6 * Dc / max(v_lp, v1)))
         assert sol.success, sol.message
-        mu[pick] = sol.y[0, :-1]
+        mu[pick] = sol.y[0, :pick.size]
         disp[pick] = x0 + v_lp * (t[pick] - start)
         y = sol.y[:, -1]
         start, x0 = end, x0 + v_lp * T
