@@ -46,6 +46,8 @@ KEYS = {
     "error_coverage": {"benchmark", "quick", "machine", "rows"},
     "fit": {"benchmark", "machine", "settings", "one_curve", "many_curves", "scipy", "ratio_per_curve", "side_by_side"},
     "history": {"benchmark", "quick", "machine", "shs_point", "forward", "grid", "targets"},
+    "history_axes": {"benchmark", "quick", "machine", "grids", "ratio_hold_axis_over_fixed_wall_per_point",
+                     "ratio_ratio_axis_over_fixed_wall_per_point"},
     "hopf": {"benchmark", "quick", "machine", "line", "inertial_line", "inertial_driven_deep_stick_slip",
              "driven_grid", "driven_grid_auto"},
     "models": {"benchmark", "quick", "machine", "cost", "accuracy_inertia_scene_model_tol_1e-2",
