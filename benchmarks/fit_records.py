@@ -6,7 +6,7 @@ likelihoods; scipy: from its Jacobian).
 
     python benchmarks/fit_records.py [--repeats 3] [--out benchmarks/results/fit_records.json]
 
-Targets: one record < 0.5 s warm, 100 records < 10 s, >= 50x scipy.
+``--quick``: 5 records, one repeat (a smoke run). Targets: one record < 0.5 s warm, 100 records < 10 s, >= 50x scipy.
 """
 
 from __future__ import annotations
@@ -69,18 +69,21 @@ def scipy_fit(t, mu):
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--quick", action="store_true", help="smoke run: 5 records instead of 100, one repeat")
     ap.add_argument("--out", default=str(HERE / "results" / "fit_records.json"))
     args = ap.parse_args(argv)
+    n_rec, repeats = (5, 1) if args.quick else (100, args.repeats)
     load0 = common.loadavg()
     rng = np.random.default_rng(0)
     t = np.sort(np.concatenate(([0.0], rng.uniform(0.0, 60.0, 999))))
     mu, disp = record_reference(*TRUE, K, list(V), list(DUR), t)
     records = [Record(t, mu + NOISE * rng.standard_normal(t.size), displacement=disp, k=K, name=f"r{i}")
-               for i in range(100)]  # one history and times: one layout, the global grid solved once
-    dense = np.linspace(0.0, 60.0, 60001)  # records of their own times: the reference on 1 ms, interpolated
+               for i in range(n_rec)]  # one history and times: one layout, the global grid solved once
+    # records of their own times: the reference on a 1 ms grid (10 ms quick), interpolated
+    dense = np.linspace(0.0, 60.0, 6001 if args.quick else 60001)
     mu_d, disp_d = record_reference(*TRUE, K, list(V), list(DUR), dense)  # (error ~ 1e-8, noise 2e-4)
     own = []
-    for i in range(100):
+    for i in range(n_rec):
         ti = np.sort(np.concatenate(([0.0], rng.uniform(0.0, 60.0, 999))))
         own.append(Record(ti, np.interp(ti, dense, mu_d) + NOISE * rng.standard_normal(ti.size),
                           displacement=np.interp(ti, dense, disp_d), k=K, name=f"own{i}"))
@@ -88,7 +91,7 @@ def main(argv=None) -> None:
     free = ("a", "b", "Dc", "mu0")
     sweep.fit(records[0], free=free, params=params, rtol=RTOL)  # warm: compiled kernels loaded
     one, many, many_own, ref = [], [], [], []
-    for _ in range(args.repeats):
+    for _ in range(repeats):
         t0 = time.perf_counter()
         ds1 = sweep.fit(records[0], free=free, params=params, rtol=RTOL)
         one.append(time.perf_counter() - t0)
@@ -103,9 +106,10 @@ def main(argv=None) -> None:
     ref.append(time.perf_counter() - t0)
     ok100 = int(np.sum(ds100["fit_status"].values == 0))
     cover = np.mean([[float(ds100[f"{n}_lower"][q]) <= v <= float(ds100[f"{n}_upper"][q])
-                      for n, v in zip(free, TRUE)] for q in range(100)])
+                      for n, v in zip(free, TRUE)] for q in range(n_rec)])
     result = {
-        "benchmark": "fit_records", "machine": common.machine_info(), "versions": common.versions(),
+        "benchmark": "fit_records", "quick": bool(args.quick), "records": n_rec,
+        "machine": common.machine_info(), "versions": common.versions(),
         "git_commit": common.git_commit(), "sweep_tree_dirty": common.sweep_tree_dirty(),
         "loadavg_start_end": [load0, common.loadavg()], "rtol": RTOL, "samples_per_record": int(t.size),
         "one_record_warm_s": min(one), "one_record_warm_s_all": one,

@@ -45,6 +45,8 @@ KEYS = {
     "end_to_end": {"benchmark", "quick", "machine", "scene", "runs", "best", "ratio_total_over_kernel", "target"},
     "error_coverage": {"benchmark", "quick", "machine", "rows"},
     "fit": {"benchmark", "machine", "settings", "one_curve", "many_curves", "scipy", "ratio_per_curve", "side_by_side"},
+    "fit_records": {"benchmark", "quick", "machine", "one_record_warm_s", "hundred_records_s",
+                    "hundred_records_own_times_s", "scipy_least_squares_s", "speedup_vs_scipy", "targets"},
     "history": {"benchmark", "quick", "machine", "shs_point", "forward", "grid", "targets"},
     "history_axes": {"benchmark", "quick", "machine", "grids", "ratio_hold_axis_over_fixed_wall_per_point",
                      "ratio_ratio_axis_over_fixed_wall_per_point"},
