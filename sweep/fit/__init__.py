@@ -15,13 +15,15 @@ import importlib
 import sys
 import types
 
-__all__ = ["Curve", "RelaxedSlips", "fit", "read_data", "save_fit"]
+__all__ = ["Curve", "Record", "RelaxedSlips", "fit", "read_data", "read_record", "save_fit"]
 
-_WHERE = {"fit": "core", "Curve": "data", "RelaxedSlips": "data", "read_data": "read", "save_fit": "result"}
+_WHERE = {"fit": "core", "Curve": "data", "RelaxedSlips": "data", "read_data": "read", "save_fit": "result",
+          "Record": "records", "read_record": "records"}
 
 
 _SUBMODULES = ("checks", "cli", "config", "core", "data", "forward", "globalstage", "levenberg", "local", "outcome",
-               "plot", "problem", "profiles", "read", "result", "space", "stack", "uncertainty", "units", "verdict")
+               "plot", "problem", "profiles", "read", "record_forward", "records", "result", "segments", "space",
+               "stack", "uncertainty", "units", "verdict")
 """The parts of the package, importable as attributes (``sweep.fit.core``) without an explicit import first."""
 
 

@@ -135,3 +135,15 @@ def test_the_fit_submodules_are_attributes_without_an_import():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["True", "ok"]
+
+
+def test_every_module_of_sweep_fit_is_listed_as_a_part():
+    """A new module of sweep/fit is reachable as sweep.fit.<name> (its _SUBMODULES) and the names of __all__ load."""
+    from pathlib import Path
+
+    import sweep.fit as package
+
+    modules = {p.stem for p in Path(package.__file__).parent.glob("*.py") if not p.stem.startswith("_")}
+    assert modules == set(package._SUBMODULES)
+    for name in package.__all__:
+        assert getattr(package, name) is not None
