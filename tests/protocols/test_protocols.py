@@ -69,7 +69,8 @@ def test_a_registered_protocol_resumes_from_its_journal(echo, tmp_path, monkeypa
 def test_a_registered_protocol_owns_its_observables_and_its_refusals(echo):
     with pytest.raises(InputError, match=r"unknown observable\(s\) \['xi_inf'\] in observables of protocol 'echo'"):
         echo_scene(observables=("xi_inf",))
-    with pytest.raises(InputError, match="extra axes are offered for protocol 'stop' and 'history' only, got protocol 'echo'"):
+    with pytest.raises(InputError,
+                       match="extra axes are offered for protocol 'stop' and 'history' only, got protocol 'echo'"):
         echo_scene(axes={"A": [0.005, 0.01]})
     with pytest.raises(InputError, match=r"state_law 'slip' is not offered on protocol 'echo'; supported: \['aging'\]"):
         echo_scene(state_law="slip")
