@@ -1,5 +1,7 @@
-"""Load-history driver (docs/physics.md, "Load histories"): one point integrated segment by segment through a
-piecewise-constant load-point velocity, with what the laboratory reads off each segment; the batch loop over points.
+"""The load-history stepper's parts (docs/physics.md, "Load histories"): the Dormand-Prince step, the peak located
+inside a step, the controller's constants and the records' definitions, shared by the drivers that integrate a
+point segment by segment through a piecewise-constant load-point velocity (quasi-static:
+sweep/integrate/history_dense.py; inertial: sweep/integrate/history_inertial.py).
 
 The equations are those of :mod:`sweep.integrate.models.history` in the state (s, u), s = (mu - mu_d(V))/A. The
 stepper is Dormand-Prince 5(4) with local extrapolation and an I controller on the mixed norm
@@ -23,17 +25,14 @@ equations left the range a double can follow); the values recorded are then NaN 
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
 from numba import njit
 
 from ..jitcache import pin_module
 from ..status import Status
-from .models.history import history_rates, steady_state
+from .models.history import history_rates
 from .solvers.fastmath import FAST
 
-__all__ = ["H_FLOOR", "STEADY_TOL", "history_batch", "history_point"]
+__all__ = ["H_FLOOR", "STEADY_TOL"]
 
 OK, MAX_STEPS, STEP_UNDERFLOW = int(Status.OK), int(Status.MAX_STEPS), int(Status.STEP_UNDERFLOW)
 H_FLOOR = 1e-14
@@ -102,63 +101,6 @@ def _peak_in_step(s, u, ds, du, h, r, k, a, b, law):
         if hi - lo <= 1e-13 * h:
             break
     return best
-
-
-@njit(fastmath=FAST, error_model="numpy")
-def history_point(k, a, b, law, s_kick, ratios, durations, tol, max_steps, s_start, s_end, s_peak, steady):
-    """Integrate one point through its segments (``ratios`` r_j, reduced ``durations`` T_j in tau) at the local
-    tolerance ``tol``, from steady sliding at r_0 with s raised by ``s_kick``; fills the per-segment records
-    (module docstring; NaN from a failed segment on) and returns (status, steps)."""
-    n = ratios.size
-    for j in range(n):
-        s_start[j], s_end[j], s_peak[j], steady[j] = np.nan, np.nan, np.nan, 0
-    s, u = steady_state(ratios[0], a, b)
-    s += s_kick
-    steps = 0
-    h0 = 1e-3 / (1.0 + k + abs(a))
-    for j in range(n):
-        r, T = ratios[j], durations[j]
-        s_start[j] = s
-        peak = s
-        ds, du, w = history_rates(s, u, r, k, a, b, law)
-        h = min(h0, T)  # each segment starts afresh: its velocity jumped
-        t = 0.0
-        while t < T:
-            if steps >= max_steps:
-                return MAX_STEPS, steps
-            last = h >= T - t
-            if last:
-                h = T - t
-            s_new, u_new, es, eu, ds_new, du_new, w_new = _dp5(s, u, ds, du, h, r, k, a, b, law)
-            steps += 1
-            err = max(abs(es) / (tol * (1.0 + max(abs(s), abs(s_new)))),
-                      abs(eu) / (tol * (1.0 + max(abs(u), abs(u_new)))))
-            if not math.isfinite(err) or err > 1.0:
-                h *= MIN_FACTOR if not math.isfinite(err) else max(MIN_FACTOR, SAFETY * err ** -0.2)
-                if h < H_FLOOR * (1.0 + t):
-                    return STEP_UNDERFLOW, steps
-                continue
-            if ds > 0.0 and ds_new <= 0.0:
-                peak = max(peak, _peak_in_step(s, u, ds, du, h, r, k, a, b, law))
-            t = T if last else t + h
-            s, u, ds, du, w = s_new, u_new, ds_new, du_new, w_new
-            peak = max(peak, s)
-            if not last:
-                h *= min(MAX_FACTOR, max(MIN_FACTOR, SAFETY * max(err, 1e-10) ** -0.2))
-        s_end[j], s_peak[j] = s, peak
-        if r > 0.0 and abs(w - math.log(r)) <= STEADY_TOL and abs(u + math.log(r)) <= STEADY_TOL:
-            steady[j] = 1
-    return OK, steps
-
-
-@njit(nogil=True, cache=True, fastmath=FAST, error_model="numpy")
-def history_batch(k, a, b, law, s_kick, ratios, durations, tol, max_steps, s_start, s_end, s_peak, steady, status,
-                  steps):
-    """:func:`history_point` for every point i: its k[i], a[i], b[i], s_kick[i] and reduced durations
-    durations[i, :]; the records are rows of the 2-D outputs, status and steps per point."""
-    for i in range(k.size):
-        status[i], steps[i] = history_point(k[i], a[i], b[i], law, s_kick[i], ratios, durations[i], tol, max_steps,
-                                            s_start[i], s_end[i], s_peak[i], steady[i])
 
 
 pin_module(__name__)

@@ -78,7 +78,7 @@ def history_dense_point(k, a, b, law, s_kick, ratios, durations, scale, times, t
     = V/D0 [1/s]) at the local tolerance ``tol`` from steady sliding at r_0 with s raised by ``s_kick``; writes s at
     the sorted physical ``times`` [s] from the history's start into ``s_out`` (NaN from a failure on, and at times
     past the history's end by more than 1e-12 of its length), fills the per-segment records as
-    sweep.integrate.history.history_point does (same steps, so the same values) and returns (status, steps)."""
+    defined in sweep.integrate.history and returns (status, steps)."""
     n, m = ratios.size, times.size
     for i in range(m):
         s_out[i] = np.nan

@@ -71,8 +71,8 @@ def history_inertial_point(k, a, b, g, s_kick, ratios, durations, scale, times, 
                            s_peak, steady, s_out):
     """Integrate one point with inertia (G = ``g`` = gamma/A at the reference velocity) through its segments
     (``ratios`` r_j, reduced ``durations`` T_j) at the local tolerance ``tol``; fills the per-segment records as
-    sweep.integrate.history.history_point does and s at the sorted physical ``times`` [s] (reduced by ``scale`` =
-    V/D0; NaN past the history's end) into ``s_out``; returns (status, steps)."""
+    the quasi-static driver (sweep.integrate.history_dense) does and s at the sorted physical ``times`` [s]
+    (reduced by ``scale`` = V/D0; NaN past the history's end) into ``s_out``; returns (status, steps)."""
     n, m = ratios.size, times.size
     for j in range(n):
         s_start[j], s_end[j], s_peak[j], steady[j] = np.nan, np.nan, np.nan, 0

@@ -104,31 +104,6 @@ def history_plan(scene: Scene) -> HistoryPlan:
                        healing="delta_mu_peak" in scene.observables and is_series(scene.options.segments))
 
 
-def _run(plan: HistoryPlan, points: np.ndarray, tol: float) -> dict[str, np.ndarray]:
-    from ...integrate.history import history_batch
-    from ...integrate.models.history import LAW_CODES
-
-    n, m = points.size, plan.ratios.shape[1]
-    rec = {name: np.full((n, m), np.nan) for name in ("s_start", "s_end", "s_peak")}
-    rec["steady"] = np.zeros((n, m), np.int8)
-    status, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
-    ratios = plan.ratios[points]
-    # the kernel takes one ratio per segment for all its points: one call per distinct row (a V_ratio axis's values)
-    rows, group = np.unique(ratios, axis=0, return_inverse=True)
-    for g in range(rows.shape[0]):
-        sel = np.flatnonzero(group.reshape(-1) == g)
-        k = plan.k[points[sel]]
-        out = {name: np.ascontiguousarray(rec[name][sel]) for name in rec}
-        st, sp = np.zeros(sel.size, np.int8), np.zeros(sel.size, np.int64)
-        history_batch(k, plan.a[points[sel]], plan.b[points[sel]], LAW_CODES[plan.state_law], k * plan.perturbation,
-                      np.ascontiguousarray(rows[g]), np.ascontiguousarray(plan.durations[points[sel]]), tol,
-                      plan.max_steps, out["s_start"], out["s_end"], out["s_peak"], out["steady"], st, sp)
-        for name in rec:
-            rec[name][sel] = out[name]
-        status[sel], steps[sel] = st, sp
-    return {**rec, "status": status, "steps": steps}
-
-
 def read_off(rec: dict[str, np.ndarray], ratios: np.ndarray, a: np.ndarray, b: np.ndarray, A: np.ndarray,
              mu_ref: np.ndarray) -> dict[str, np.ndarray]:
     """The observables (points, segments) from one run's records: mu at each segment's end; the steady-state jump
@@ -167,7 +142,7 @@ def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dic
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
         inert = plan.inertial[points]
         parts = [(rows, _outputs(plan, points[rows], run)) for rows, run in
-                 ((np.flatnonzero(~inert), run_sampled if plan.t_obs.size else _run),
+                 ((np.flatnonzero(~inert), run_sampled),
                   (np.flatnonzero(inert), run_inertial)) if rows.size]
         if not parts:
             return {**_outputs(plan, points, run_inertial), "model": np.zeros(0, np.int8)}
@@ -185,9 +160,9 @@ def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dic
 
 
 def _outputs(plan: HistoryPlan, points: np.ndarray, run: Callable) -> dict[str, np.ndarray]:
-    """The chunk's outputs for ``points`` from two runs of ``run``: quasi-static :func:`_run`, or
-    sweep.protocols.history.sampled.run_sampled where the scene asks for mu_t, or
-    sweep.protocols.history.inertial.run_inertial (both of these also sample s at t_obs)."""
+    """The chunk's outputs for ``points`` from two runs of ``run``: quasi-static
+    sweep.protocols.history.sampled.run_sampled or sweep.protocols.history.inertial.run_inertial (both also sample s
+    at the scene's t_obs, where it has any)."""
     loose, tight = (run(plan, points, plan.rtol / TIGHTER**e) for e in (1, 2))
     args = (plan.ratios[points], plan.a[points], plan.b[points], plan.A[points], plan.mu_ref[points])
     values, looser = read_off(tight, *args), read_off(loose, *args)
