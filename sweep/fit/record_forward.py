@@ -22,7 +22,7 @@ from ..scene.params import FrictionParams, require_finite
 from ..status import Status
 from .problem import Problem
 from .segments import load_history
-from .space import ParamSpace, _pair
+from .space import ParamSpace, bounded_space
 from .stack import ProblemStack
 
 __all__ = ["RECORD_FREE", "RecordStack", "make_record_space"]
@@ -57,19 +57,7 @@ def make_record_space(free: Sequence[str], params: FrictionParams, k: float | No
         values[name] = require_finite(f"start {name}", value)
     if "k" in free and not np.isfinite(values["k"]):
         raise InputError("k is free but has no start: give start={'k': value [1/m]} or records with k")
-    for name in dict(bounds or {}):
-        if name not in free:
-            raise InputError(f"bounds name {name!r}, which is not free; free: {list(free)}")
-    lo, hi = [], []
-    for name in free:
-        spec = dict(bounds or {}).get(name)
-        b = _default_bounds(name, values) if spec is None else _pair(name, spec)
-        if not b[0] <= values[name] <= b[1]:
-            raise InputError(f"start {name} = {values[name]!r} lies outside its bounds [{b[0]!r}, {b[1]!r}]")
-        lo.append(b[0])
-        hi.append(b[1])
-    return ParamSpace(names=free, start=np.array([values[n] for n in free]), lower=np.array(lo), upper=np.array(hi),
-                      values=values, V0=params.V0, g=params.g)
+    return bounded_space(free, values, bounds, _default_bounds, params)
 
 
 class RecordStack(ProblemStack):

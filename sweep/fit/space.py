@@ -11,7 +11,7 @@ of ``params`` (a preset or your own :class:`sweep.FrictionParams`), which are al
 from __future__ import annotations
 
 import itertools
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import InputError
 from ..scene.params import FrictionParams, require_finite
 
-__all__ = ["FREE", "UNITS", "ParamSpace", "default_bounds", "make_space"]
+__all__ = ["FREE", "UNITS", "ParamSpace", "bounded_space", "default_bounds", "make_space"]
 
 FREE = ("A", "m1", "m2", "D0", "K_over_M_factor")
 """Parameters a fit may free, in the order they are reported."""
@@ -108,13 +108,22 @@ def make_space(free: Sequence[str], params: FrictionParams, bounds: Mapping[str,
         if name not in FREE:
             raise InputError(f"start names {name!r}, which does not exist; allowed: {list(FREE)}")
         values[name] = require_finite(f"start {name}", value)
+    return bounded_space(free, values, bounds, default_bounds, params)
+
+
+def bounded_space(free: tuple[str, ...], values: dict[str, float], bounds: Mapping[str, Sequence[float]] | None,
+                  defaults: Callable[[str, dict[str, float]], tuple[float, float]],
+                  params: FrictionParams) -> ParamSpace:
+    """The ParamSpace of ``free`` started at ``values``: each free parameter's bounds from ``bounds`` or
+    ``defaults(name, values)``; InputError for bounds of a parameter that is not free, a lower bound <= 0 of a
+    POSITIVE one, or a start outside its bounds."""
     for name in dict(bounds or {}):
         if name not in free:
             raise InputError(f"bounds name {name!r}, which is not free; free: {list(free)}")
     lo, hi = [], []
     for name in free:
         spec = dict(bounds or {}).get(name)
-        b = default_bounds(name, values) if spec is None else _pair(name, spec)
+        b = defaults(name, values) if spec is None else _pair(name, spec)
         if name in POSITIVE and b[0] <= 0:
             raise InputError(f"bounds {name} = [{b[0]!r}, {b[1]!r}]: {name} must stay > 0, so the lower bound must "
                              f"be > 0")
