@@ -22,8 +22,8 @@ from collections.abc import Mapping
 import numpy as np
 
 __all__ = ["A_RANGE", "D0_RANGE", "K_OVER_M_RANGE", "NOT_FAILED", "PlausibilityWarning", "SLIP_MAX", "SLOPE_MAX",
-           "V_MAX", "implausible", "implausible_params", "implausible_slips", "not_ok_summary", "warn_implausible",
-           "warn_implausible_params", "warn_not_ok"]
+           "V_MAX", "implausible", "implausible_lab_axes", "implausible_params", "implausible_slips", "not_ok_summary",
+           "warn_implausible", "warn_implausible_params", "warn_not_ok"]
 
 V_MAX = 1e-2
 """Largest plausible driving velocity [m s-1] (1 cm/s)."""
@@ -82,26 +82,30 @@ def _span(values) -> tuple[float, float] | None:
     return (float(v.min()), float(v.max())) if v.size else None
 
 
-def implausible_params(A=None, m1=None, m2=None, D0=None) -> list[str]:
+def implausible_params(A=None, m1=None, m2=None, D0=None, *, names: Mapping[str, str] | None = None) -> list[str]:
     """One message per friction parameter with a value outside its plausible range (:data:`A_RANGE`,
     :data:`SLOPE_MAX`, :data:`D0_RANGE`), naming the field and the likely unit mistake; empty if all are plausible.
     Each argument: a value or values (a scene's parameter and its axis, a fit's start and bounds); None: not
-    checked. ``A``, ``m1``, ``m2`` [1], ``D0`` [m]."""
+    checked. ``A``, ``m1``, ``m2`` [1], ``D0`` [m]. ``names``: the spelling the user gave a parameter in, where it
+    differs (the laboratory's {"A": "a", "D0": "Dc"}: a = A, Dc = D0), used in the messages."""
+    shown = {"A": "A", "D0": "D0", **dict(names or {})}
     messages = []
     span = _span(D0) if D0 is not None else None
     if span and (span[0] < D0_RANGE[0] or span[1] > D0_RANGE[1]):
         lo, hi = span
-        guess = ("did you give µm? D0 is in m, 1 µm = 1e-6 m" if hi > D0_RANGE[1] else
-                 "did you convert to m twice? D0 is in m, 1 µm = 1e-6 m")
-        messages.append(f"D0 {_range_text(lo, hi)} m is outside {D0_RANGE[0]:g}..{D0_RANGE[1]:g} m of measured "
+        n = shown["D0"]
+        guess = (f"did you give µm? {n} is in m, 1 µm = 1e-6 m" if hi > D0_RANGE[1] else
+                 f"did you convert to m twice? {n} is in m, 1 µm = 1e-6 m")
+        messages.append(f"{n} {_range_text(lo, hi)} m is outside {D0_RANGE[0]:g}..{D0_RANGE[1]:g} m of measured "
                         f"memory lengths (~0.1-10 µm): {guess}")
     span = _span(A) if A is not None else None
     if span and (span[0] < A_RANGE[0] or span[1] > A_RANGE[1]):
         lo, hi = span
-        guess = ("did you give it in percent, or give mu0 instead? A is a number, e.g. 0.01" if hi > A_RANGE[1]
-                 else "did you divide it by 100 twice? A is a number, e.g. 0.01")
-        messages.append(f"A {_range_text(lo, hi)} is outside {A_RANGE[0]:g}..{A_RANGE[1]:g} of measured direct-effect "
-                        f"coefficients (~1e-3..5e-2): {guess}")
+        n = shown["A"]
+        guess = (f"did you give it in percent, or give mu0 instead? {n} is a number, e.g. 0.01" if hi > A_RANGE[1]
+                 else f"did you divide it by 100 twice? {n} is a number, e.g. 0.01")
+        messages.append(f"{n} {_range_text(lo, hi)} is outside {A_RANGE[0]:g}..{A_RANGE[1]:g} of measured "
+                        f"direct-effect coefficients (~1e-3..5e-2): {guess}")
     for name, values in (("m1", m1), ("m2", m2)):
         span = _span(values) if values is not None else None
         if span and max(abs(span[0]), abs(span[1])) > SLOPE_MAX:
@@ -121,6 +125,26 @@ def implausible_slips(field: str, values) -> list[str]:
             f"did you give µm? {field} is in m, 1 µm = 1e-6 m"]
 
 
+def implausible_lab_axes(axes: Mapping[str, object] | None, g: float = 9.81) -> list[str]:
+    """Messages for a scene's axes in the laboratory's parameters (docs/physics.md 7b) outside their plausible
+    ranges, named as given: ``a`` as A and ``Dc`` [m] as D0 (:data:`A_RANGE`, :data:`D0_RANGE`), ``b`` [1] within
+    :data:`SLOPE_MAX`, ``k`` [1/m] through K/M = k g [s-2] within :data:`K_OVER_M_RANGE`; empty if all are
+    plausible or none is an axis."""
+    axes = {n: v for n, v in dict(axes or {}).items() if v is not None}
+    messages = implausible_params(A=axes.get("a"), D0=axes.get("Dc"), names={"A": "a", "D0": "Dc"})
+    span = _span(axes["b"]) if "b" in axes else None
+    if span and max(abs(span[0]), abs(span[1])) > SLOPE_MAX:
+        messages.append(f"b {_range_text(*span)}: |b| above {SLOPE_MAX:g} (measured ~1e-3..5e-2: the evolution "
+                        f"effect per e-fold of V): did you give it in percent? b is a number, e.g. 0.015")
+    span = _span(axes["k"]) if "k" in axes else None
+    if span and (span[0] * g < K_OVER_M_RANGE[0] or span[1] * g > K_OVER_M_RANGE[1]):
+        messages.append(f"k {_range_text(*span)} 1/m (K/M = k g = {_range_text(span[0] * g, span[1] * g)} s^-2) is "
+                        f"outside {K_OVER_M_RANGE[0] / g:.3g}..{K_OVER_M_RANGE[1] / g:.3g} 1/m of a table-top slider: "
+                        "k is friction per metre of load-point displacement (K / (M g), 1/m): did you give it per "
+                        "µm, or K in N/m?")
+    return messages
+
+
 def _range_text(lo: float, hi: float) -> str:
     return f"= {lo:g}" if lo == hi else f"{lo:g}..{hi:g}"
 
@@ -129,8 +153,8 @@ def warn_implausible_params(params, axes=None) -> list[str]:
     """ONE :class:`PlausibilityWarning` (once per process for the same text, as :func:`warn_implausible`) for the
     friction parameters of a scene that lie outside their plausible ranges (:func:`implausible_params`): ``params`` a
     :class:`sweep.FrictionParams` (or anything with attributes A, m1, m2, D0), ``axes`` the scene's extra axes
-    {name: values} (those named A, m1, m2 or D0 are checked with their values; the others are ignored). Returns the
-    messages (empty: all plausible)."""
+    {name: values} (those named A, m1, m2 or D0 are checked with their values, the laboratory's a, b, Dc, k by
+    :func:`implausible_lab_axes`; the others are ignored). Returns the messages (empty: all plausible)."""
     axes = dict(axes or {})
     values = {}
     for name in ("A", "m1", "m2", "D0"):
@@ -138,7 +162,7 @@ def warn_implausible_params(params, axes=None) -> list[str]:
         if name in axes and axes[name] is not None:
             v += np.asarray(axes[name], dtype=float).reshape(-1).tolist()
         values[name] = v or None
-    messages = implausible_params(**values)
+    messages = implausible_params(**values) + implausible_lab_axes(axes, getattr(params, "g", 9.81))
     if messages:
         text = "; ".join(messages)
         if text not in _ISSUED:

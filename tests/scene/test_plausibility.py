@@ -128,3 +128,27 @@ def test_gamma_over_A_is_one_warning_for_many_samples(no_engine):
 def test_plausible_data_say_nothing(no_engine):
     _, caught = _check([_slips(1.0, f"s{i}") for i in range(3)])
     assert caught == []
+
+
+@pytest.mark.parametrize("axes, words", [
+    ({"a": [0.5, 1.0]}, ["a 0.5..1 is outside", "0.0001..0.1", "a is a number"]),
+    ({"Dc": [10.0, 30.0]}, ["Dc 10..30 m", "did you give µm? Dc is in m"]),
+    ({"b": [0.01, 1.5]}, ["b 0.01..1.5", "|b| above 0.5"]),
+    ({"k": [1e-6, 1e-5]}, ["k 1e-06..1e-05 1/m", "K/M = k g", "per metre of load-point displacement"]),
+    ({"k": [1e11, 1e12]}, ["k 1e+11..1e+12 1/m", "K in N/m"]),
+])
+def test_a_lab_axis_far_outside_its_range_is_warned_under_its_own_name(axes, words):
+    """A scene's axes in the laboratory's parameters (a, b, Dc, k: docs/physics.md 7b) are checked as the paper's
+    (a = A, Dc = D0, k g = K/M; b against SLOPE_MAX) and named as the user spelt them: one warning for the call."""
+    messages, caught = _caught(warn_implausible_params, S2, axes)
+    assert len(caught) == 1 and len(messages) == 1
+    for w in words:
+        assert w in caught[0], (w, caught[0])
+    assert "A " not in caught[0].split(":")[0] and "D0 " not in caught[0].split(":")[0]
+
+
+def test_plausible_lab_axes_are_quiet():
+    """The usual laboratory ranges (a, b ~ 0.005-0.02, Dc ~ 1-100 um, k ~ 1e2-1e5 per m) give no warning."""
+    axes = {"a": [0.005, 0.02], "b": [0.0, 0.02], "Dc": [1e-6, 1e-4], "k": [1e2, 1e5]}
+    messages, caught = _caught(warn_implausible_params, S2, axes)
+    assert messages == [] and caught == []
