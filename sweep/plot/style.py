@@ -133,14 +133,31 @@ def preset_name(params: dict[str, float]) -> str | None:
     return None
 
 
+LAB_SCENE_KEYS = ("a", "b", "Dc", "k")
+"""Axis tables that mark a scene as given in the laboratory's parameters (its caption then names them)."""
+
+
+def _speaks_lab(params: dict[str, float], scene: dict) -> bool:
+    """Whether a caption names the laboratory's a, b, Dc, mu0: the law is theirs (m2 = 0) and the scene is a load
+    history or has axes in their names (files store the paper's parameters, whichever were given)."""
+    return (params.get("m2", 0.0) == 0.0 and {"A", "m1", "D0", "m0"} <= set(params)
+            and (scene.get("protocol") == "history" or any(n in scene for n in LAB_SCENE_KEYS)))
+
+
 def caption(ds: xr.Dataset, what: str) -> str:
-    """``what`` followed by the parameters of the file: preset, A, m1, m2, D0, V0, rtol and model."""
+    """``what`` followed by the parameters of the file: preset, A, m1, m2, D0, V0 (a, b, Dc, mu0, V0 for a load
+    history or a scene with laboratory axes, docs/physics.md 7b), rtol and model."""
     params = file_params(ds)
     scene = scene_table(ds.attrs["scene"]) if "scene" in ds.attrs else {}
     name = preset_name(params)
-    shown = ", ".join(f"{k}={params[k]:g}" for k in ("A", "m1", "m2") if k in params)
-    if "D0" in params:
-        shown += f", D0={params['D0'] * 1e6:g} µm, V0={params.get('V0', 1e-6) * 1e6:g} µm/s"
+    v0 = f"V0={params.get('V0', 1e-6) * 1e6:g} µm/s"
+    if _speaks_lab(params, scene):
+        shown = (f"a={params['A']:g}, b={params['A'] + params['m1']:g}, Dc={params['D0'] * 1e6:g} µm, "
+                 f"mu0={params['m0']:g}, {v0}")
+    else:
+        shown = ", ".join(f"{k}={params[k]:g}" for k in ("A", "m1", "m2") if k in params)
+        if "D0" in params:
+            shown += f", D0={params['D0'] * 1e6:g} µm, {v0}"
     model = scene.get("model") or str(ds.attrs.get("model", "")).split(" ")[0]
     rtol = scene.get("rtol", ds.attrs.get("rtol"))
     numerics = ", ".join(x for x in (f"rtol {rtol:g}" if rtol is not None else "",

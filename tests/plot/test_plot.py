@@ -188,6 +188,21 @@ def test_title_names_the_parameters(stop_file, hopf_file):
     assert "preset" not in caption(custom, "x") and "m2=0.001" in caption(custom, "x")
 
 
+def test_a_lab_scene_is_captioned_in_the_labs_parameters():
+    """A load history given in the laboratory's a, b, Dc, mu0 (files store the paper's A, m1, m2, D0) is captioned in
+    a, b, Dc (a = A, b = A + m1, Dc = D0: docs/physics.md 7b); a stop scene of the same law keeps the paper's names."""
+    lab = sweep.FrictionParams.from_lab(a=0.011, b=0.017, Dc=3e-6, mu0=0.55)
+    hist = sweep.run_sweep(sweep.Scene(protocol="history", params=lab, K_over_M=[2e4], V=[1e-6], model="quasistatic",
+                                       options={"segments": [{"V_ratio": 1.0, "duration": 1.0},
+                                                             {"V_ratio": 10.0, "duration": 1.0}]}), progress=False)
+    text = caption(hist, "h")
+    for part in ("a=0.011", "b=0.017", "Dc=3 µm", "mu0=0.55", "V0=1 µm/s"):
+        assert part in text, (part, text)
+    assert "m1=" not in text and "A=" not in text
+    stop = sweep.run_sweep(sweep.Scene(protocol="stop", params=lab, K_over_M=[1e5], V=[1e-6]), progress=False)
+    assert "A=0.011" in caption(stop, "s") and "a=" not in caption(stop, "s")
+
+
 def test_what_cannot_be_drawn_is_a_clear_error(stop_file, tmp_path, capsys):
     other = tmp_path / "other.nc"
     xr.Dataset({"foo": ("x", np.arange(3.0))}).to_netcdf(other)
