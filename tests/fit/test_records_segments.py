@@ -47,5 +47,5 @@ def test_velocity_column_and_load_history():
 def test_record_starting_in_a_hold_is_refused():
     t = np.linspace(0.0, 100.0, 500)
     x = np.where(t < 50.0, 0.0, 1e-6 * (t - 50.0))
-    with pytest.raises(InputError, match="does not move at the start"):
+    with pytest.raises(InputError, match="starts in a hold"):
         record_steps(Record(t, np.full(t.size, 0.6), displacement=x))
