@@ -21,8 +21,11 @@ PROGRESS_AFTER_S = 2.0
 
 def add_fit_command(add) -> None:
     """Register ``fit`` through ``add(name, **kw)`` (the sub-parser factory of sweep.cli.build_parser)."""
-    fit = add("fit", help="fit the friction parameters to relaxation curves / relaxed slips (netCDF + PNG)")
-    fit.add_argument("config", help="fit TOML: preset/[params], free, [bounds], [start], [[data]] file = ...")
+    fit = add("fit", help="fit the friction parameters to relaxation curves, relaxed slips or laboratory records "
+                          "(netCDF + PNG)")
+    fit.add_argument("config", help="fit TOML: preset/[params], free, [bounds], [start], [[data]] file = ... (a "
+                                    "record's [[data]] also: columns, units, steps, k, noise, detrend, t_start, "
+                                    "t_end)")
     fit.add_argument("-o", "--output", type=Path, default=DEFAULT_OUT, help=f"netCDF output (default {DEFAULT_OUT})")
     fit.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
     fit.add_argument("--overwrite", action="store_true", help="replace existing output files")

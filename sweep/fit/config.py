@@ -12,6 +12,9 @@
     [[data]]
     file = "curve_1um.csv"        # relative to this TOML file; CSV or netCDF (sweep.fit.read)
     sample = "s2"                 # optional: data sets with the same sample share parameters
+    [[data]]
+    file = "p4966.txt"            # a laboratory record (sweep.fit.records.read_record) and its options:
+    columns = {time = "Zeit"}     # columns, units, steps, k, noise, detrend, t_start, t_end
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from typing import Any
 
 from ..errors import InputError
 from ..scene.scene import _params_from, _read_toml
-from .read import read_data
+from .read import RECORD_OPTIONS, read_data
 
 __all__ = ["FIT_KEYS", "load_fit_config"]
 
@@ -46,11 +49,12 @@ def load_fit_config(path: str | Path) -> dict[str, Any]:
     for i, entry in enumerate(entries):
         if not isinstance(entry, Mapping) or "file" not in entry:
             raise InputError(f"[[data]] number {i + 1} needs file = \"...\"")
-        extra = set(entry) - {"file", "sample", "name"}
+        extra = set(entry) - {"file", "sample", "name", *RECORD_OPTIONS}
         if extra:
             raise InputError(f"[[data]] number {i + 1} has unknown key(s) {sorted(extra)}; allowed: file, sample, "
-                             f"name")
-        data.append(read_data(path.parent / entry["file"], sample=entry.get("sample"), name=entry.get("name")))
+                             f"name and a record's {', '.join(RECORD_OPTIONS)}")
+        data.append(read_data(path.parent / entry["file"], sample=entry.get("sample"), name=entry.get("name"),
+                              record={k: entry[k] for k in RECORD_OPTIONS if k in entry}))
     kwargs = {k: cfg[k] for k in ("free", "per_data_set", "poor", "rtol", "global_rtol", "profiles", "bounds",
                                   "start") if k in cfg}
     return {"data": data, "params": _params_from(cfg) if ("preset" in cfg or "params" in cfg) else "sample2",

@@ -35,7 +35,9 @@ from __future__ import annotations
 
 import csv
 import os
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -47,17 +49,31 @@ from .units import to_si
 __all__ = ["read_data"]
 
 
-def read_data(path: str | os.PathLike, sample: str | None = None, name: str | None = None) -> Data:
-    """A :class:`Curve` or :class:`RelaxedSlips` from a CSV or netCDF file (module docstring), in SI units.
-    ``sample`` and ``name`` label it (default: the header's ``sample``, else "sample"; the file's stem)."""
+RECORD_OPTIONS = ("columns", "units", "steps", "k", "noise", "detrend", "t_start", "t_end")
+"""Options of a laboratory record's file (sweep.fit.records.read_record), also keys of ``sweep fit``'s [[data]]."""
+
+
+def read_data(path: str | os.PathLike, sample: str | None = None, name: str | None = None,
+              record: Mapping[str, Any] | None = None) -> Data:
+    """A :class:`Curve` or :class:`RelaxedSlips` from a CSV or netCDF file (module docstring), in SI units, or a
+    laboratory record (sweep.fit.records.Record) from a text file whose header names a time and a friction column,
+    or wherever ``record`` (options of read_record, :data:`RECORD_OPTIONS`) is given. ``sample`` and ``name`` label it
+    (default: the header's ``sample``, else "sample"; the file's stem)."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"data file {str(path)!r} does not exist")
     where = f"data file {str(path)!r}"
+    record = dict(record or {})
+    unknown = sorted(set(record) - set(RECORD_OPTIONS))
+    if unknown:
+        raise InputError(f"{where}: unknown record option(s) {unknown}; allowed: {list(RECORD_OPTIONS)}")
     if path.suffix.lower() in (".nc", ".nc4", ".netcdf"):
+        if record:
+            raise InputError(f"{where}: {sorted(record)} are options of a laboratory record (a text file), not of "
+                             f"a netCDF file")
         columns, units, meta = _netcdf(path, where)
-    elif is_record_file(path):  # a laboratory record: mu(t) and the load point (sweep.fit.records)
-        return read_record(path, sample=sample, name=name)
+    elif record or is_record_file(path):  # a laboratory record: mu(t) and the load point (sweep.fit.records)
+        return read_record(path, sample=sample, name=name, **record)
     else:
         columns, units, meta = _csv(path, where)
     sample = sample or meta.get("sample", (None, None))[0] or "sample"

@@ -5,30 +5,37 @@ steps and holds (docs/fit.md, "Laboratory records"). The history is given as a l
 velocity [m s-1]), or found from the record's load-point displacement or velocity (sweep.fit.segments). The model
 starts from steady sliding at the first segment's velocity at the record's first time.
 
-The reader takes text files as laboratories write them: columns separated by commas, semicolons, tabs or blanks
-(trailing delimiters ignored); comment lines starting with ``#`` or ``%`` (``# k = 2e3 1/m`` there sets the
-stiffness); a header naming the columns with their units in brackets or parentheses (``Time (s)``, ``mu [-]``) or
-in a units row below the names; latin-1 files (µm); irregular sample times. Columns it knows by name (case, blanks
-and units aside; ``columns={"time": "Zeit"}`` names others):
+The reader takes text files as laboratories write them: columns separated by tabs, semicolons, commas or blanks
+(the first data row decides; trailing delimiters ignored), decimal commas, CR LF, latin-1 (µm); comment lines starting
+with ``#`` or ``%`` (``# k = 2e3 1/m`` there sets the stiffness); title lines above the header; a header naming the
+columns with their units in brackets or parentheses (``Time (s)``, ``mu [-]``), as the name's last part (PSU's
+``time_s``, ``lpdisp_um``, ``shr_stress_mpa``) or in a units row below the names (xlook's ``sec  mic  MPa  .``);
+columns it does not use (a row counter, a sync, a sampling rate); irregular sample times; 1e5 rows (numpy's reader;
+row by row only to name a bad row). Columns it knows by name (case, blanks and units aside; ``columns={"time":
+"Zeit"}`` names others, ``units={"displacement": "um"}`` gives a unit the file does not write):
 
-* time [s, ms, min];
-* load-point displacement [m, mm, um, nm] or load-point velocity [m/s, mm/s, um/s];
-* friction mu [1], or shear and normal stress [Pa, kPa, MPa] (mu = tau/sigma).
+* time [s, ms, min, h; sec];
+* load-point displacement [m, mm, um, nm; mic, micron] or load-point velocity [length/time];
+* friction mu [1], or shear and normal stress [Pa, kPa, MPa, GPa, bar, psi] or load [N, kN, lbf, kgf] (mu =
+  shear/normal, both stresses or both loads).
 
-Anything else it refuses in one line naming the column and what was found.
+Anything else it refuses in one line naming the column and what was found: a missing or unknown column or unit,
+NaN or empty values, time that repeats or goes back, a row cut short, a step outside the data.
 """
 
 from __future__ import annotations
 
 import os
 import re
+import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
+from .units import FORCE, RECORD_UNITS
 
 __all__ = ["ROLES", "Record", "is_record_file", "read_record"]
 
@@ -36,27 +43,32 @@ ROLES = ("time", "displacement", "velocity", "mu", "shear", "normal")
 """The columns a record may have (``columns`` maps these to the file's names)."""
 
 _ALIASES = {
-    "time": ("t", "time", "times", "elapsed_time", "time_s"),
+    "time": ("t", "time", "times", "elapsed_time", "time_elapsed", "run_time", "test_time"),
     "displacement": ("lp_disp", "lpdisp", "load_point_displacement", "displacement", "lp_displacement", "x_lp",
-                     "disp", "load_point", "lpd", "d_lp"),
-    "velocity": ("v_lp", "lp_velocity", "load_point_velocity", "velocity", "vlp", "v"),
-    "mu": ("mu", "µ", "μ", "friction", "friction_coefficient", "coefficient_of_friction", "cof", "mu_f"),
-    "shear": ("tau", "shear", "shear_stress", "tau_s"),
-    "normal": ("sigma", "normal", "normal_stress", "sigma_n", "sn"),
+                     "disp", "load_point", "lpd", "d_lp", "load_point_disp", "lp_position", "ram_disp",
+                     "axial_disp", "shear_disp", "slip_lp"),
+    "velocity": ("v_lp", "lp_velocity", "load_point_velocity", "velocity", "vlp", "v", "lp_vel", "lp_v",
+                 "load_point_vel"),
+    "mu": ("mu", "µ", "μ", "friction", "friction_coefficient", "coefficient_of_friction", "cof", "mu_f",
+           "friction_coef", "fric_coef"),
+    "shear": ("tau", "shear", "shear_stress", "tau_s", "shr_stress", "shear_load", "shear_force", "shr_load",
+              "f_s", "fs", "tau_mpa"),
+    "normal": ("sigma", "normal", "normal_stress", "sigma_n", "sn", "nor_stress", "normal_load", "normal_force",
+               "nor_load", "f_n", "fn", "effns", "eff_ns", "effective_normal_stress", "sigma_eff", "sigma_n_eff"),
 }
 _PART = {"time": "time", "displacement": "disp", "velocity": "veloc", "mu": "fric", "shear": "shear",
          "normal": "normal"}
 """A part of a name that tells its role where no alias matches exactly ('Load point disp.', 'Friction coef.')."""
-_UNITS = {
-    "time": {"s": 1.0, "sec": 1.0, "ms": 1e-3, "min": 60.0},
-    "displacement": {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "micron": 1e-6, "nm": 1e-9},
-    "velocity": {"m/s": 1.0, "mm/s": 1e-3, "um/s": 1e-6, "µm/s": 1e-6, "μm/s": 1e-6, "nm/s": 1e-9},
-    "mu": {"": 1.0, "-": 1.0, "1": 1.0},
-    "shear": {"pa": 1.0, "kpa": 1e3, "mpa": 1e6},
-    "normal": {"pa": 1.0, "kpa": 1e3, "mpa": 1e6},
-}
+_NOT_LOAD_POINT = ("nor", "hor", "dilat", "layer", "thick", "vert", "gap", "lvdt", "dcdt")
+"""Parts of a displacement's name that say it is not the load point's (normal, horizontal, dilatancy, layer
+thickness, a gauge): such a column is never taken as the load point by a part of its name."""
+_UNITLESS = {".", "-", "", "1", "none", "bit", "bits", "hz", "v", "mv", "count", "counts", "#", "n/a", "na",
+             "no_unit", "unitless", "%", "c", "°c", "deg", "ohm", "a.u.", "au"}
+"""What a units row writes beside the units of the columns a record uses (a row counter's '.', a sync 'bit')."""
 _STIFFNESS = {"1/m": 1.0, "m-1": 1.0, "1/mm": 1e3, "mm-1": 1e3, "1/um": 1e6, "um-1": 1e6, "1/µm": 1e6}
 _UNIT_IN_NAME = re.compile(r"^(.*?)\s*[\[(]\s*([^\])]*?)\s*[\])]\s*$")
+HEADER_LINES = 500
+"""Lines of a file that :func:`is_record_file` reads for its header."""
 
 
 def _key(name: str) -> str:
@@ -67,6 +79,26 @@ def _key(name: str) -> str:
 def _unit_key(unit: str) -> str:
     """A unit compared to the tables: lower case, no blanks, s-1 and s^-1 as /s."""
     return unit.strip().replace(" ", "").replace("s^-1", "/s").replace("s-1", "/s").lower()
+
+
+def _role_of(key: str, role: str) -> tuple[bool, str | None]:
+    """Whether a column's name (:func:`_key`) names ``role`` and the unit written as its last part, if any
+    (``time_s``, ``lp_disp_um``, ``shr_stress_mpa``, ``v_lp_um_s``: PSU's and xlook's style); an alias that ends as
+    a unit does (``tau_s``, ``sigma_n``) is the alias."""
+    if key in _ALIASES[role]:
+        return True, None
+    parts = key.split("_")
+    for n in (2, 1):
+        if len(parts) > n and "_".join(parts[:-n]) in _ALIASES[role]:
+            unit = "/".join(parts[-n:])
+            if _unit_key(unit) in RECORD_UNITS[role]:
+                return True, unit
+    return False, None
+
+
+def _unit_like(field: str) -> bool:
+    u = _unit_key(field.strip("[]() "))
+    return u in _UNITLESS or any(u in table for table in RECORD_UNITS.values())
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,6 +162,31 @@ class Record:
     def n(self) -> int:
         return self.t.size
 
+    def window(self, t_start: float | None = None, t_end: float | None = None) -> Record:
+        """The record between ``t_start`` and ``t_end`` [s, its own clock] (default: its first and last time): the
+        samples there, the steps from the one in force at the new first time. The model starts from steady sliding at
+        the new first time: cut a record that starts in a hold (or right after a change) to where it slides steadily.
+        """
+        where = f"record {self.name!r}"
+        lo, hi = (float(self.t[0]) if t_start is None else float(t_start),
+                  float(self.t[-1]) if t_end is None else float(t_end))
+        for label, value in (("t_start", lo), ("t_end", hi)):
+            if not (np.isfinite(value) and self.t[0] <= value <= self.t[-1]):
+                raise InputError(f"{where}: {label} = {value:g} s is not in the data (time runs from {self.t[0]:g} "
+                                 f"to {self.t[-1]:g} s)")
+        keep = (self.t >= lo) & (self.t <= hi)
+        if keep.sum() < 10:
+            raise InputError(f"{where}: {int(keep.sum())} samples between t_start = {lo:g} s and t_end = {hi:g} s; a "
+                             f"record needs at least 10")
+        t = self.t[keep]
+        steps = None
+        if self.steps is not None:
+            first = int(np.searchsorted([s for s, _ in self.steps], t[0], side="right")) - 1
+            steps = ((float(t[0]), self.steps[first][1]),) + tuple(s for s in self.steps[first + 1:] if s[0] < t[-1])
+        cut = {f: None if getattr(self, f) is None else getattr(self, f)[keep]
+               for f in ("mu", "displacement", "velocity", "noise")}
+        return replace(self, t=t, steps=steps, **cut)
+
 
 def _column(where: str, role: str, values, n: int | None = None) -> np.ndarray:
     try:
@@ -169,11 +226,15 @@ def _steps(where: str, steps, t: np.ndarray) -> tuple[tuple[float, float], ...]:
 
 # --- the reader -------------------------------------------------------------------------------------------------
 
-def _lines(path: Path) -> list[str]:
+def _lines(path: Path, limit: int | None = None) -> list[str]:
+    """The file's lines (all, or the first ``limit``): UTF-8 (a byte-order mark dropped) or latin-1 (a lab PC's µ as
+    one byte); CR LF, CR or LF."""
+    with open(path, "rb") as fh:
+        raw = fh.read() if limit is None else b"".join(fh.readline() for _ in range(limit))
     try:
-        text = path.read_text(encoding="utf-8-sig")
+        text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:
-        text = path.read_text(encoding="latin-1")  # a lab PC's export (µ as one byte)
+        text = raw.decode("latin-1")
     return text.splitlines()
 
 
@@ -195,16 +256,33 @@ def _numeric(fields: list[str]) -> bool:
     return bool(fields)
 
 
-def _is_unit(text: str) -> bool:
-    u = _unit_key(text.strip("[]() "))
-    return any(u in table for table in _UNITS.values()) or text.strip() in ("", "-")
+@dataclass
+class _Header:
+    names: list[str]
+    units: list[str | None]
+    delimiter: str | None
+    body: int
+    """Index of the first data line."""
+    meta: dict[str, tuple[str, str]]
 
 
-def _parse(lines: list[str], where: str):
-    """(names, units per name (None: none), data rows (n, ncol), meta {key: (value, unit)})."""
+def _data_line(line: str) -> str | bool | None:
+    """The delimiter under which ``line`` is a row of numbers (tab, semicolon, comma, else blanks: None), or False."""
+    for d in ("\t", ";", ","):
+        if d in line and _numeric(_split(line, d)):
+            return d
+    return None if _numeric(_split(line, None)) else False
+
+
+def _header(lines: list[str], where: str) -> _Header:
+    """The header of a record file: comment lines (``#``, ``%``: ``# key = value unit`` kept as metadata), then lines
+    that are not numbers (a title, the names, a units row), then the data, whose first row decides how columns are
+    separated (tab, semicolon, comma, else blanks). The last non-number line names the columns, or the one before it
+    where the last is a units row (as many fields, each a unit or a unit-less mark such as a row counter's '.', at
+    least one a unit a record column takes)."""
     meta: dict[str, tuple[str, str]] = {}
-    pre, body, delimiter = [], [], None
-    for line in lines:
+    pre, delimiter, body_at = [], None, len(lines)
+    for i, line in enumerate(lines):
         s = line.strip()
         if not s:
             continue
@@ -214,99 +292,137 @@ def _parse(lines: list[str], where: str):
                 parts = rest.split(None, 1)
                 meta[key.strip().lower()] = (parts[0] if parts else "", parts[1].strip() if len(parts) > 1 else "")
             continue
-        if not body:
-            if not pre:  # the first line that is not a comment decides how columns are separated
-                delimiter = next((d for d in ("\t", ";", ",") if d in s), None)
-            fields = _split(s, delimiter)
-            if not _numeric(fields):
-                pre.append(s)
-                continue
-        body.append(s)
+        d = _data_line(s)
+        if d is not False:
+            body_at, delimiter = i, d
+            break
+        pre.append(s)
     if not pre:
         raise InputError(f"{where}: no header naming the columns (time, load-point displacement, mu, ...)")
-    if not body:
+    if body_at == len(lines):
         raise InputError(f"{where}: a header but no data rows")
-    names = _split(pre[-1], delimiter)
+    width = len(_split(lines[body_at].strip(), delimiter))
+
+    def fields(line: str) -> list[str]:  # a header separated by blanks above tab-separated rows
+        f = _split(line, delimiter)
+        return f if len(f) == width or delimiter is None else (_split(line, None) if len(_split(line, None)) == width
+                                                                 else f)
+
+    names = fields(pre[-1])
     units: list[str | None] = [None] * len(names)
-    if len(pre) >= 2 and all(_is_unit(u) for u in _split(pre[-1], delimiter)):  # a units row below the names
-        units = [u.strip("[]() ") for u in _split(pre[-1], delimiter)]
-        names = _split(pre[-2], delimiter)
-        units += [None] * (len(names) - len(units))
+    if len(pre) >= 2:
+        above = fields(pre[-2])
+        if len(above) == len(names) and all(_unit_like(u) for u in names) and \
+                any(_unit_key(u.strip("[]() ")) not in _UNITLESS for u in names):  # a units row below the names
+            names, units = above, [u.strip("[]() ") or None for u in names]
     for j, name in enumerate(names):
         m = _UNIT_IN_NAME.match(name)
         if m:
             names[j], units[j] = m.group(1).strip(), m.group(2)
+    return _Header(names, units, delimiter, body_at, meta)
+
+
+def _rows(lines: list[str], h: _Header, where: str) -> np.ndarray:
+    """The data rows (n, columns): numpy's reader, or row by row where it fails (to name the row)."""
+    body = [s for s in (line.strip() for line in lines[h.body:]) if s and s[0] not in "#%"]
+    d = h.delimiter
+    if d is not None and body and body[0].endswith(d):  # a trailing delimiter on every row
+        body = [s.rstrip(d + " ") for s in body]
+    if d != "," and any("," in s for s in body[:20]):  # decimal commas
+        body = [s.replace(",", ".") for s in body]
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # an empty line numpy would skip with a warning: row by row
+            data = np.loadtxt(body, delimiter=d, ndmin=2, dtype=float, comments=None)
+        if data.shape[1] == len(h.names):
+            return data
+    except ValueError:
+        pass
     rows = []
     for i, s in enumerate(body):
-        fields = _split(s, delimiter)
-        if len(fields) != len(names):
-            raise InputError(f"{where}: data row {i + 1} has {len(fields)} values, the header {len(names)} "
-                             f"({', '.join(names)})")
+        fields = _split(s, d)
+        if len(fields) != len(h.names):
+            last = " (the last line, cut short: remove it)" if i == len(body) - 1 else ""
+            raise InputError(f"{where}: data row {i + 1} has {len(fields)} values, the header {len(h.names)} "
+                             f"({', '.join(h.names)}){last}")
         try:
-            rows.append([_number(f, delimiter) for f in fields])
+            rows.append([float("nan") if f.lower() in ("nan", "") else float(f) for f in fields])
         except ValueError:
             raise InputError(f"{where}: data row {i + 1} has a value that is not a number: {s!r}") from None
-    return names, units, np.array(rows, dtype=float), meta
+    return np.array(rows, dtype=float).reshape(-1, len(h.names))
 
 
-def _number(text: str, delimiter: str | None) -> float:
-    text = text.strip()
-    if text.lower() in ("nan", ""):
-        return float("nan")
-    if delimiter != "," and text.count(",") == 1 and "." not in text:
-        text = text.replace(",", ".")  # a decimal comma
-    return float(text)
-
-
-def _find(names: list[str], columns: Mapping[str, str] | None, where: str) -> dict[str, int]:
-    """Column index of each role found: first the ``columns`` mapping, then the aliases."""
-    found: dict[str, int] = {}
+def _find(names: list[str], columns: Mapping[str, str] | None, where: str) -> dict[str, tuple[int, str | None]]:
+    """Column index of each role found, with the unit its name ends in (``time_s``) if any: first the ``columns``
+    mapping, then the aliases (exact, or with a unit as their last part), then a part of the name."""
+    found: dict[str, tuple[int, str | None]] = {}
+    keys = [_key(_UNIT_IN_NAME.sub(r"\1", n)) for n in names]
     for role, name in dict(columns or {}).items():
         if role not in ROLES:
             raise InputError(f"columns: {role!r} is not a record column; use one of {list(ROLES)}")
-        keys = [_key(n) for n in names]
         if name in names:
-            found[role] = names.index(name)
-        elif _key(_UNIT_IN_NAME.sub(r"\1", name)) in keys:
-            found[role] = keys.index(_key(_UNIT_IN_NAME.sub(r"\1", name)))
+            j = names.index(name)
+        elif _key(_UNIT_IN_NAME.sub(r"\1", str(name))) in keys:
+            j = keys.index(_key(_UNIT_IN_NAME.sub(r"\1", str(name))))
         else:
             raise InputError(f"{where}: columns[{role!r}] = {name!r} is not a column of the file; found {names}")
-    for match in (lambda k, role: k in _ALIASES[role], lambda k, role: _PART[role] in k):  # exact names first
-        for j, name in enumerate(names):
-            for role in ROLES:
-                if role not in found and j not in found.values() and match(_key(name), role):
-                    found[role] = j
+        found[role] = (j, _role_of(keys[j], role)[1])
+
+    def free(j: int) -> bool:
+        return all(j != i for i, _ in found.values())
+
+    for j, key in enumerate(keys):  # exact names first
+        for role in ROLES:
+            hit, unit = _role_of(key, role)
+            if hit and role not in found and free(j):
+                found[role] = (j, unit)
+    for j, key in enumerate(keys):
+        for role in ROLES:
+            if role not in found and free(j) and _PART[role] in key and \
+                    not (role == "displacement" and any(p in key for p in _NOT_LOAD_POINT)):
+                found[role] = (j, None)
     return found
 
 
 def _si(where: str, role: str, name: str, unit: str | None) -> float:
-    table = _UNITS[role]
+    table = RECORD_UNITS[role]
     if unit is None:
         if role == "mu":
             return 1.0
-        raise InputError(f"{where}: column {name!r} ({role}) has no unit; write it as '{name} [unit]' with a unit "
-                         f"from {sorted(table)}")
+        raise InputError(f"{where}: column {name!r} ({role}) has no unit; write it as '{name} [unit]' or give "
+                         f"units={{{role!r}: '<unit>'}}, a unit from {sorted(table)}")
     u = _unit_key(unit)
     if u not in table:
-        raise InputError(f"{where}: column {name!r} ({role}) has unit {unit!r}; use one of {sorted(table)}")
+        raise InputError(f"{where}: column {name!r} ({role}) has unit {unit!r}; use one of {sorted(table)} (or give "
+                         f"units={{{role!r}: '<unit>'}})")
     return table[u]
 
 
 def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = None,
-                steps: Sequence[tuple[float, float]] | None = None, k: float | None = None,
-                noise: float | None = None, sample: str | None = None, name: str | None = None) -> Record:
+                units: Mapping[str, str] | None = None, steps: Sequence[tuple[float, float]] | None = None,
+                k: float | None = None, noise: float | None = None, sample: str | None = None,
+                name: str | None = None, detrend: str | None = None, t_start: float | None = None,
+                t_end: float | None = None) -> Record:
     """A :class:`Record` from a laboratory text file (module docstring), in SI units.
 
     ``columns`` maps roles (:data:`ROLES`) to the file's column names where the reader does not know them;
+    ``units`` roles to units where the file gives none (or a wrong one), e.g. ``{"displacement": "um"}``;
     ``steps`` the history as (start time [s], velocity [m/s]) (default: found from the load point); ``k`` [1/m]
     (default: ``# k = value unit`` in the file's comments, else the fit's); ``noise`` [1] of mu (default: estimated);
-    ``sample`` (default: ``# sample = name`` in the comments, else "sample") and ``name`` (the file's stem)."""
+    ``sample`` (default: ``# sample = name`` in the comments, else "sample") and ``name`` (the file's stem);
+    ``detrend`` as :class:`Record`'s; ``t_start``, ``t_end`` [s, the file's clock]: keep only the samples between
+    them (:meth:`Record.window`: a record that starts in a hold is cut to a time in steady sliding)."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"record file {str(path)!r} does not exist")
     where = f"record file {str(path)!r}"
-    names, units, data, meta = _parse(_lines(path), where)
+    lines = _lines(path)
+    h = _header(lines, where)
+    names, data = h.names, _rows(lines, h, where)
     found = _find(names, columns, where)
+    for role in dict(units or {}):
+        if role not in ROLES:
+            raise InputError(f"units: {role!r} is not a record column; use one of {list(ROLES)}")
     if "time" not in found:
         raise InputError(f"{where}: no time column among {names}; name it with columns={{'time': '<name>'}}")
     if "mu" not in found and not {"shear", "normal"} <= found.keys():
@@ -317,8 +433,9 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
                          f"columns={{'displacement': '<name>'}} or give the steps")
 
     def col(role):
-        j = found[role]
-        values = data[:, j] * _si(where, role, names[j], units[j])
+        j, unit = found[role]
+        unit = dict(units or {}).get(role, h.units[j] if h.units[j] is not None else unit)
+        values = data[:, j] * _si(where, role, names[j], unit)
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:
             raise InputError(f"{where}: column {names[j]!r} ({role}) has {bad.size} NaN or empty value(s), first at "
@@ -329,25 +446,36 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
     back = np.flatnonzero(np.diff(t) <= 0)
     if back.size:
         i = int(back[0]) + 1
-        raise InputError(f"{where}: column {names[found['time']]!r} (time) is not strictly increasing: data row "
-                         f"{i + 1} ({t[i]:g} s) follows {t[i - 1]:g} s")
-    mu = col("mu") if "mu" in found else col("shear") / col("normal")
-    if k is None and "k" in meta:
-        value, unit = meta["k"]
+        what = "repeats a time" if t[i] == t[i - 1] else "is not strictly increasing"
+        raise InputError(f"{where}: column {names[found['time'][0]]!r} (time) {what}: data row {i + 1} ({t[i]:.9g} s)"
+                         f" follows {t[i - 1]:.9g} s ({back.size} such row(s)); sort the rows or remove the repeats")
+    if "mu" in found:
+        mu = col("mu")
+    else:
+        kinds = {r: "force" if _unit_key(dict(units or {}).get(r) or h.units[found[r][0]] or found[r][1] or "")
+                 in FORCE else "stress" for r in ("shear", "normal")}
+        if kinds["shear"] != kinds["normal"]:
+            raise InputError(f"{where}: column {names[found['shear'][0]]!r} (shear) is a {kinds['shear']} and "
+                             f"{names[found['normal'][0]]!r} (normal) a {kinds['normal']}: friction is their ratio; "
+                             f"give both as stresses or both as forces")
+        mu = col("shear") / col("normal")
+    if k is None and "k" in h.meta:
+        value, unit = h.meta["k"]
         if _unit_key(unit) not in _STIFFNESS:
             raise InputError(f"{where}: '# k = {value} {unit}': unit must be one of {sorted(_STIFFNESS)}")
         k = float(value) * _STIFFNESS[_unit_key(unit)]
-    return Record(t, mu, displacement=col("displacement") if "displacement" in found else None,
-                  velocity=col("velocity") if "velocity" in found else None, steps=steps, k=k, noise=noise,
-                  sample=sample or meta.get("sample", ("sample", ""))[0], name=name or path.stem)
+    rec = Record(t, mu, displacement=col("displacement") if "displacement" in found else None,
+                 velocity=col("velocity") if "velocity" in found else None, steps=steps, k=k, noise=noise,
+                 sample=sample or h.meta.get("sample", ("sample", ""))[0], name=name or path.stem, detrend=detrend)
+    return rec if t_start is None and t_end is None else rec.window(t_start, t_end)
 
 
 def is_record_file(path: str | os.PathLike) -> bool:
     """Whether a text file's header names a time and a friction column (mu, or shear and normal stress): a record,
-    not a relaxation curve or relaxed slips (sweep.fit.read.read_data hands it to :func:`read_record`)."""
+    not a relaxation curve or relaxed slips (sweep.fit.read.read_data hands it to :func:`read_record`). Reads the
+    first :data:`HEADER_LINES` lines only."""
     try:
-        names = _parse(_lines(Path(path)), "")[0]
-        found = _find(names, None, "")
+        found = _find(_header(_lines(Path(path), HEADER_LINES), "").names, None, "")
     except (InputError, OSError, ValueError):
         return False
     return "time" in found and ("mu" in found or {"shear", "normal"} <= found.keys())
