@@ -37,7 +37,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from ..write.targets import check_targets
     from .config import load_fit_config
     from .core import fit
-    from .plot import plot_fit
+    from .plot import plot_fit, trend_lines
     from .result import save_fit
 
     kwargs = load_fit_config(args.config)
@@ -67,6 +67,10 @@ def _cmd_fit(args: argparse.Namespace) -> int:
                     if f"{name}_label" in ds else ""
                 print(f"{sample}: {name} = {float(ds[name][i]):.4g} (95 %: {lo:.4g} .. {hi:.4g}) "
                       f"{lab.replace('_', ' ')}")
+        if "record_name" in ds:  # a detrended record's trend slope, fitted with the parameters
+            for name, line in zip(ds["record_name"].values.tolist(), trend_lines(ds)):
+                if line:
+                    print(f"{name}: {line}")
         for i, sample in enumerate(ds["sample"].values.tolist()):
             if status[i]:
                 print(f"{sample}: the fit failed ({meanings[int(status[i])]})")

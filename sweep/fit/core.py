@@ -43,7 +43,7 @@ from .local import refine_all
 from .outcome import FitOutcome
 from .problem import MODEL_FAILED, make_problems
 from .profiles import profile_all
-from .result import build_fit_dataset
+from .result import build_fit_dataset, trend_count
 from .space import make_space
 from .stack import ProblemStack
 from .uncertainty import NOT_COMPUTED, Interval, covariance, interval, label, noise_variance, threshold
@@ -127,13 +127,16 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
                                        [u.any() for u in unsolved])
 
     # the noise variance over the data the model solved (all of them but where a fit failed its solves)
-    s2 = [noise_variance(f.rss, pr.n_residuals, space.p, pr.noise_given) if not u.any() else
-          _solved_noise_variance(f.residuals[~u], space.p, pr.noise_given)
-          for pr, f, u in zip(problems, fits, unsolved)]
+    # a detrended record's trend slope is fitted too (sweep.fit.record_forward): one parameter more per such record
+    n_par = space.p + trend_count(problems)
+    s2 = [noise_variance(f.rss, pr.n_residuals, p, pr.noise_given) if not u.any() else
+          _solved_noise_variance(f.residuals[~u], p, pr.noise_given)
+          for pr, f, u, p in zip(problems, fits, unsolved, n_par)]
     covs = [covariance(f.jac, s) if not u.any() else np.full((space.p, space.p), np.nan)
             for f, s, u in zip(fits, s2, unsolved)]
-    verdicts = [judge(f, c, s, space, MODEL_FAILED) for f, c, s in zip(fits, covs, s2)]
-    crit = [threshold(pr.noise_given, pr.n_residuals - space.p) for pr in problems]
+    verdicts = [judge(f, c, s, space, MODEL_FAILED, pr.n_residuals - p if pr.noise_given else None)
+                for f, c, s, pr, p in zip(fits, covs, s2, problems, n_par)]
+    crit = [threshold(pr.noise_given, pr.n_residuals - p) for pr, p in zip(problems, n_par)]
     profs = ivs = labels = None
     if profiles:
         say(f"profile likelihoods of {space.p} parameter(s) x {len(problems)} problem(s) "

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-__all__ = ["plot_fit"]
+__all__ = ["plot_fit", "trend_lines"]
 
 MAX_SETS = 8
 """Data sets drawn in the data panel (the first ones)."""
@@ -18,6 +18,7 @@ def _data_panel(ax, res_ax, ds: xr.Dataset) -> None:
     record = '"kind": "records"' in ds.attrs.get("fit_settings", "")  # mu(t) of laboratory records: linear axes
     scale = 1.0 if record else 1e6
     names = list(dict.fromkeys(ds["datum_set"].values.tolist()))[:MAX_SETS]
+    trends = dict(zip(ds["record_name"].values.tolist(), trend_lines(ds))) if "record_name" in ds else {}
     for name in names:
         sel = ds["datum_set"].values == name
         t = ds["datum_t"].values[sel]
@@ -25,7 +26,8 @@ def _data_panel(ax, res_ax, ds: xr.Dataset) -> None:
         order = np.argsort(x)
         line, = ax.plot(x[order], scale * ds["observed"].values[sel][order], "o", ms=3 if not record else 1,
                         alpha=0.6)
-        ax.plot(x[order], scale * ds["fitted"].values[sel][order], "-", color=line.get_color(), label=name)
+        ax.plot(x[order], scale * ds["fitted"].values[sel][order], "-", color=line.get_color(),
+                label=f"{name}: {trends[name]}" if trends.get(name) else name)
         res_ax.plot(x[order], ds["residual"].values[sel][order], "o", ms=2 if not record else 1,
                     color=line.get_color())
     ax.set_xscale("linear" if record else "log")
@@ -36,6 +38,19 @@ def _data_panel(ax, res_ax, ds: xr.Dataset) -> None:
     res_ax.axhline(0.0, color="k", lw=0.8)
     res_ax.set_xlabel("t [s] since the record's start" if record else "t [s] (relaxed slips: K/M [s-2])")
     res_ax.set_ylabel("residual / noise")
+
+
+def trend_lines(ds: xr.Dataset) -> list[str]:
+    """Per record of a record fit (the Dataset's ``record`` dimension): its detrend at the best fit in words,
+    'trend 2.0e-05 /s in time (fitted)', or '' where it has none (sweep.fit.result: detrend_slope_*)."""
+    out = []
+    for i, kind in enumerate(ds["record_detrend"].values.tolist()):
+        if kind == "none":
+            out.append("")
+            continue
+        c = float(ds[f"detrend_slope_{kind}"][i])
+        out.append(f"trend {c:.3g} /{'s' if kind == 'time' else 'm'} in {kind} (fitted)")
+    return out
 
 
 def _profile_panel(ax, ds: xr.Dataset, name: str) -> None:

@@ -112,10 +112,13 @@ def _per_sample(out: FitOutcome) -> dict[str, xr.Variable]:
                          flag_meanings=" ".join(FIT_STATUS[k] for k in sorted(FIT_STATUS)),
                          comment="failed_solves: the model gives no number for some data at the best point; singular: "
                                  "infinite standard errors; at_bound: the misfit would fall beyond a bound; "
-                                 "not_converged: the least squares ran out of rounds"),
+                                 "not_converged: the least squares ran out of rounds; poor_fit: with the noise "
+                                 "given, the misfit is far above its degrees of freedom (sweep.fit.verdict)"),
         "misfit": _v("sample", [f.rss / s if ok else np.nan for f, s, ok in zip(out.fits, out.s2, solved)], "1",
                      "sum of squared residuals over the noise variance at the best fit (chi^2; NaN: failed solves)"),
-        "degrees_of_freedom": _v("sample", np.array(n) - out.space.p, "1", "data values minus free parameters"),
+        "degrees_of_freedom": _v("sample", np.array(n) - out.space.p - trend_count(out.problems), "1",
+                                 "data values minus free parameters (and minus one per detrended record: its trend "
+                                 "slope, sweep.fit.records.Record.detrend)"),
         "noise": _v("sample", [np.sqrt(s) * pr.noise[0] if not pr.noise_given and ok else np.nan
                                for pr, s, ok in zip(out.problems, out.s2, solved)],
                     "m", "noise estimated from the residuals, sqrt(RSS/(n - p)) (NaN: noise given, or failed solves)"),
@@ -189,6 +192,66 @@ def _data(out: FitOutcome) -> dict[str, xr.Variable]:
     }
 
 
+def trend_count(problems) -> np.ndarray:
+    """Per problem, its records' trend slopes (one per detrended record): parameters fitted besides the free ones."""
+    return np.array([sum(getattr(d, "detrend", None) is not None for d in pr.data) for pr in problems], dtype=int)
+
+
+def trend_slopes(out: FitOutcome) -> list[list[float | None]]:
+    """Per problem and data set, the slope c of a detrended record's linear trend at the best fit [1/s for
+    detrend="time", 1/m for "displacement"; None: no trend]: the least-squares c = sum w^2 x (observed - m) /
+    sum w^2 x^2 (sweep.fit.record_forward) with m the model without its trend, solved once more at the best fit."""
+    slopes: list[list[float | None]] = [[None] * len(pr.data) for pr in out.problems]
+    need = [q for q, c in enumerate(trend_count(out.problems)) if c]
+    if not need:
+        return slopes
+    from dataclasses import replace
+
+    from .problem import Problem
+    from .record_forward import RecordStack
+
+    plain = [Problem(out.problems[q].name, tuple(replace(d, detrend=None) for d in out.problems[q].data),
+                     out.problems[q].space) for q in need]
+    r = RecordStack(plain, float(out.settings["rtol"]), estimates=False).residuals(
+        np.arange(len(need)), np.array([out.fits[q].theta for q in need])[:, None, :])[0][:, 0]
+    for row, q in enumerate(need):  # r = (m - observed) w
+        w, col = out.problems[q].weights, 0
+        for i, d in enumerate(out.problems[q].data):
+            part = slice(col, col + d.n)
+            if d.detrend is not None:
+                x = d.t - d.t[0] if d.detrend == "time" else d.displacement - d.displacement[0]
+                slopes[q][i] = float(-np.sum(w[part] * x * r[row, part]) / np.sum((w[part] * x) ** 2))
+            col += d.n
+    return slopes
+
+
+def _records(out: FitOutcome) -> dict[str, xr.Variable]:
+    """Per record of a record fit (dimension ``record``): its sample and its detrend slope at the best fit."""
+    if not hasattr(out.problems[0].data[0], "mu"):
+        return {}
+    slopes = trend_slopes(out)
+    names, owner, per_time, per_disp, kind = [], [], [], [], []
+    for q, pr in enumerate(out.problems):
+        for d, c in zip(pr.data, slopes[q]):
+            names.append(d.name)
+            owner.append(q)
+            kind.append(d.detrend or "none")
+            per_time.append(c if d.detrend == "time" else np.nan)
+            per_disp.append(c if d.detrend == "displacement" else np.nan)
+    counted = "fitted with the other parameters: counted in degrees_of_freedom and in the estimated noise"
+    return {
+        "record_name": _v("record", np.array(names, dtype=str), None, "name of the record (its datum_set)"),
+        "record_sample": _v("record", np.array(owner, np.int32), None, "index of the sample (problem) of the record"),
+        "record_detrend": _v("record", np.array(kind, dtype=str), None,
+                             "the record's linear trend: none, time or displacement (sweep.fit.records.Record)"),
+        "detrend_slope_time": _v("record", per_time, "s-1", "slope of the record's linear trend in time, c in "
+                                 "mu = model + c (t - t0), at the best fit (NaN: no trend in time)", comment=counted),
+        "detrend_slope_displacement": _v("record", per_disp, "m-1", "slope of the record's linear trend in load-point "
+                                         "displacement, c in mu = model + c (x - x0), at the best fit (NaN: no trend "
+                                         "in displacement)", comment=counted),
+    }
+
+
 def build_fit_dataset(out: FitOutcome, history: str = "sweep.fit") -> xr.Dataset:
     """The Dataset of a fit (module docstring)."""
     grid_coords, landscape = _landscape(out)
@@ -209,7 +272,7 @@ def build_fit_dataset(out: FitOutcome, history: str = "sweep.fit") -> xr.Dataset
                                                                           out.seconds.items()}),
         "comment": "quasi-static stop model, aging law (docs/physics.md 3a); intervals from profile likelihoods",
     }
-    data_vars = {**_parameters(out), **_per_sample(out), **landscape, **_data(out)}
+    data_vars = {**_parameters(out), **_per_sample(out), **landscape, **_data(out), **_records(out)}
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 

@@ -14,7 +14,11 @@ A sample's ``fit_status`` is the most severe of (codes in :data:`FIT_STATUS`, in
   parameters);
 * ``failed_solves``: the forward model gave no number for some datum at the best fit (no finite relaxed slip there,
   or a solve that failed). Its covariance, intervals, profiles, noise, misfit and the fitted values of those data
-  are not computed: NaN.
+  are not computed: NaN;
+* ``poor_fit`` (code 5, the least severe failure, reported only where nothing else failed): with the noise given,
+  the misfit chi^2 lies more than :data:`POOR_FIT_Z` standard deviations sqrt(2 dof) above its degrees of freedom
+  dof: no parameter set describes the data (a wrong history, a trend not modelled), or the noise given is too small.
+  With the noise estimated the misfit is dof by construction and says nothing.
 
 ``ok`` is 0; every other status is a failed fit (``sweep fit`` then exits 1).
 """
@@ -32,8 +36,12 @@ from .space import ParamSpace
 
 __all__ = ["BOUND_FLAGS", "FIT_STATUS", "PHYSICAL_LIMITS", "PUSH", "Verdict", "judge", "summary", "user_stacklevel"]
 
-FIT_STATUS = {0: "ok", 1: "not_converged", 2: "at_bound", 3: "singular", 4: "failed_solves"}
-"""Per sample (CF flag_meanings), in increasing severity: the reported one is the most severe that applies."""
+FIT_STATUS = {0: "ok", 1: "not_converged", 2: "at_bound", 3: "singular", 4: "failed_solves", 5: "poor_fit"}
+"""Per sample (CF flag_meanings), 1..4 in increasing severity, 5 below 1: the reported one is the most severe that
+applies."""
+POOR_FIT_Z = 5.0
+"""With the noise given, a misfit above dof + POOR_FIT_Z sqrt(2 dof) is a poor fit (chi^2 with dof degrees of
+freedom: mean dof, standard deviation sqrt(2 dof); 5 of them is a p-value below ~1e-5 for dof >= 100)."""
 BOUND_FLAGS = {0: "inside", 1: "at_physical_limit", 2: "pushed_against_bound", 3: "at_bound"}
 """Per free parameter and sample: inside its bounds; resting on a physical limit (no failure); on a bound that the data
 push against (a failure: widen it); on a bound the data do not push against (the misfit rises beyond it too)."""
@@ -56,16 +64,19 @@ class Verdict:
     bound: np.ndarray
     unsolved: np.ndarray
     pushed: list[tuple[str, float, str]]
+    misfit: tuple[float, int] | None = None
+    """(chi^2, degrees of freedom) where the noise was given and the misfit is a poor fit's."""
 
     @property
     def failed(self) -> bool:
         return self.status != 0
 
 
-def judge(fit: LocalFit, cov: np.ndarray, s2: float, space: ParamSpace, model_failed: float) -> Verdict:
+def judge(fit: LocalFit, cov: np.ndarray, s2: float, space: ParamSpace, model_failed: float,
+          dof: int | None = None) -> Verdict:
     """The verdict of one sample (module docstring): ``fit`` its least squares (residuals where the model gave no
     number hold ``model_failed``, sweep.fit.problem.MODEL_FAILED), ``cov`` its covariance, ``s2`` its noise variance
-    (1 with the noise given)."""
+    (1 with the noise given), ``dof`` its degrees of freedom where the noise was given (None: estimated)."""
     unsolved = fit.residuals == model_failed
     if getattr(fit, "failures", 0) and not unsolved.any():  # a residual equal to the stand-in by chance: impossible
         unsolved = np.ones_like(unsolved)
@@ -89,7 +100,9 @@ def judge(fit: LocalFit, cov: np.ndarray, s2: float, space: ParamSpace, model_fa
                 pushed.append((name, float(fit.theta[j]), side))
             else:
                 flags[j] = 3
-    status = 0
+    status, poor = 0, None
+    if dof is not None and dof > 0 and fit.rss > dof + POOR_FIT_Z * np.sqrt(2.0 * dof):
+        status, poor = 5, (float(fit.rss), int(dof))
     if fit.status == 0:
         status = 1
     if pushed:
@@ -98,7 +111,7 @@ def judge(fit: LocalFit, cov: np.ndarray, s2: float, space: ParamSpace, model_fa
         status = 3
     if unsolved.any():
         status = 4
-    return Verdict(status, flags, unsolved, pushed)
+    return Verdict(status, flags, unsolved, pushed, poor)
 
 
 def _names(items: list[str]) -> str:
@@ -111,7 +124,7 @@ def summary(names: list[str], verdicts: list[Verdict], max_rounds: int) -> str |
     if not failed:
         return None
     parts = []
-    by = {code: [(n, v) for n, v in failed if v.status == code] for code in (4, 3, 2, 1)}
+    by = {code: [(n, v) for n, v in failed if v.status == code] for code in (4, 3, 2, 1, 5)}
     if by[4]:
         which = _names([f"{n} ({int(v.unsolved.sum())} of {v.unsolved.size} data)" for n, v in by[4]])
         parts.append(f"failed_solves: the model gives no number for some data at the best point ({which}), even "
@@ -129,6 +142,11 @@ def summary(names: list[str], verdicts: list[Verdict], max_rounds: int) -> str |
     if by[1]:
         parts.append(f"not_converged: the least squares stopped after {max_rounds} rounds "
                      f"({_names([n for n, _ in by[1]])}); give a start nearer the data or narrower bounds")
+    if by[5]:
+        which = _names([f"{n}: chi^2 = {v.misfit[0]:.4g} for {v.misfit[1]} degrees of freedom" for n, v in by[5]])
+        parts.append(f"poor_fit: with the noise given, the misfit is far above its degrees of freedom ({which}): no "
+                     f"parameter set describes the data, or the noise given is too small; check the noise, the load "
+                     f"history (steps) and whether a trend needs a detrend")
     return (f"the fit failed for {len(failed)} of {len(verdicts)} sample(s) ({_names([n for n, _ in failed])}): "
             + "; ".join(parts) + " (fit_status in the output)")
 
