@@ -19,22 +19,28 @@ Recorded per segment j (the observables' raw material, in units of A):
   <= STEADY_TOL (never for a hold).
 
 A point never raises: its status (sweep.status.Status) says ok, max_steps (the scene's step budget, over all
-segments, ran out) or step_underflow (the step fell below H_FLOOR relative to 1 + the time into the segment: the
-equations left the range a double can follow); the values recorded are then NaN from the failing segment on.
+segments, ran out), step_underflow (the step fell below H_FLOOR relative to 1 + the time into the segment: the
+equations left the range a double can follow) or, the quasi-static driver only, quasistatic_breakdown: the step
+underflowed where the slip velocity is past RUNAWAY_XI_DOT times V (w > W_RUNAWAY): the runaway of a spring softer
+than critical, where the quasi-static equations reach v = inf in finite time and inertia is needed (a finite burst
+past 1e8 V, e.g. the reslide after a long hold with m2 > 0, is followed and kept); the values recorded are then NaN
+from the failing segment on.
 """
 
 from __future__ import annotations
 
 from numba import njit
 
+from ..accuracy import W_RUNAWAY
 from ..jitcache import pin_module
 from ..status import Status
 from .models.history import history_rates
 from .solvers.fastmath import FAST
 
-__all__ = ["H_FLOOR", "STEADY_TOL"]
+__all__ = ["H_FLOOR", "STEADY_TOL", "W_RUNAWAY"]
 
 OK, MAX_STEPS, STEP_UNDERFLOW = int(Status.OK), int(Status.MAX_STEPS), int(Status.STEP_UNDERFLOW)
+BREAKDOWN = int(Status.QUASISTATIC_BREAKDOWN)
 H_FLOOR = 1e-14
 """Smallest step relative to 1 + the time into the segment before the point is flagged step_underflow."""
 STEADY_TOL = 1e-6

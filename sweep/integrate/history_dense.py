@@ -14,8 +14,8 @@ an accepted step from tau_n of size h the state at tau_n + theta h is Hairer's 4
 so that a record of 1e5 samples costs about what the integration costs. A sample on a segment boundary takes the
 state at the end of the earlier segment (the state is continuous there; only its rate jumps).
 
-A point never raises: its status (sweep.status.Status) is ok, max_steps or step_underflow as in
-sweep/integrate/history.py; samples from the failing step on are NaN.
+A point never raises: its status (sweep.status.Status) is ok, max_steps, quasistatic_breakdown (runaway) or
+step_underflow as in sweep/integrate/history.py; samples from the failing step on are NaN.
 """
 
 from __future__ import annotations
@@ -27,7 +27,19 @@ from numba import njit
 
 from ..jitcache import pin_module
 from . import history as dp
-from .history import H_FLOOR, MAX_FACTOR, MAX_STEPS, MIN_FACTOR, OK, SAFETY, STEADY_TOL, STEP_UNDERFLOW, _peak_in_step
+from .history import (
+    BREAKDOWN,
+    H_FLOOR,
+    MAX_FACTOR,
+    MAX_STEPS,
+    MIN_FACTOR,
+    OK,
+    SAFETY,
+    STEADY_TOL,
+    STEP_UNDERFLOW,
+    W_RUNAWAY,
+    _peak_in_step,
+)
 from .models.history import history_rates, steady_state
 from .solvers.fastmath import FAST
 
@@ -121,8 +133,8 @@ def history_dense_point(k, a, b, law, s_kick, ratios, durations, scale, times, t
                       abs(eu) / (tol * (1.0 + max(abs(u), abs(u_new)))))
             if not math.isfinite(err) or err > 1.0:
                 h *= MIN_FACTOR if not math.isfinite(err) else max(MIN_FACTOR, SAFETY * err ** -0.2)
-                if h < H_FLOOR * (1.0 + t):
-                    return STEP_UNDERFLOW, steps
+                if h < H_FLOOR * (1.0 + t):  # where ln xi' is past W_RUNAWAY: the runaway (sweep.integrate.history)
+                    return BREAKDOWN if s - u * (a + b * u) - u > W_RUNAWAY else STEP_UNDERFLOW, steps
                 continue
             if ds > 0.0 and ds_new <= 0.0:
                 peak = max(peak, _peak_in_step(s, u, ds, du, h, r, k, a, b, law))

@@ -121,6 +121,30 @@ def test_inertial_sets_against_newtons_law():
     assert np.abs(out.mu[0] - ref).max() <= out.error.max()
 
 
+def test_a_soft_spring_runs_away_quasistatically_and_is_run_with_inertia():
+    """k = 0.5 (b - a)/Dc: after a step 1 -> 10 um/s the quasi-static equations run away (v -> inf in finite time:
+    the Radau reference of the quasi-static model cannot pass it), so friction_at runs the set with inertia (aging
+    law; a record's inertia N/M = 1e3 m/s^2 as g: gamma/A = 1e-6 at 10 um/s, far below INERTIA_LIMIT), which gives
+    the stick-slip sawtooth of Newton's law (Radau); the slip law, with no inertial model, is flagged."""
+    k_lab, g = 0.5 * 5e-3 / LAB.D0, 1e3
+    load = LoadHistory(np.array([1e-6, 1e-5]), np.array([5.0, 20.0]))
+    t = sample_times(load, 150, seed=5)
+    p = {**params_of(LAB, k_lab), "K_over_M": k_lab * g, "g": g}
+    with pytest.raises(AssertionError, match="step size"):  # no quasi-static solution past the runaway
+        history_reference_at(LAB.A, LAB.m1, LAB.m2, LAB.D0, k_lab * g, load.velocities, load.durations, t, g=g,
+                             m0=LAB.m0, V0=LAB.V0)
+    ref, _ = inertial_reference_at(LAB.A, LAB.m1, LAB.m2, LAB.D0, k_lab * g, load.velocities, load.durations, t,
+                                   m0=LAB.m0, V0=LAB.V0, g=g)
+    assert np.ptp(ref[t > 6.0]) > 5 * LAB.A  # a sawtooth: stress drops of several A
+    out = friction_at(p, load, t, rtol=1e-6)
+    assert out.model.tolist() == [1] and out.status.tolist() == [Status.OK]
+    assert np.abs(out.mu[0] - ref).max() <= 1e-6 * LAB.A
+    assert np.abs(out.mu[0] - ref).max() <= out.error.max()
+    slip = friction_at(p, load, t, state_law="slip")
+    assert slip.status.tolist() == [Status.QUASISTATIC_BREAKDOWN] and slip.model.tolist() == [0]
+    assert np.all(np.isfinite(slip.mu[0, t < 5.0])) and np.isnan(slip.mu[0, -1])
+
+
 @pytest.mark.parametrize(("kwargs", "field"), [
     ({"velocities": [0.0, 1e-6], "durations": [1.0, 1.0]}, "velocities[0]"),
     ({"velocities": [1e-6, -1e-6], "durations": [1.0, 1.0]}, "velocities"),

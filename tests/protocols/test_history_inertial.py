@@ -68,6 +68,31 @@ def test_scene_runs_inertia_where_it_matters():
                     state_law="slip", options={"segments": segments})
 
 
+def test_scene_runs_inertia_where_the_quasistatic_model_runs_away():
+    """A spring softer than critical (k = 0.5 (b - a)/Dc) under a step 1 -> 10 um/s: model "auto" reruns the point
+    with inertia where its quasi-static run ran away (gamma/A = 1e-5 is far below model_tol there), and its mu_t is
+    Newton's law's (Radau); model "quasistatic" flags the point quasistatic_breakdown, its values NaN from the
+    runaway on; the stiff point (k = 2 (b - a)/Dc) stays quasi-static and ok in both."""
+    params = sweep.FrictionParams.from_lab(a=0.01, b=0.015, Dc=1e-5, mu0=0.6)
+    k_lab = np.array([0.5, 2.0]) * 5e-3 / params.D0
+    segments = [{"V_ratio": 1, "duration": 5.0}, {"V_ratio": 10, "duration": 10.0}]
+    t_obs = np.linspace(0.0, 15.0, 31)
+    runs = {model: sweep.run_sweep(sweep.Scene(
+        protocol="history", params=params, K_over_M=k_lab * 9.81, V=[1e-6], rtol=1e-6, model=model,
+        observables=("mu_end", "mu_t"), t_obs=t_obs, options={"segments": segments})).isel(V=0)
+        for model in ("auto", "quasistatic")}
+    auto, qs = runs["auto"], runs["quasistatic"]
+    assert auto["model"].values.tolist() == [1, 0] and (auto["status"] == Status.OK).all()
+    assert qs["model"].values.tolist() == [0, 0]
+    assert qs["status"].values.tolist() == [Status.QUASISTATIC_BREAKDOWN, Status.OK]
+    assert np.isnan(qs["mu_t"].values[0, -1]) and np.isnan(qs["mu_end"].values[0, -1])
+    np.testing.assert_array_equal(auto["mu_t"].values[1], qs["mu_t"].values[1])
+    ref, _ = inertial_reference_at(params.A, params.m1, params.m2, params.D0, k_lab[0] * 9.81, [1e-6, 1e-5],
+                                   [5.0, 10.0], t_obs, m0=params.m0, V0=params.V0)
+    assert np.ptp(ref[t_obs > 6.0]) > 5 * params.A
+    assert np.abs(auto["mu_t"].values[0] - ref).max() <= 1e-5 * params.A
+
+
 def test_one_long_hold_with_inertia_is_the_inertial_stop():
     """Slide at V, then an (effectively) infinite hold, with inertia at gamma/A = 0.2: Delta mu_relax is the
     inertial stop scene's chi xi_inf (its own driver: RODAS3 in contact-age time with the plunge's time map,

@@ -75,8 +75,8 @@ class HistoryPlan:
 
     def describe(self) -> dict[str, str]:
         models = {"quasistatic": "quasistatic", "inertial": "inertial (RODAS3 on (s, u, ln xi'), I control)",
-                  "auto": "per point: inertial (RODAS3) where some segment's gamma/A exceeds model_tol, else "
-                          "quasistatic"}
+                  "auto": "per point: inertial (RODAS3) where some segment's gamma/A exceeds model_tol or where "
+                          "the quasi-static run runs away (slip velocity > 1e8 V, aging law), else quasistatic"}
         return {"model": f"{models[self.model]}, {self.state_law} law",
                 "method": f"dp5 (adaptive, I control) on (s = (mu - mu_d(V))/A, u = ln psi), segment by segment, at "
                           f"local tolerances rtol/{TIGHTER:g} and rtol/{TIGHTER**2:g}: the tighter run's values, their "
@@ -140,16 +140,18 @@ def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dic
     status, steps)."""
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
-        inert = plan.inertial[points]
-        parts = [(rows, _outputs(plan, points[rows], run)) for rows, run in
-                 ((np.flatnonzero(~inert), run_sampled),
-                  (np.flatnonzero(inert), run_inertial)) if rows.size]
-        if not parts:
+        inert = plan.inertial[points].copy()
+        if not points.size:
             return {**_outputs(plan, points, run_inertial), "model": np.zeros(0, np.int8)}
-        out = {name: np.empty((points.size, *x.shape[1:]), x.dtype) for name, x in parts[0][1].items()}
-        for rows, part in parts:
-            for name, x in part.items():
-                out[name][rows] = x
+        out: dict[str, np.ndarray] = {}
+        for rows, run in ((np.flatnonzero(~inert), run_sampled), (np.flatnonzero(inert), run_inertial)):
+            _merge(out, rows, _outputs(plan, points[rows], run), points.size)
+        if plan.model == "auto" and plan.state_law == "aging":  # the quasi-static runaway: inertia is needed there
+            again = np.flatnonzero((out["status"] == Status.QUASISTATIC_BREAKDOWN) & ~inert)
+            steps = out["steps"][again]
+            _merge(out, again, _outputs(plan, points[again], run_inertial), points.size)
+            out["steps"][again] += steps
+            inert[again] = True
         out["model"] = inert.astype(np.int8)
         if plan.healing:
             t_hold = hold_before(plan.ratios[points], plan.durations[points] / plan.scale[points, None])
@@ -157,6 +159,16 @@ def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dic
         return out
 
     return compute
+
+
+def _merge(out: dict[str, np.ndarray], rows: np.ndarray, part: dict[str, np.ndarray], n: int) -> None:
+    """The outputs ``part`` of the chunk's points ``rows`` into ``out`` (arrays of n points made on first use)."""
+    if not rows.size:
+        return
+    for name, x in part.items():
+        if name not in out:
+            out[name] = np.empty((n, *x.shape[1:]), x.dtype)
+        out[name][rows] = x
 
 
 def _outputs(plan: HistoryPlan, points: np.ndarray, run: Callable) -> dict[str, np.ndarray]:

@@ -4,7 +4,9 @@ laboratory records (docs/physics.md 7b; sweep.fit builds on :func:`friction_at`)
 Each parameter set is reduced with the first segment's velocity V = velocities[0] (section 2: xi = x/D0,
 tau = V t/D0; k = chi/A, a = mu1(V)/A, b = m2/A) and integrated in s = (mu - mu_d(V))/A twice, at local tolerances
 rtol/10 and rtol/100: quasi-statically by the dense-output dp5 (sweep/integrate/history_dense.py), or, where
-gamma/A at the fastest segment exceeds INERTIA_LIMIT (aging law), with inertia by RODAS3
+gamma/A at the fastest segment exceeds INERTIA_LIMIT or where the quasi-static run runs away (slip velocity past
+1e8 V: a spring softer than critical, k < (b - a)/Dc, whose records are stick-slip sawtooths) (aging law), with
+inertia by RODAS3
 (sweep/integrate/history_inertial.py; s is then the spring's force, the friction a laboratory measures). The
 friction is the tighter run's mu = mu_d(V) + A s; its error estimate the difference of the two runs.
 """
@@ -84,8 +86,8 @@ class FrictionSamples:
     """(n_sets, n_t) its error estimate [1]: |the run at rtol/100 - the run at rtol/10|."""
     status: np.ndarray
     """(n_sets,) int8 sweep.Status: ok, max_steps, step_underflow (values NaN from the failure on),
-    error_above_tol (some error estimate above rtol (|mu| + A)), quasistatic_breakdown (gamma/A > INERTIA_LIMIT at
-    the fastest segment)."""
+    error_above_tol (some error estimate above rtol (|mu| + A)), quasistatic_breakdown (slip law only: gamma/A >
+    INERTIA_LIMIT at the fastest segment, or the quasi-static run ran away, values NaN from there on)."""
     steps: np.ndarray
     """(n_sets,) accepted and rejected steps of both runs."""
     model: np.ndarray | None = None
@@ -136,9 +138,11 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
     unless given), each a number or an array; they broadcast to (n_sets,). The history starts in steady sliding at
     velocities[0] with the spring stretched ``stretch`` [m] beyond it (mu raised by K/(M g) x stretch). The
     quasi-static equations of docs/physics.md 7b, or with inertia (aging law) for the sets where gamma/A at the
-    fastest segment exceeds INERTIA_LIMIT (``model`` of the result); ``state_law`` "aging" or "slip". ``rtol``: the
-    relative accuracy asked of mu in units of (|mu| + A); ``max_steps``: the step budget of one run over all
-    segments.
+    fastest segment exceeds INERTIA_LIMIT and those whose quasi-static run breaks down (the runaway of a spring
+    softer than critical: a stick-slip record) (``model`` of the result); ``state_law`` "aging" or "slip" (a
+    slip-law set that would need inertia keeps the status quasistatic_breakdown, its values NaN from the runaway
+    on). ``rtol``: the relative accuracy asked of mu in units of (|mu| + A); ``max_steps``: the step budget of one
+    run over all segments.
     """
     from ...integrate.models.history import LAW_CODES
 
@@ -173,14 +177,21 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
     quasistatic = np.flatnonzero(~inertial if state_law == "aging" else np.ones(A.size, bool))
     out = {"mu_t": np.full((A.size, times.size), np.nan), "mu_t_error": np.full((A.size, times.size), np.nan),
            "status": np.zeros(A.size, np.int8), "steps": np.zeros(A.size, np.int64)}
-    for rows, run in ((quasistatic, _quasistatic), (np.setdiff1d(np.arange(A.size), quasistatic), _inertial)):
-        if rows.size:
-            part = run(k[rows], a[rows], b[rows], A[rows], mu_ref[rows], state_law, s_kick[rows], ratios[rows],
-                       durations[rows], scale[rows], G[rows], times, rtol, max_steps)
-            for name, x in part.items():
-                out[name][rows] = x
+
+    def run(rows: np.ndarray, model) -> None:
+        if not rows.size:
+            return
+        part = model(k[rows], a[rows], b[rows], A[rows], mu_ref[rows], state_law, s_kick[rows], ratios[rows],
+                     durations[rows], scale[rows], G[rows], times, rtol, max_steps)
+        for name, x in part.items():
+            out[name][rows] = x + out[name][rows] if name == "steps" else x  # steps: a run that broke down too
+
+    run(quasistatic, _quasistatic)
     status = out["status"]
-    if state_law != "aging":
+    if state_law == "aging":  # the quasi-static runaway (a spring softer than critical): inertia is needed there
+        inertial[quasistatic[status[quasistatic] == Status.QUASISTATIC_BREAKDOWN]] = True
+        run(np.flatnonzero(inertial), _inertial)
+    else:
         status[(status == Status.OK) & inertial] = Status.QUASISTATIC_BREAKDOWN
     model = (inertial & (state_law == "aging")).astype(np.int8)
     return FrictionSamples(mu=out["mu_t"], error=out["mu_t_error"], status=status, steps=out["steps"], model=model)
