@@ -38,7 +38,7 @@ def _best_hinge(t: np.ndarray, y: np.ndarray) -> tuple[int, float]:
     tc = (t - t.mean()) / (np.ptp(t) or 1.0)
     yc = y - y.mean()
     one, S_t, S_tt = float(n), tc.sum(), (tc * tc).sum()
-    S_y, S_ty, S_yy = yc.sum(), (tc * yc).sum(), (yc * yc).sum()
+    S_y, S_ty = yc.sum(), (tc * yc).sum()
     rev = lambda a: np.cumsum(a[::-1])[::-1]  # noqa: E731 (sums over i >= k)
     N, T1, T2, Y1, TY = rev(np.ones(n)), rev(tc), rev(tc * tc), rev(yc), rev(tc * yc)
     b = tc
@@ -49,19 +49,17 @@ def _best_hinge(t: np.ndarray, y: np.ndarray) -> tuple[int, float]:
     k = np.arange(MIN_SAMPLES, n - MIN_SAMPLES)
     if k.size == 0:
         return -1, 0.0
-    M = np.zeros((k.size, 3, 3))
-    M[:, 0, 0], M[:, 0, 1], M[:, 1, 1] = one, S_t, S_tt
-    M[:, 1, 0] = S_t
-    M[:, 0, 2] = M[:, 2, 0] = h1[k]
-    M[:, 1, 2] = M[:, 2, 1] = th[k]
-    M[:, 2, 2] = h2[k]
-    rhs = np.stack([np.full(k.size, S_y), np.full(k.size, S_ty), hy[k]], axis=1)
-    beta = np.linalg.solve(M, rhs[..., None])[..., 0]
-    rss2 = S_yy - np.sum(beta * rhs, axis=1)
-    slope = S_ty / S_tt if S_tt > 0 else 0.0
-    rss1 = S_yy - slope * S_ty - S_y * S_y / one  # one line (yc has mean 0 so S_y ~ 0)
-    j = int(np.argmin(rss2))
-    return int(k[j]), float(rss1 - rss2[j])
+    # the hinge column h_k beside the line's basis X = [1, t]: its fall of the RSS is (h.y - c G^-1 f)^2 /
+    # (h.h - c G^-1 c), G = X'X, c = X'h_k, f = X'y (the part of h_k the line cannot carry; no 3x3 solve per k, which
+    # took 55 % of segmenting 1e5 samples)
+    det = one * S_tt - S_t * S_t
+    c1, c2 = h1[k], th[k]
+    cgc = (S_tt * c1 * c1 - 2.0 * S_t * c1 * c2 + one * c2 * c2) / det
+    cgf = (S_tt * c1 * S_y - S_t * (c1 * S_ty + c2 * S_y) + one * c2 * S_ty) / det
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gain = np.where(h2[k] - cgc > 0, (hy[k] - cgf) ** 2 / (h2[k] - cgc), 0.0)
+    j = int(np.argmax(gain))
+    return int(k[j]), float(gain[j])
 
 
 def detect_steps(t: np.ndarray, displacement: np.ndarray, noise: float | None = None
