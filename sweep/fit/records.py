@@ -242,18 +242,45 @@ def _split(line: str, delimiter: str | None) -> list[str]:
     if delimiter is None:  # blanks: a name followed by its unit in brackets stays one field
         fields = re.findall(r"[^\s\[(]+(?:\s*[\[(][^\])]*[\])])?|[\[(][^\])]*[\])]", line)
     else:
-        fields = [f.strip() for f in line.split(delimiter)]
+        fields = [f.strip().strip('"').strip() for f in line.split(delimiter)]  # a spreadsheet's quotes
     while fields and fields[-1] == "":  # a trailing delimiter
         fields.pop()
     return fields
 
 
-def _numeric(fields: list[str]) -> bool:
-    try:
-        [float(f.replace(",", ".")) if f.count(",") == 1 and "." not in f else float(f) for f in fields]
-    except ValueError:
-        return False
-    return bool(fields)
+_STAMP = re.compile(r"^(\d{4}-\d{2}-\d{2}[ T])?\d{1,2}:\d{2}(:\d{2}([.,]\d+)?)?$")
+"""A date and clock time (ISO 8601, a blank or T between them) or a clock time: a DAQ's time stamp."""
+
+
+def _number(text: str) -> float:
+    """A value of a data row: a number (a decimal comma too), NaN for '' or 'nan'; ValueError otherwise."""
+    if text.lower() in ("", "nan"):
+        return float("nan")
+    return float(text.replace(",", ".") if text.count(",") == 1 and "." not in text else text)
+
+
+def _numeric(fields: list[str], strict: bool = False) -> bool:
+    """Whether ``fields`` look like a row of data: one number at least, and numbers, empty fields or time stamps for
+    at least half of them (the rest a status word), or (``strict``) for all."""
+    numbers = values = 0
+    for f in fields:
+        try:
+            numbers += bool(np.isfinite(_number(f)))
+            values += 1
+        except ValueError:
+            values += bool(_STAMP.match(f))
+    return numbers > 0 and (values == len(fields) if strict else 2 * values >= len(fields))
+
+
+def _seconds(column: list[str]) -> np.ndarray:
+    """Time stamps (:data:`_STAMP`) as seconds [s] (since 1970 with a date, since midnight without); ValueError where
+    one is not a time stamp."""
+    if not all(_STAMP.match(f) for f in column):
+        raise ValueError
+    if ":" in column[0] and "-" not in column[0]:  # a clock time only
+        column = [f"1970-01-01 {f}" for f in column]
+    stamps = np.array([f.replace(",", ".").replace(" ", "T") for f in column], dtype="datetime64[us]")
+    return stamps.astype(np.int64) * 1e-6
 
 
 @dataclass
@@ -267,11 +294,25 @@ class _Header:
 
 
 def _data_line(line: str) -> str | bool | None:
-    """The delimiter under which ``line`` is a row of numbers (tab, semicolon, comma, else blanks: None), or False."""
-    for d in ("\t", ";", ","):
-        if d in line and _numeric(_split(line, d)):
-            return d
-    return None if _numeric(_split(line, None)) else False
+    """The delimiter under which ``line`` is a row of data (tab, semicolon, comma, else blanks: None), or False: the
+    first under which every field is a value, else the first under which most are (:func:`_numeric`)."""
+    for strict in (True, False):
+        for d in ("\t", ";", ",", None):
+            if (d is None or d in line) and _numeric(_split(line, d), strict):
+                return d
+    return False
+
+
+def _next_agrees(lines: list[str], i: int, delimiter: str | None) -> bool:
+    """Whether the line after data-like line ``i`` (blank and comment lines skipped) is data-like too, with as many
+    fields: the first data row, not a 'Sampling rate,100' line above the header (the last line: data)."""
+    n = len(_split(lines[i].strip(), delimiter))
+    for line in lines[i + 1:]:
+        s = line.strip()
+        if s and s[0] not in "#%":
+            fields = _split(s, delimiter)
+            return len(fields) == n and _numeric(fields)
+    return True
 
 
 def _header(lines: list[str], where: str) -> _Header:
@@ -293,7 +334,7 @@ def _header(lines: list[str], where: str) -> _Header:
                 meta[key.strip().lower()] = (parts[0] if parts else "", parts[1].strip() if len(parts) > 1 else "")
             continue
         d = _data_line(s)
-        if d is not False:
+        if d is not False and _next_agrees(lines, i, d):
             body_at, delimiter = i, d
             break
         pre.append(s)
@@ -322,20 +363,23 @@ def _header(lines: list[str], where: str) -> _Header:
     return _Header(names, units, delimiter, body_at, meta)
 
 
-def _rows(lines: list[str], h: _Header, where: str) -> np.ndarray:
-    """The data rows (n, columns): numpy's reader, or row by row where it fails (to name the row)."""
+def _rows(lines: list[str], h: _Header, where: str) -> tuple[np.ndarray, dict[int, str]]:
+    """The data rows (n, columns): numpy's reader, or column by column where it fails (to name a bad row, to read
+    time stamps as seconds); and the columns that are not numbers ({index: the first such value}: NaN in the data,
+    refused only where the record uses them)."""
     body = [s for s in (line.strip() for line in lines[h.body:]) if s and s[0] not in "#%"]
     d = h.delimiter
     if d is not None and body and body[0].endswith(d):  # a trailing delimiter on every row
         body = [s.rstrip(d + " ") for s in body]
-    if d != "," and any("," in s for s in body[:20]):  # decimal commas
-        body = [s.replace(",", ".") for s in body]
+    fast = [s.replace('"', "") for s in body] if body and '"' in body[0] else body
+    if d != "," and any("," in s for s in fast[:20]):  # decimal commas
+        fast = [s.replace(",", ".") for s in fast]
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # an empty line numpy would skip with a warning: row by row
-            data = np.loadtxt(body, delimiter=d, ndmin=2, dtype=float, comments=None)
+            data = np.loadtxt(fast, delimiter=d, ndmin=2, dtype=float, comments=None)
         if data.shape[1] == len(h.names):
-            return data
+            return data, {}
     except ValueError:
         pass
     rows = []
@@ -345,11 +389,25 @@ def _rows(lines: list[str], h: _Header, where: str) -> np.ndarray:
             last = " (the last line, cut short: remove it)" if i == len(body) - 1 else ""
             raise InputError(f"{where}: data row {i + 1} has {len(fields)} values, the header {len(h.names)} "
                              f"({', '.join(h.names)}){last}")
+        rows.append(fields)
+    data, text = np.full((len(rows), len(h.names)), np.nan), {}
+    for j, column in enumerate(zip(*rows)):
         try:
-            rows.append([float("nan") if f.lower() in ("nan", "") else float(f) for f in fields])
+            data[:, j] = [_number(f) for f in column]
         except ValueError:
-            raise InputError(f"{where}: data row {i + 1} has a value that is not a number: {s!r}") from None
-    return np.array(rows, dtype=float).reshape(-1, len(h.names))
+            try:
+                data[:, j] = _seconds(list(column))
+            except ValueError:
+                text[j] = next(f for f in column if not _STAMP.match(f) and not _is_number(f))
+    return data, text
+
+
+def _is_number(text: str) -> bool:
+    try:
+        _number(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _find(names: list[str], columns: Mapping[str, str] | None, where: str) -> dict[str, tuple[int, str | None]]:
@@ -418,7 +476,7 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
     where = f"record file {str(path)!r}"
     lines = _lines(path)
     h = _header(lines, where)
-    names, data = h.names, _rows(lines, h, where)
+    names, (data, text) = h.names, _rows(lines, h, where)
     found = _find(names, columns, where)
     for role in dict(units or {}):
         if role not in ROLES:
@@ -434,7 +492,11 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
 
     def col(role):
         j, unit = found[role]
+        if j in text:
+            raise InputError(f"{where}: column {names[j]!r} ({role}) is not numbers (e.g. {text[j]!r})")
         unit = dict(units or {}).get(role, h.units[j] if h.units[j] is not None else unit)
+        if role == "time" and unit is None and _STAMP.match(_split(lines[h.body].strip(), h.delimiter)[j]):
+            unit = "s"  # time stamps, read as seconds
         values = data[:, j] * _si(where, role, names[j], unit)
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:

@@ -191,3 +191,20 @@ def test_sweep_fit_reads_a_record_with_unknown_headers_through_its_toml(tmp_path
         for name, true in (("a", A), ("b", B), ("Dc", DC), ("mu0", MU0)):
             assert abs(float(ds[name][0]) - true) < 4 * float(ds[f"{name}_stderr"][0]), name
         assert int(ds["fit_status"][0]) == 0 and ds.sizes["datum"] == t.size
+
+
+def test_spreadsheet_export_quotes_time_stamps_and_a_text_column(tmp_path, vstep):
+    """A spreadsheet/LabVIEW export: every field quoted, the time as date-and-clock stamps (read as seconds from the
+    first), a status column of words (never used: no error), the displacement in mm."""
+    t, mu, disp = vstep
+    start = np.datetime64("2024-03-05T14:02:07.250", "us")
+    stamps = [str(start + np.timedelta64(int(round(a * 1e6)), "us")).replace("T", " ") for a in t]
+    rows = [f'"{s}","{"RUN" if i % 7 else "HOLD?"}","{d * 1e3:.8f}","{m:.6f}"'
+            for i, (s, d, m) in enumerate(zip(stamps, disp, mu))]
+    rec = read_record(_write(tmp_path / "export.csv", ['"Timestamp","Status","LP Disp (mm)","Friction (-)"'] + rows),
+                      columns={"time": "Timestamp"})
+    np.testing.assert_allclose(rec.t - rec.t[0], t - t[0], atol=1e-6)
+    np.testing.assert_allclose(rec.displacement, disp, atol=1e-11)
+    np.testing.assert_allclose(rec.mu, mu, atol=1e-6)
+    with pytest.raises(InputError, match=r"column 'Status' \(mu\) is not numbers \(e.g. 'HOLD\?'\)"):
+        read_record(tmp_path / "export.csv", columns={"time": "Timestamp", "mu": "Status"})
