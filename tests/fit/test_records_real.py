@@ -208,3 +208,13 @@ def test_spreadsheet_export_quotes_time_stamps_and_a_text_column(tmp_path, vstep
     np.testing.assert_allclose(rec.mu, mu, atol=1e-6)
     with pytest.raises(InputError, match=r"column 'Status' \(mu\) is not numbers \(e.g. 'HOLD\?'\)"):
         read_record(tmp_path / "export.csv", columns={"time": "Timestamp", "mu": "Status"})
+
+
+def test_key_value_lines_above_the_header(tmp_path, vstep):
+    """'Sampling rate,100' and 'Normal stress,10' lines above the header (a number among words): not data rows."""
+    t, mu, disp = vstep
+    rows = [f"{a:.4f},{d * 1e6:.4f},{m:.6f}" for a, d, m in zip(t, disp, mu)]
+    rec = read_record(_write(tmp_path / "kv.csv", ["Sampling rate,100", "Normal stress,10", "Operator,JD",
+                                                   "Time (s),LP_Disp (um),mu"] + rows))
+    assert rec.n == t.size
+    np.testing.assert_allclose(rec.t, t, atol=1e-9)
