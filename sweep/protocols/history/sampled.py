@@ -5,6 +5,7 @@ the per-segment observables, sweep/protocols/history/engine.py, which then come 
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from ...accuracy import TIGHTER
@@ -36,16 +37,34 @@ def two_runs(k, a, b, A, mu_ref, state_law: str, s_kick, ratios, durations, scal
     return read_samples(s_loose, s_tight, st_loose, st_tight, A, mu_ref, rtol, n_loose + n_tight)
 
 
+@numba.njit(cache=True, nogil=True)
+def _read_off(s_loose, s_tight, A, mu_ref, rtol, mu, error, above):  # pragma: no cover (compiled)
+    """mu = mu_ref + A s_tight, error = |A (s_tight - s_loose)| (inf where only the looser is NaN), above[i]:
+    some error of set i exceeds rtol (|mu| + A) (NaNs compare false): one pass (numpy took ~10 over the global
+    stage's sets x samples, ~4 ms of a record fit's grid)."""
+    for i in range(mu.shape[0]):
+        flag = False
+        for j in range(mu.shape[1]):
+            m = mu_ref[i] + A[i] * s_tight[i, j]
+            e = abs(A[i] * (s_tight[i, j] - s_loose[i, j]))
+            if np.isnan(e) and np.isfinite(m):
+                e = np.inf  # the looser run failed there: no estimate
+            mu[i, j] = m
+            error[i, j] = e
+            if e > rtol * (abs(m) + A[i]):
+                flag = True
+        above[i] = flag
+
+
 def read_samples(s_loose, s_tight, st_loose, st_tight, A, mu_ref, rtol: float, steps) -> dict[str, np.ndarray]:
     """mu_t, mu_t_error (sets, times), status and steps from the s samples of a looser and a tighter run (any driver)
     and their statuses: mu = mu_ref + A s of the tighter run, the error the difference to the looser (inf where
     only the looser failed), error_above_tol where an error exceeds rtol (|mu| + A)."""
-    mu = mu_ref[:, None] + A[:, None] * s_tight
-    error = np.abs(A[:, None] * (s_tight - s_loose))
-    error[np.isnan(error) & np.isfinite(mu)] = np.inf  # the looser run failed there: no estimate
+    s_loose, s_tight = np.asarray(s_loose, dtype=float), np.asarray(s_tight, dtype=float)
+    mu, error, above = np.empty(s_tight.shape), np.empty(s_tight.shape), np.empty(s_tight.shape[0], np.bool_)
+    _read_off(s_loose, s_tight, np.asarray(A, dtype=float), np.asarray(mu_ref, dtype=float), float(rtol), mu, error,
+              above)
     status = np.where(st_tight != Status.OK, st_tight, st_loose).astype(np.int8)
-    with np.errstate(invalid="ignore"):
-        above = np.any(error > rtol * (np.abs(mu) + A[:, None]), axis=1)
     status[(status == Status.OK) & above] = Status.ERROR_ABOVE_TOL
     return {"mu_t": mu, "mu_t_error": error, "status": status, "steps": steps}
 
