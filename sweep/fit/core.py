@@ -38,7 +38,7 @@ from ..scene.presets import presets
 from . import local
 from .checks import check_problems
 from .data import Data
-from .globalstage import grid_axes, search_all
+from .globalstage import grid_sets, search_all
 from .local import refine_all
 from .outcome import FitOutcome
 from .problem import MODEL_FAILED, make_problems
@@ -105,10 +105,9 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
     if not records:
         announce_if_cold(families=["time-resolved lanes", "time-resolved stop"])
     rounds, seconds = {}, {}
-    n_sets = len(problems) * (int(np.prod([a.size for a in grid_axes(space)])) + 1)
-    say(f"global stage: {len(problems)} problem(s), {n_sets} parameter sets on the grid")
     t0 = time.perf_counter()
     stack = (RecordStack if records else ProblemStack)(problems, global_rtol, estimates=False)
+    say(f"global stage: {len(problems)} problem(s), {len(grid_sets(space, stack.offset))} parameter sets each")
     # a cold cache: the per-point path (the grid's sets without a finite relaxed slip) compiles in a second process
     # while this one compiles the sampled lanes (~45 s and ~18 s on 2 cores, one after the other without it)
     aside = "" if records else (f"from sweep.fit.forward import warm_up_per_point; "

@@ -89,6 +89,20 @@ class RecordStack(ProblemStack):
         self.trends = [[None if d.detrend is None else (d.t - d.t[0] if d.detrend == "time" else
                                                          d.displacement - d.displacement[0]) for d in pr.data]
                        for pr in self.problems]
+        # mu0 shifts every model value alike (mu = mu0 + a function of the others): an offset parameter
+        self.offset = self.space.names.index("mu0") if "mu0" in self.space.names else None
+
+    def offset_direction(self) -> np.ndarray:
+        """d(weighted residual)/d mu0 (Q, n_max): the weight, where a record is detrended times 1 - x <x>/<x^2>
+        (weighted means over the record: its trend's slope absorbs part of a shift)."""
+        out = np.zeros_like(self.weights)
+        for q, pr in enumerate(self.problems):
+            col = 0
+            for d, x in zip(pr.data, self.trends[q]):
+                w = self.weights[q, col:col + d.t.size]
+                out[q, col:col + d.t.size] = w if x is None else w * (1.0 - x * np.sum(w**2 * x) / np.sum(w**2 * x**2))
+                col += d.t.size
+        return out
 
     def _params(self, sets: np.ndarray) -> np.ndarray:
         """(a, b, Dc, mu0, k) of each parameter set (rows of ``sets``); k NaN where neither fitted nor given."""

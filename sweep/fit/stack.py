@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -27,28 +28,41 @@ import numpy as np
 from .forward import ForwardPoints, forward
 from .problem import MODEL_FAILED, Problem
 
-__all__ = ["ProblemStack", "distinct_rows"]
+__all__ = ["Misfits", "ProblemStack", "distinct_rows"]
 
 
 @numba.njit(cache=True, nogil=True, parallel=True)
-def _misfit_sums(model, block_of, observed, weights, n_res, out, failures):  # pragma: no cover (compiled)
-    """out[t, s] = sum over i < n_res[t] of the squared weighted residual (model[block_of[t, s], i] - observed[t, i])
-    weights[t, i] over the residuals the model solved, failures[t, s] the number it did not (no finite value): one
-    pass, no temporaries (numpy needed 6 passes over 100 curves x 730 grid sets x 200 samples, 85 % of the global
-    stage), tasks split over the threads (each sum runs in order)."""
+def _misfit_sums(model, block_of, observed, weights, direction, n_res, out, failures, cross,
+                 norm):  # pragma: no cover (compiled)
+    """out[t, s] = sum over i < n_res[t] of the squared weighted residual r = (model[block_of[t, s], i] -
+    observed[t, i]) weights[t, i] over the residuals the model solved, failures[t, s] the number it did not (no
+    finite value): one pass, no temporaries (numpy needed 6 passes over 100 curves x 730 grid sets x 200 samples, 85 %
+    of the global stage), tasks split over the threads (each sum runs in order). Where ``direction`` (T, n) has
+    columns (an offset parameter, ProblemStack.offset): also cross[t, s] = sum r g and norm[t, s] = sum g^2 over the
+    solved residuals, g = direction[t, i]."""
+    along = direction.shape[1] > 0
     for t in numba.prange(block_of.shape[0]):
         for s in range(block_of.shape[1]):
             row = model[block_of[t, s]]
             acc = 0.0
+            rg = 0.0
+            gg = 0.0
             bad = 0
             for i in range(n_res[t]):
                 r = (row[i] - observed[t, i]) * weights[t, i]
                 if np.isfinite(r):
                     acc += r * r
+                    if along:
+                        g = direction[t, i]
+                        rg += r * g
+                        gg += g * g
                 else:
                     bad += 1
             out[t, s] = acc
             failures[t, s] = bad
+            if along:
+                cross[t, s] = rg
+                norm[t, s] = gg
 
 
 @numba.njit(cache=True, nogil=True)
@@ -97,6 +111,20 @@ def distinct_rows(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return first, inverse.reshape(-1)
 
 
+@dataclass
+class Misfits:
+    """:meth:`ProblemStack.misfits`: the misfit over the solved residuals ``rss`` (T, S), stability and the number of
+    residuals not solved (T, S); where the stack has an offset parameter (index j), ``cross`` = sum r g and ``norm``
+    = sum g^2 (T, S) over the solved residuals r, g their derivative along it: the misfit at theta_j + c is then
+    rss + 2 c cross + c^2 norm exactly (None without)."""
+
+    rss: np.ndarray
+    stable: np.ndarray
+    failures: np.ndarray
+    cross: np.ndarray | None = None
+    norm: np.ndarray | None = None
+
+
 class ProblemStack:
     """The problems of a fit (one shared :class:`sweep.fit.space.ParamSpace`) and their engine settings.
 
@@ -106,6 +134,12 @@ class ProblemStack:
     (sweep.fit.forward), each one run at the ladder's first control tolerance (the optimisations' rounds: the best
     fits are checked by a stack with estimates, sweep.fit.core).
     """
+
+    offset: int | None = None
+    """Index (in the space's names) of a free parameter that every weighted residual depends on linearly, along a
+    direction that depends on no parameter (:meth:`offset_direction`): the global stage then solves its grid with
+    that parameter at its start only and puts it at its best value per set (sweep.fit.globalstage). None: none
+    (relaxation curves and relaxed slips)."""
 
     def __init__(self, problems: Sequence[Problem], rtol: float,
                  on_round: Callable[[int, int], None] | None = None, estimates: bool = True):
@@ -168,12 +202,13 @@ class ProblemStack:
                        failures)
         return r, stable[block_of].reshape(T, S), failures
 
-    def misfits(self, problem: np.ndarray, sets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def misfits(self, problem: np.ndarray, sets: np.ndarray) -> Misfits:
         """Sums of squared weighted residuals over the residuals the model solved (T, S), stability (T, S) and the
         number of residuals it did not solve (T, S), for ``sets`` (T, S, p), or (S, p) the same for every task (the
         global grid: its blocks are then the layouts times the sets, without sorting T S keys), summed in order, not
         pairwise (the global stage's misfits only rank its grid), without holding the residuals (100 curves x 730
-        sets x 200 samples would be a 117 MB temporary)."""
+        sets x 200 samples would be a 117 MB temporary). Where the stack has an :attr:`offset` parameter, also the
+        sums that give each set's misfit at any value of it (:class:`Misfits`)."""
         problem = np.asarray(problem, dtype=np.intp)
         T, S = problem.size, sets.shape[-2]
         if sets.ndim == 2:  # one row of sets for every task (the global grid): blocks per layout, no key sort
@@ -183,9 +218,17 @@ class ProblemStack:
         else:
             model, stable, block_of = self._blocks(problem, sets)
         rss, failures = np.empty((T, S)), np.empty((T, S), np.intp)
-        _misfit_sums(model, block_of.reshape(T, S), self.observed[problem], self.weights[problem],
-                     self.n_res[problem], rss, failures)
-        return rss, stable[block_of].reshape(T, S), failures
+        along = self.offset is not None
+        direction = self.offset_direction()[problem] if along else np.zeros((T, 0))
+        cross, norm = (np.empty((T, S)), np.empty((T, S))) if along else (None, None)
+        _misfit_sums(model, block_of.reshape(T, S), self.observed[problem], self.weights[problem], direction,
+                     self.n_res[problem], rss, failures, cross if along else rss, norm if along else rss)
+        return Misfits(rss, stable[block_of].reshape(T, S), failures, cross, norm)
+
+    def offset_direction(self) -> np.ndarray:
+        """(Q, n_max): the derivative of each problem's weighted residuals along the :attr:`offset` parameter (0 on
+        the padding); a stack with an offset parameter defines it."""
+        raise NotImplementedError
 
     def engine_errors(self, problem: np.ndarray, theta: np.ndarray, used: np.ndarray | None = None) -> np.ndarray:
         """Per task (``problem`` (T,), parameter set ``theta`` (T, p)): the largest error estimate of the engine's
