@@ -303,15 +303,23 @@ def _data_line(line: str) -> str | bool | None:
     return False
 
 
+AGREE = 20
+"""Lines after the first data row that must look like data rows with as many fields (fewer where the file ends)."""
+
+
 def _next_agrees(lines: list[str], i: int, delimiter: str | None) -> bool:
-    """Whether the line after data-like line ``i`` (blank and comment lines skipped) is data-like too, with as many
-    fields: the first data row, not a 'Sampling rate,100' line above the header (the last line: data)."""
-    n = len(_split(lines[i].strip(), delimiter))
-    for line in lines[i + 1:]:
+    """Whether the :data:`AGREE` lines after data-like line ``i`` (blank and comment lines skipped) are data-like
+    too, with as many fields: the first data row, not a block of 'Sampling rate,100' lines above the header."""
+    n, seen = len(_split(lines[i].strip(), delimiter)), 0
+    for k, line in enumerate(lines[i + 1:], start=i + 1):
         s = line.strip()
         if s and s[0] not in "#%":
             fields = _split(s, delimiter)
-            return len(fields) == n and _numeric(fields)
+            if len(fields) != n or not _numeric(fields):
+                return not any(x.strip() for x in lines[k + 1:])  # the last line, cut short: _rows names it
+            seen += 1
+            if seen == AGREE:
+                break
     return True
 
 
