@@ -17,7 +17,8 @@ row by row only to name a bad row). Columns it knows by name (case, blanks and u
 * time [s, ms, min, h; sec];
 * load-point displacement [m, mm, um, nm; mic, micron] or load-point velocity [length/time];
 * friction mu [1], or shear and normal stress [Pa, kPa, MPa, GPa, bar, psi] or load [N, kN, lbf, kgf] (mu =
-  shear/normal, both stresses or both loads).
+  shear/normal, both stresses or both loads); friction that is negative throughout (a sign convention) is taken as
+  its magnitude, as is a load-point displacement that counts down (sweep.fit.segments).
 
 Anything else it refuses in one line naming the column and what was found: a missing or unknown column or unit,
 NaN or empty values, time that repeats or goes back, a row cut short, a step outside the data.
@@ -352,10 +353,13 @@ def _header(lines: list[str], where: str) -> _Header:
         raise InputError(f"{where}: a header but no data rows")
     width = len(_split(lines[body_at].strip(), delimiter))
 
-    def fields(line: str) -> list[str]:  # a header separated by blanks above tab-separated rows
-        f = _split(line, delimiter)
-        return f if len(f) == width or delimiter is None else (_split(line, None) if len(_split(line, None)) == width
-                                                                 else f)
+    def fields(line: str) -> list[str]:
+        """The header's fields: as the rows are separated, else by blanks (above tab-separated rows), else by runs of
+        two or more blanks (names with a blank inside: 'LP Disp (um)  Shear stress (MPa)'), as many as the rows'."""
+        for f in (_split(line, delimiter), _split(line, None), [x for x in re.split(r"\s{2,}|\t", line) if x]):
+            if len(f) == width:
+                return f
+        return _split(line, delimiter)
 
     names = fields(pre[-1])
     units: list[str | None] = [None] * len(names)
@@ -529,6 +533,8 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
                              f"{names[found['normal'][0]]!r} (normal) a {kinds['normal']}: friction is their ratio; "
                              f"give both as stresses or both as forces")
         mu = col("shear") / col("normal")
+    if np.all(mu < 0):  # a shear load counted negative (a sign convention): friction is its magnitude
+        mu = -mu
     if k is None and "k" in h.meta:
         value, unit = h.meta["k"]
         if _unit_key(unit) not in _STIFFNESS:

@@ -218,3 +218,14 @@ def test_key_value_lines_above_the_header(tmp_path, vstep):
                                                    "Time (s),LP_Disp (um),mu"] + rows))
     assert rec.n == t.size
     np.testing.assert_allclose(rec.t, t, atol=1e-9)
+
+
+def test_names_with_blanks_in_a_blank_separated_file_and_negative_shear(tmp_path, vstep):
+    """A blank-separated file whose names hold single blanks ('LP Disp (um)'), columns two blanks apart; shear
+    stress counted negative (a sign convention): mu is its magnitude over the normal stress."""
+    t, mu, disp = vstep
+    rows = [f"{a:10.4f}  {d * 1e6:12.4f}  {-m * 5:12.6f}  {5.0:8.3f}" for a, d, m in zip(t, disp, mu)]
+    head = "Time (s)  LP Disp (um)  Shear stress (MPa)  Normal stress (MPa)"
+    rec = read_record(_write(tmp_path / "blanks.txt", [head] + rows))
+    np.testing.assert_allclose(rec.mu, mu, atol=2e-7)
+    np.testing.assert_allclose(rec.displacement, disp, atol=1e-10)
