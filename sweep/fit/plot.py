@@ -36,7 +36,7 @@ def _data_panel(ax, res_ax, ds: xr.Dataset) -> None:
     ax.legend(fontsize=7)
     res_ax.set_xscale("linear" if record else "log")
     res_ax.axhline(0.0, color="k", lw=0.8)
-    res_ax.set_xlabel("t [s] since the record's start" if record else "t [s] (relaxed slips: K/M [s-2])")
+    res_ax.set_xlabel("t [s] (the record's clock)" if record else "t [s] (relaxed slips: K/M [s-2])")
     res_ax.set_ylabel("residual / noise")
 
 

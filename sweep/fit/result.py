@@ -121,7 +121,8 @@ def _per_sample(out: FitOutcome) -> dict[str, xr.Variable]:
                                  "slope, sweep.fit.records.Record.detrend)"),
         "noise": _v("sample", [np.sqrt(s) * pr.noise[0] if not pr.noise_given and ok else np.nan
                                for pr, s, ok in zip(out.problems, out.s2, solved)],
-                    "m", "noise estimated from the residuals, sqrt(RSS/(n - p)) (NaN: noise given, or failed solves)"),
+                    _data_unit(out), "noise estimated from the residuals, sqrt(RSS/degrees_of_freedom) (NaN: noise "
+                    "given, or failed solves)"),
         "engine_error": _v("sample", out.engine_error, "1",
                           "bound on the engine's error in the model values of the best fit, in units of the noise "
                           "(largest over the sample's data)",
@@ -147,6 +148,16 @@ def _landscape(out: FitOutcome) -> tuple[dict[str, xr.Variable], dict[str, xr.Va
     return coords, {"misfit_landscape": _v(("sample",) + tuple(coords), land, "1",
                                            "misfit (chi^2, noise variance of the best fit) over the global stage's "
                                            "grid (engine at global_rtol; NaN: stick-slip side of the Hopf line)")}
+
+
+def _is_record_fit(out: FitOutcome) -> bool:
+    """Whether the fit's data are laboratory records (friction mu(t), sweep.fit.records), not stop data (slips)."""
+    return hasattr(out.problems[0].data[0], "mu")
+
+
+def _data_unit(out: FitOutcome) -> str:
+    """The unit of the data and their noise: 1 (friction) for records, m (slip) for stop data."""
+    return "1" if _is_record_fit(out) else "m"
 
 
 def _data(out: FitOutcome) -> dict[str, xr.Variable]:
@@ -179,16 +190,19 @@ def _data(out: FitOutcome) -> dict[str, xr.Variable]:
                 cols["V"].append(d.V)
     c = {k: np.concatenate(v) for k, v in cols.items()}
     c["sample"], c["set"] = np.repeat(owner, counts), np.repeat(np.array(names, dtype=str), counts)
+    unit, record = _data_unit(out), _is_record_fit(out)
     return {
         "datum_sample": _v("datum", c["sample"].astype(np.int32), None, "index of the sample (problem) of the datum"),
         "datum_set": _v("datum", c["set"], None, "name of the data set of the datum"),
-        "datum_t": _v("datum", c["t"], "s", "time after the stop (NaN: a relaxed slip)"),
+        "datum_t": _v("datum", c["t"], "s", "the record's time (its own clock)" if record else
+                      "time after the stop (NaN: a relaxed slip)"),
         "datum_K_over_M": _v("datum", c["K_over_M"], "s-2", "K/M of the datum (times the fitted factor if free)"),
         "datum_V": _v("datum", c["V"], "m s-1", "driving velocity before the stop"),
-        "observed": _v("datum", c["observed"], "m", "measured slip x(t) or relaxed slip Dx_inf"),
-        "fitted": _v("datum", c["fitted"], "m", "the model at the best fit (NaN: the model gave no number)"),
+        "observed": _v("datum", c["observed"], unit,
+                       "measured friction mu(t)" if record else "measured slip x(t) or relaxed slip Dx_inf"),
+        "fitted": _v("datum", c["fitted"], unit, "the model at the best fit (NaN: the model gave no number)"),
         "residual": _v("datum", c["residual"], "1", "(fitted - observed)/noise"),
-        "datum_noise": _v("datum", c["noise"], "m", "noise of the datum (given, or estimated per sample)"),
+        "datum_noise": _v("datum", c["noise"], unit, "noise of the datum (given, or estimated per sample)"),
     }
 
 
@@ -227,7 +241,7 @@ def trend_slopes(out: FitOutcome) -> list[list[float | None]]:
 
 def _records(out: FitOutcome) -> dict[str, xr.Variable]:
     """Per record of a record fit (dimension ``record``): its sample and its detrend slope at the best fit."""
-    if not hasattr(out.problems[0].data[0], "mu"):
+    if not _is_record_fit(out):
         return {}
     slopes = trend_slopes(out)
     names, owner, per_time, per_disp, kind = [], [], [], [], []
@@ -263,14 +277,18 @@ def build_fit_dataset(out: FitOutcome, history: str = "sweep.fit") -> xr.Dataset
     bounds = {n: [float(lo), float(hi)] for n, lo, hi in zip(out.space.names, out.space.lower, out.space.upper)}
     attrs = {
         "Conventions": "CF-1.11",
-        "title": "Friction parameters fitted to stop transients (Baumberger & Gauthier 1996 spring-block model)",
+        "title": "Friction parameters fitted to laboratory friction records (rate and state, spring-slider)"
+        if _is_record_fit(out) else "Friction parameters fitted to stop transients (Baumberger & Gauthier 1996 "
+                                    "spring-block model)",
         "source": versions(), "references": REFERENCES,
         "history": f"{_dt.datetime.now(_dt.UTC).isoformat(timespec='seconds')}: {history}",
         "sweep_kind": "fit",
         "fit_settings": json.dumps({**out.settings, "bounds": bounds}),
         "fit_rounds": json.dumps(out.rounds), "fit_seconds": json.dumps({k: round(v, 3) for k, v in
                                                                           out.seconds.items()}),
-        "comment": "quasi-static stop model, aging law (docs/physics.md 3a); intervals from profile likelihoods",
+        "comment": ("quasi-static load-history model from steady sliding, aging law (docs/physics.md 7b)" if
+                    _is_record_fit(out) else "quasi-static stop model, aging law (docs/physics.md 3a)")
+        + "; intervals from profile likelihoods",
     }
     data_vars = {**_parameters(out), **_per_sample(out), **landscape, **_data(out), **_records(out)}
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)

@@ -178,6 +178,7 @@ def test_detrend_slopes_are_reported_and_counted(vstep):
     assert float(ds["detrend_slope_displacement"][1]) == pytest.approx(-3.0, rel=0.05)
     assert np.isnan(ds["detrend_slope_time"][1:]).all() and np.isnan(ds["detrend_slope_displacement"][[0, 2]]).all()
     assert ds["degrees_of_freedom"].values.tolist() == [t.size - 5, t.size - 5, t.size - 4]
+    assert ds["observed"].attrs["units"] == "1" and ds["noise"].attrs["units"] == "1"  # friction, not slip
     lines = trend_lines(ds)
     assert lines[0].startswith("trend 2") and "/s in time" in lines[0] and "/m in displacement" in lines[1]
     assert lines[2] == ""
