@@ -229,3 +229,20 @@ def test_names_with_blanks_in_a_blank_separated_file_and_negative_shear(tmp_path
     rec = read_record(_write(tmp_path / "blanks.txt", [head] + rows))
     np.testing.assert_allclose(rec.mu, mu, atol=2e-7)
     np.testing.assert_allclose(rec.displacement, disp, atol=1e-10)
+
+
+@pytest.mark.parametrize("extra, needle", [
+    ('columns = {time = "Zeit"}', "columns['time'] = 'Zeit' is not a column of the file"),
+    ('t_begin = 5.0', "unknown key(s) ['t_begin']"),
+    ('t_start = 99.0', "t_start = 99 s is not in the data"),
+])
+def test_sweep_fit_refuses_a_bad_record_option_in_one_line(tmp_path, capsys, vstep, extra, needle):
+    from sweep.cli import main
+
+    t, mu, disp = vstep
+    _write(tmp_path / "r.csv", ["time [s],lp_disp [um],mu"] + [f"{a:.4f},{d * 1e6:.4f},{m:.6f}"
+                                                              for a, d, m in zip(t, disp, mu)])
+    (tmp_path / "fit.toml").write_text(f'free = ["a", "b"]\n[[data]]\nfile = "r.csv"\n{extra}\n')
+    assert main(["fit", str(tmp_path / "fit.toml"), "-o", str(tmp_path / "o.nc")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert needle in err and err.count("\n") == 0, err
