@@ -8,7 +8,8 @@ at the first segment's velocity at the record's first time) with A = a, m1 = b -
 K/M = k g (docs/physics.md 7b). k: the fit's where free, else the record's own (``Record.k``), else the start's.
 A record with ``detrend`` adds c x to its model (x its time or displacement from the start) with the slope c that
 minimises its weighted residuals at each parameter set (a linear nuisance parameter projected out: the profiles of
-the other parameters are then profiled over c too; the noise estimate does not yet count it as a parameter).
+the other parameters are then profiled over c too; it counts as a parameter in the degrees of freedom and the
+noise estimate, sweep.fit.core, and its value at the best fit is reported, sweep.fit.result.trend_slopes).
 """
 
 from __future__ import annotations

@@ -110,7 +110,9 @@ class Record:
     (found from the displacement, sweep.fit.segments); ``k`` [1/m] the stiffness k = K/(M g) (None: from the fit's
     parameters); ``noise`` [1] per sample, one number, or None (estimated); ``sample`` and ``name`` as for a Curve;
     ``detrend`` "time" or "displacement": the model carries a linear trend c (t - t[0]) or c (x - x[0]) of its own
-    slope c [1/s or 1/m] per record, the one that fits best at each parameter set (projected out, not reported)."""
+    slope c [1/s or 1/m] per record, the one that fits best at each parameter set (projected out; fitted as one
+    more parameter: sweep.fit.result reports it, ``detrend_slope_time`` / ``_displacement``). :meth:`window` cuts
+    a record to a time range."""
 
     t: np.ndarray
     mu: np.ndarray
