@@ -6,12 +6,13 @@ velocity [m s-1]), or found from the record's load-point displacement or velocit
 starts from steady sliding at the first segment's velocity at the record's first time.
 
 The reader takes text files as laboratories write them: columns separated by tabs, semicolons, commas or blanks
-(the first data row decides; trailing delimiters ignored), decimal commas, CR LF, latin-1 (µm); comment lines starting
-with ``#`` or ``%`` (``# k = 2e3 1/m`` there sets the stiffness); title lines above the header; a header naming the
-columns with their units in brackets or parentheses (``Time (s)``, ``mu [-]``), as the name's last part (PSU's
-``time_s``, ``lpdisp_um``, ``shr_stress_mpa``) or in a units row below the names (xlook's ``sec  mic  MPa  .``);
-columns it does not use (a row counter, a sync, a sampling rate); irregular sample times; 1e5 rows (numpy's reader;
-row by row only to name a bad row). Columns it knows by name (case, blanks and units aside; ``columns={"time":
+(the first data row decides; trailing delimiters ignored), decimal commas, CR LF, latin-1 (µm) or UTF-16; comment
+lines starting with ``#`` or ``%`` (``# k = 2e3 1/m`` there sets the stiffness); title lines and key-value lines
+above the header; a header naming the columns with their units in brackets or parentheses (``Time (s)``, ``mu
+[-]``), as the name's last part (PSU's ``time_s``, ``lpdisp_um``, ``shr_stress_mpa``) or in a units row below the
+names (xlook's ``sec  mic  MPa  .``); quoted fields; time stamps (read as seconds); columns it does not use (a row
+counter, a sync, a sampling rate, a status word); irregular sample times; 1e5 rows (numpy's reader; column by column
+only to name a bad row or read time stamps). Columns it knows by name (case, blanks and units aside; ``columns={"time":
 "Zeit"}`` names others, ``units={"displacement": "um"}`` gives a unit the file does not write):
 
 * time [s, ms, min, h; sec];
@@ -230,10 +231,12 @@ def _steps(where: str, steps, t: np.ndarray) -> tuple[tuple[float, float], ...]:
 # --- the reader -------------------------------------------------------------------------------------------------
 
 def _lines(path: Path, limit: int | None = None) -> list[str]:
-    """The file's lines (all, or the first ``limit``): UTF-8 (a byte-order mark dropped) or latin-1 (a lab PC's µ as
-    one byte); CR LF, CR or LF."""
+    """The file's lines (all, or about the first ``limit``): UTF-8 (a byte-order mark dropped), UTF-16 with its
+    byte-order mark (a spreadsheet's "Unicode text") or latin-1 (a lab PC's µ as one byte); CR LF, CR or LF."""
     with open(path, "rb") as fh:
         raw = fh.read() if limit is None else b"".join(fh.readline() for _ in range(limit))
+    if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        return raw.decode("utf-16", errors="ignore" if limit else "strict").splitlines()
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:

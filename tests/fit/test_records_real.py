@@ -34,7 +34,7 @@ def vstep():
 
 
 def _write(path, lines, newline="\n", encoding="utf-8"):
-    path.write_bytes(newline.join(lines).encode(encoding) + newline.encode())
+    path.write_bytes((newline.join(lines) + newline).encode(encoding))
     return path
 
 
@@ -246,3 +246,14 @@ def test_sweep_fit_refuses_a_bad_record_option_in_one_line(tmp_path, capsys, vst
     assert main(["fit", str(tmp_path / "fit.toml"), "-o", str(tmp_path / "o.nc")]) == 2
     err = capsys.readouterr().err.strip()
     assert needle in err and err.count("\n") == 0, err
+
+
+def test_a_spreadsheets_unicode_text_utf16_tabs(tmp_path, vstep):
+    """A spreadsheet's 'Unicode text': UTF-16 with its byte-order mark, tab-separated, µm in the header."""
+    t, mu, disp = vstep
+    rows = [f"{a:.4f}\t{d * 1e6:.4f}\t{m:.6f}" for a, d, m in zip(t, disp, mu)]
+    path = _write(tmp_path / "unicode.txt", ["Time [s]\tLP_Disp [µm]\tµ"] + rows, newline="\r\n", encoding="utf-16")
+    assert is_record_file(path)
+    rec = read_record(path)
+    np.testing.assert_allclose(rec.displacement, disp, atol=1e-10)
+    np.testing.assert_allclose(rec.mu, mu, atol=1e-6)
