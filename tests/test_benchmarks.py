@@ -57,6 +57,7 @@ KEYS = {
     "out_of_core": {"benchmark", "quick", "machine", "runs"},
     "peers": {"benchmark", "machine", "versions", "peers_status", "tools_missing", "settings", "scenes"},
     "readme_numbers": {"numbers", "readme_spans", "readme_stale_keys", "readme_up_to_date"},
+    "records_read": {"benchmark", "quick", "machine", "files", "targets"},
     "scaling": {"benchmark", "quick", "tools_missing", "machine", "threads", "dask", "memory", "memory_trajectories",
                 "targets"},
     "structure": {"import_cycle", "modules", "longest_functions", "largest_positional_lists"},
