@@ -74,7 +74,8 @@ class HistoryPlan:
                        scale=self.scale[rows], G=self.G[rows], inertial=self.inertial[rows])
 
     def describe(self) -> dict[str, str]:
-        models = {"quasistatic": "quasistatic", "inertial": "inertial (RODAS3 on (s, u, ln xi'), I control)",
+        models = {"quasistatic": "quasistatic",
+                  "inertial": "inertial (RODAS3 on (s, u, ln xi', tau) in a plunge-resolving time, I control)",
                   "auto": "per point: inertial (RODAS3) where some segment's gamma/A exceeds model_tol or where "
                           "the quasi-static run runs away (slip velocity > 1e8 V, aging law), else quasistatic"}
         return {"model": f"{models[self.model]}, {self.state_law} law",
