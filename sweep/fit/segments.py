@@ -8,8 +8,10 @@ sweep.fit.data.first_noise_estimate, at least the rounding noise of the column's
 segment), recursively, no piece shorter than MIN_SAMPLES; then each cut moves to the best hinge between its
 neighbouring cuts until none moves (a first split over several changes lands between them). Each piece's velocity
 is its least-squares slope; a piece whose slope is within 3 standard errors of 0, or below HOLD_FRACTION of the
-fastest, is a hold (velocity 0). A velocity column is integrated (trapezoids) to a displacement first. Only the
-load point is looked at: a sawtooth or noise in friction cannot move a step.
+fastest, is a hold (velocity 0). A hold too short for a piece of its own (a 1 s hold at 10 Hz under 0.3 um of noise)
+shows as a sliding piece whose line after it is behind: the best step in a piece's displacement, kept by the same
+penalty, is a pause of (lag)/(velocity) (:func:`_pauses`). A velocity column is integrated (trapezoids) to a
+displacement first. Only the load point is looked at: a sawtooth or noise in friction cannot move a step.
 """
 
 from __future__ import annotations
@@ -31,9 +33,10 @@ TRIM = MIN_SAMPLES // 2
 """Neighbouring pieces whose velocities differ by less than this fraction (plus 3 standard errors) are one."""
 
 
-def _best_hinge(t: np.ndarray, y: np.ndarray) -> tuple[int, float]:
-    """(index of the best hinge sample, the RSS reduction it gives over one line) for one piece; all candidates from
-    cumulative sums (O(n)): basis 1, t, (t - t_k)+ for each candidate k."""
+def _best_column(t: np.ndarray, y: np.ndarray, jump: bool = False) -> tuple[int, float, float]:
+    """(index k of the best candidate sample, the RSS reduction it gives over one line, its column's coefficient) for
+    one piece, every candidate from cumulative sums (O(n)): basis 1, t and a hinge (t - t_k)+ or, with ``jump``, a
+    step (t >= t_k) (a pause too short for a piece of its own: the line after it is behind by the coefficient)."""
     n = t.size
     tc = (t - t.mean()) / (np.ptp(t) or 1.0)
     yc = y - y.mean()
@@ -41,25 +44,29 @@ def _best_hinge(t: np.ndarray, y: np.ndarray) -> tuple[int, float]:
     S_y, S_ty = yc.sum(), (tc * yc).sum()
     rev = lambda a: np.cumsum(a[::-1])[::-1]  # noqa: E731 (sums over i >= k)
     N, T1, T2, Y1, TY = rev(np.ones(n)), rev(tc), rev(tc * tc), rev(yc), rev(tc * yc)
-    b = tc
-    h1 = T1 - b * N
-    h2 = T2 - 2 * b * T1 + b * b * N
-    th = T2 - b * T1
-    hy = TY - b * Y1
+    if jump:  # h_k = 1 for i >= k
+        h1, h2, th, hy = N, N, T1, Y1
+    else:  # h_k = (t - t_k) for i >= k
+        h1 = T1 - tc * N
+        h2 = T2 - 2 * tc * T1 + tc * tc * N
+        th = T2 - tc * T1
+        hy = TY - tc * Y1
     k = np.arange(MIN_SAMPLES, n - MIN_SAMPLES)
     if k.size == 0:
-        return -1, 0.0
-    # the hinge column h_k beside the line's basis X = [1, t]: its fall of the RSS is (h.y - c G^-1 f)^2 /
-    # (h.h - c G^-1 c), G = X'X, c = X'h_k, f = X'y (the part of h_k the line cannot carry; no 3x3 solve per k, which
-    # took 55 % of segmenting 1e5 samples)
+        return -1, 0.0, 0.0
+    # the column h_k beside the line's basis X = [1, t]: its fall of the RSS is (h.y - c G^-1 f)^2 / (h.h - c G^-1 c),
+    # G = X'X, c = X'h_k, f = X'y (the part of h_k the line cannot carry; no 3x3 solve per k, which took 55 % of
+    # segmenting 1e5 samples), its coefficient (h.y - c G^-1 f) / (h.h - c G^-1 c)
     det = one * S_tt - S_t * S_t
     c1, c2 = h1[k], th[k]
     cgc = (S_tt * c1 * c1 - 2.0 * S_t * c1 * c2 + one * c2 * c2) / det
     cgf = (S_tt * c1 * S_y - S_t * (c1 * S_ty + c2 * S_y) + one * c2 * S_ty) / det
     with np.errstate(divide="ignore", invalid="ignore"):
-        gain = np.where(h2[k] - cgc > 0, (hy[k] - cgf) ** 2 / (h2[k] - cgc), 0.0)
+        ok = h2[k] - cgc > 0
+        gain = np.where(ok, (hy[k] - cgf) ** 2 / (h2[k] - cgc), 0.0)
+        coef = np.where(ok, (hy[k] - cgf) / (h2[k] - cgc), 0.0)
     j = int(np.argmax(gain))
-    return int(k[j]), float(gain[j])
+    return int(k[j]), float(gain[j]), float(coef[j])
 
 
 def detect_steps(t: np.ndarray, displacement: np.ndarray, noise: float | None = None
@@ -73,7 +80,7 @@ def detect_steps(t: np.ndarray, displacement: np.ndarray, noise: float | None = 
         i, j = todo.pop()
         if j - i < 2 * MIN_SAMPLES + 1:
             continue
-        k, gain = _best_hinge(t[i:j], y[i:j])
+        k, gain, _ = _best_column(t[i:j], y[i:j])
         if k > 0 and gain > PENALTY * np.log(j - i) * s * s:
             cuts.append(i + k)
             todo += [(i, i + k), (i + k, j)]
@@ -114,11 +121,41 @@ def detect_steps(t: np.ndarray, displacement: np.ndarray, noise: float | None = 
             start = float(cross) if t[pieces[q - 1][0]] < cross < t[j - 1] else 0.5 * float(t[i - 1] + t[i])
         hold = abs(v) < 3 * e or abs(v) < HOLD_FRACTION * fastest
         steps.append((start, 0.0 if hold else float(v)))
+    for q in reversed(range(len(pieces))):  # a hold too short for a piece of its own: the slide after it behind
+        if steps[q][1] > 0:
+            i, j = pieces[q]
+            found = _pauses(t[i:j], y[i:j], steps[q][1], s)
+            if found:  # the piece's velocity without the pauses' lag in its line
+                v = found[1][1]
+                steps[q:q + 1] = [(steps[q][0], v)] + [(a, v if b else 0.0) for a, b in found]
     merged = [steps[0]]
     for st in steps[1:]:  # two holds in a row are one hold
         if not (st[1] == 0.0 and merged[-1][1] == 0.0):
             merged.append(st)
     return tuple(merged)
+
+
+def _pauses(t: np.ndarray, y: np.ndarray, v: float, s: float) -> list[tuple[float, float]]:
+    """The pauses inside a sliding piece (samples ``t``, ``y``, its velocity ``v`` [m/s], noise ``s`` [m]) as steps
+    ((start, 0), (end, v)): where a step in the displacement (the line after it behind by d, sweep.fit.segments'
+    split test on its fall of the RSS) lasts d/v longer than the sample spacing; the start where the line, flat for
+    d/v, fits best (a grid over 3 pauses either side); the pieces before and after searched again."""
+    n = t.size
+    if n < 2 * MIN_SAMPLES + 1:
+        return []
+    k, gain, d = _best_column(t, y, jump=True)
+    if k <= 0 or d >= 0 or gain <= PENALTY * np.log(n) * s * s:
+        return []
+    c0, v, d = np.linalg.lstsq(np.column_stack([np.ones(n), t, np.arange(n) >= k]), y, rcond=None)[0]
+    lag = float(-d / v) if v > 0 else 0.0
+    if d >= 0 or lag <= t[k] - t[k - 1]:
+        return []
+    taus = np.linspace(max(t[0], t[k] - 3 * lag), min(t[-1] - lag, t[k] + 2 * lag), 301)
+    near = (t >= taus[0]) & (t <= taus[-1] + lag)
+    tn, yn = t[near], y[near]
+    rss = [np.sum((yn - c0 - v * (np.minimum(tn, tau) + np.clip(tn - tau - lag, 0.0, None))) ** 2) for tau in taus]
+    tau = float(taus[int(np.argmin(rss))])
+    return [*_pauses(t[:k], y[:k], v, s), (tau, 0.0), (tau + lag, float(v)), *_pauses(t[k:], y[k:], v, s)]
 
 
 def _noise_floor(t: np.ndarray, y: np.ndarray) -> float:
@@ -139,7 +176,7 @@ def _refine(t: np.ndarray, y: np.ndarray, cuts: list[int], sweeps: int = 5) -> l
         moved = False
         for q in range(len(cuts)):
             lo, hi = (cuts[q - 1] if q else 0), (cuts[q + 1] if q + 1 < len(cuts) else t.size)
-            k, _ = _best_hinge(t[lo:hi], y[lo:hi])
+            k, _, _ = _best_column(t[lo:hi], y[lo:hi])
             if k > 0 and lo + k != cuts[q]:
                 cuts[q], moved = lo + k, True
         if not moved:
