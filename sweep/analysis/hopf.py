@@ -53,7 +53,7 @@ from ..accuracy import (
 )
 from ..assemble.dataset import REFERENCES, versions
 from ..errors import InputError
-from ..integrate.driven import DrivenParams, DrivenSettings, Regime, simulate_point
+from ..integrate.driven import Regime
 from ..plan.plan import line_uses_inertia
 from ..run.compile_notice import announce_if_cold, driven_families
 from ..run.progress import Progress
@@ -62,11 +62,11 @@ from ..scene.plausibility import warn_implausible
 from ..scene.scene import MODEL_TOL_RANGE, MODELS, STATE_LAWS
 from ..status import MODEL_FLAG
 from . import bistable
+from .hopf_batch import TYPE_RTOL, Run, Search, drive
 from .lyapunov import TYPES, bautin_points, lyapunov_line
 
 __all__ = ["hopf_summary", "locate_hopf", "with_simulated_line"]
 
-MAX_STEPS = 20_000_000
 BIFURCATIONS = ("none", "supercritical", "subcritical", "degenerate", "undetermined")
 AGREEMENT = ("not_compared", "agree", "disagree")
 """types_agree: simulation and l1 both decided a type (none / undetermined are not compared)."""
@@ -76,75 +76,131 @@ BAND_RTOL = 1e-2
 """Relative precision of the bistable band's upper edge."""
 
 
-def _growth(k: float, a: float, b: float, g: float, law: str = "aging") -> float:
-    """Measured growth rate of a small perturbation at reduced stiffness k = chi/A (a = mu1/A, b = m2/A,
-    g = gamma/A)."""
-    return simulate_point(DrivenParams(k, a, b, g), DrivenSettings(SIGN_PERTURBATION, STEPPER_RTOL, SIGN_CYCLES,
-                                                                   MAX_STEPS), law).growth_rate
+SMALL_START = 1e-4
+"""Initial stretch of the small starts of the type decision."""
+STRADDLE = 0.45
+"""Once the root estimate x has settled (it moved by less than STRADDLE rtol x in the last round), the growth rate
+is measured at x (1 -+ STRADDLE rtol): where the signs differ there, the bracket left is 0.9 rtol wide."""
 
 
-def _run(k: float, a: float, b: float, g: float, perturbation: float, law: str = "aging"):
-    """(regime, amplitude) of a point run to a decision."""
-    r = simulate_point(DrivenParams(k, a, b, g), DrivenSettings(perturbation, STEPPER_RTOL, TYPE_CYCLES, MAX_STEPS),
-                       law)
-    return int(r.regime), r.amplitude
+def _root_estimate(points: list[tuple[float, float]]) -> float:
+    """Where the measured growth rate r(k) vanishes, from the (k, r) ``points``: inverse quadratic interpolation
+    through the three with the smallest |r| (the chord's root through two of them where the rates of a pair are
+    within 1e-12 relative of each other, or fewer than three are given)."""
+    near = sorted(points, key=lambda point: abs(point[1]))[:3]
+    rates = [r for _, r in near]
+    if len(near) == 3 and all(abs(r1 - r2) > 1e-12 * max(abs(r1), abs(r2)) for i, r1 in enumerate(rates)
+                              for r2 in rates[i + 1:]):
+        return sum(k_i * math.prod(-r_j / (r_i - r_j) for j, r_j in enumerate(rates) if j != i)
+                   for i, (k_i, r_i) in enumerate(near))
+    (k1, r1), (k2, r2) = near[0], next((point for point in near[1:] if point[1] != near[0][1]), near[0])
+    return k1 if r1 == r2 else k1 - r1 * (k2 - k1) / (r2 - r1)
 
 
-def _locate(a: float, b: float, g: float, rtol: float, law: str = "aging") -> tuple[float, int]:
-    """Reduced critical stiffness k_c = chi_c/A where the measured growth rate changes sign, bracketed around
-    the linear value a (1 + g); (value, evaluations).
+def _locate(a: float, b: float, g: float, rtol: float) -> Search:
+    """Search (sweep/analysis/hopf_batch.py) for the reduced critical stiffness k_c = chi_c/A where the measured
+    growth rate changes sign, bracketed around the linear value a (1 + g); returns (k_c, evaluations).
+
+    The growth rate is a smooth function of k through the line (linear for the quasi-static model: Re sigma =
+    (a - k)/2), so after the initial bracket a (1 + g) (1 -+ BRACKET) (widened by the same factors until the signs
+    differ) each round estimates the root x from the rates measured so far (:func:`_root_estimate`, inside the
+    bracket) and measures the rate at x, or, once x has settled (moved by less than STRADDLE rtol x since the last
+    round; the first estimate is compared with the linear value), at both sides x (1 -+ STRADDLE rtol). The bracket
+    is the tightest pair of measured points with opposite signs; K_c is its midpoint once narrower than ``rtol``.
+    A quasi-static line is bracketed after 4 runs, an inertial one (a curved rate) after 4 to 7 (bisection took
+    2 + log2(0.2/rtol): 10 at rtol 1e-3). Safeguard (Brent's): an estimate outside the bracket, or two rounds in a
+    row that do not halve it, make the next round a bisection (the midpoint), so the bracket at least halves every
+    third round.
 
     Inertia moves the line by g = gamma/A relative; below INERTIA_NEGLIGIBLE x rtol that shift is far inside the
     bracket, and the explicit driven stepper, whose steps follow the inertial time gamma/A, would take ~1/g steps
     per cycle for nothing: the line is then located with g = 0 (the bifurcation type still uses the true g)."""
     if g < INERTIA_NEGLIGIBLE * rtol:
         g = 0.0
+
+    def rates(ks: list[float]) -> Search:  # one round: the growth rates measured at the stiffnesses ks
+        results = yield [Run(x, a, b, g, SIGN_PERTURBATION, SIGN_CYCLES) for x in ks]
+        return [r.growth_rate for r in results]
+
     lo, hi = a * (1.0 + g) * (1.0 - BRACKET), a * (1.0 + g) * (1.0 + BRACKET)
     evaluations = 2
-    g_lo, g_hi = _growth(lo, a, b, g, law), _growth(hi, a, b, g, law)
-    while not (g_lo > 0.0 > g_hi) and evaluations < 40:
+    r_lo, r_hi = yield from rates([lo, hi])
+    while not (r_lo > 0.0 > r_hi) and evaluations < 40:
         lo, hi = lo * (1.0 - BRACKET), hi * (1.0 + BRACKET)
-        g_lo, g_hi = _growth(lo, a, b, g, law), _growth(hi, a, b, g, law)
+        r_lo, r_hi = yield from rates([lo, hi])
         evaluations += 2
-    if not (g_lo > 0.0 > g_hi):
+    if not (r_lo > 0.0 > r_hi):
         return math.nan, evaluations
+    points = [(lo, r_lo), (hi, r_hi)]
+    previous, slow = a * (1.0 + g), 0  # the last estimate; rounds in a row that did not halve the bracket
     while (hi - lo) > rtol * 0.5 * (hi + lo):
-        mid = 0.5 * (lo + hi)
-        rate = _growth(mid, a, b, g, law)
-        evaluations += 1
-        if rate > 0.0:
-            lo = mid
-        elif rate < 0.0:
-            hi = mid
-        else:
-            return mid, evaluations
+        half = STRADDLE * rtol * 0.5 * (lo + hi)
+        x = _root_estimate(points)
+        if slow >= 2 or not lo < x < hi:
+            x, slow = 0.5 * (lo + hi), 0
+        x = min(max(x, lo + half), hi - half)
+        ks = [x - half, x + half] if abs(x - previous) <= half else [x]
+        previous = x
+        measured = list(zip(ks, (yield from rates(ks))))
+        evaluations += len(ks)
+        for k, r in measured:
+            if not (r > 0.0 or r < 0.0):  # zero (or no rate measured): the line is there
+                return k, evaluations
+        points += measured
+        width = hi - lo
+        inside = sorted([(lo, r_lo), *measured, (hi, r_hi)])
+        lo, r_lo, hi, r_hi = min(((k1, r1, k2, r2) for (k1, r1), (k2, r2) in zip(inside, inside[1:])
+                                  if r1 > 0.0 > r2), key=lambda pair: pair[2] - pair[0])
+        slow = slow + 1 if hi - lo > 0.5 * width else 0
     return 0.5 * (lo + hi), evaluations
 
 
-def _bifurcation(k_c: float, a: float, b: float, g: float, rtol: float, law: str = "aging") -> tuple[str, float]:
-    """Type of the bifurcation at k_c (module docstring) and the limit-cycle amplitude at distance TYPE_DISTANCE
-    below the line (NaN if none was decided there)."""
+def _bifurcation(k_c: float, a: float, b: float, g: float, rtol: float) -> Search:
+    """Search (sweep/analysis/hopf_batch.py) for the type of the bifurcation at k_c (module docstring); returns
+    (type, the limit-cycle amplitude at distance TYPE_DISTANCE below the line, NaN if none was decided there).
+
+    The runs at d and 4d below come first (one round): where both end in stick-slip they are the closest and the
+    farthest decided ones whatever the run at 2d gives, so it is run only where one of them does not."""
+    run = lambda x, start: Run(x, a, b, g, start, TYPE_CYCLES, TYPE_RTOL)  # noqa: E731
+    outcome = lambda r: (int(r.regime), float(r.amplitude))  # noqa: E731
     distances = TYPE_DISTANCE * np.array([1.0, 2.0, 4.0])
-    below = [_run(k_c * (1.0 - d), a, b, g, 1e-4, law) for d in distances]
-    cycles = [(d, amp) for d, (regime, amp) in zip(distances, below) if regime == Regime.STICK_SLIP]
-    amp_near = below[0][1] if below[0][0] == Regime.STICK_SLIP else math.nan
-    if len(cycles) >= 2:
-        (d1, a1), (d2, a2) = cycles[0], cycles[-1]
-        if abs(a2 / a1 / math.sqrt(d2 / d1) - 1.0) <= SQRT_LAW_SPREAD:
-            return "supercritical", amp_near
+    near, far = map(outcome, (yield [run(k_c * (1.0 - distances[0]), SMALL_START),
+                                     run(k_c * (1.0 - distances[2]), SMALL_START)]))
+    below = [near, None, far]
+    amp_near = near[1] if near[0] == Regime.STICK_SLIP else math.nan
+    for _ in range(2):
+        cycles = [(d, out[1]) for d, out in zip(distances, below) if out is not None and out[0] == Regime.STICK_SLIP]
+        if len(cycles) >= 2:
+            (d1, a1), (d2, a2) = cycles[0], cycles[-1]
+            if abs(a2 / a1 / math.sqrt(d2 / d1) - 1.0) <= SQRT_LAW_SPREAD:
+                return "supercritical", amp_near
+        if below[1] is not None:
+            break
+        below[1] = outcome((yield [run(k_c * (1.0 - distances[1]), SMALL_START)])[0])
     # a large start: at least the size of the stick-slip cycles found below, which a subcritical (inverted) line
     # keeps on its stable side too, within a window that can be narrow (two distances above the line, the closer
     # one still outside the located bracket)
     large = max([LARGE_PERTURBATION] + [1.2 * amp for _, amp in cycles])
     first_large = None
     for d in (TYPE_DISTANCE, max(0.25 * TYPE_DISTANCE, rtol)):  # the bracket reaches rtol/2 above k_c
-        above_large = _run(k_c * (1.0 + d), a, b, g, large, law)[0]
+        above_large = int((yield [run(k_c * (1.0 + d), large)])[0].regime)
         first_large = above_large if first_large is None else first_large
-        if above_large == Regime.STICK_SLIP and _run(k_c * (1.0 + d), a, b, g, 1e-4, law)[0] == Regime.STEADY:
+        if above_large == Regime.STICK_SLIP and (yield [run(k_c * (1.0 + d), SMALL_START)])[0].regime == Regime.STEADY:
             return "subcritical", amp_near
     if below[0][0] == Regime.RUNAWAY and first_large == Regime.STEADY:
         return "degenerate", math.nan
     return "undetermined", amp_near
+
+
+def _line_search(a: float, b: float, g: float, rtol: float, typed: bool) -> Search:
+    """Search for the line at one V and, with ``typed``, its type: returns (k_c, evaluations, type, amplitude)."""
+    k_c, evaluations = yield from _locate(a, b, g, rtol)
+    if not math.isfinite(k_c):
+        return k_c, evaluations, "none", math.nan
+    if not typed:
+        return k_c, evaluations, "undetermined", math.nan
+    kind, amp = yield from _bifurcation(k_c, a, b, g, rtol)
+    return k_c, evaluations, kind, amp
 
 
 def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto", rtol: float = 1e-3,
@@ -194,16 +250,16 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
     gamma = np.asarray(physics.inertia_number(v, p.D0, p.g), dtype=float) * inertial
     chi_c, kinds, amps, evals = (np.full(v.size, np.nan), np.zeros(v.size, np.int8), np.full(v.size, np.nan),
                                  np.zeros(v.size, np.int64))
-    for i, m in enumerate(Progress(v.size, progress, label="hopf", unit="velocities").iterate(mu1)):
-        if m <= 0.0:
-            continue
-        k_c, evals[i] = _locate(m / p.A, p.m2 / p.A, gamma[i] / p.A, rtol, state_law)
-        chi_c[i] = k_c * p.A
-        if bifurcation and math.isfinite(k_c):
-            kind, amps[i] = _bifurcation(k_c, m / p.A, p.m2 / p.A, gamma[i] / p.A, rtol, state_law)
-            kinds[i] = BIFURCATIONS.index(kind)
-        elif math.isfinite(k_c):
-            kinds[i] = BIFURCATIONS.index("undetermined")
+    lined = np.flatnonzero(mu1 > 0.0)
+    bar = Progress(v.size, progress, label="hopf", unit="velocities")
+    bar.update(v.size - lined.size)
+    try:
+        found = drive([_line_search(mu1[i] / p.A, p.m2 / p.A, gamma[i] / p.A, rtol, bifurcation) for i in lined],
+                      state_law, done=lambda _: bar.update(1))
+    finally:
+        bar.__exit__()
+    for i, (k_c, evaluations, kind, amp) in zip(lined, found):
+        chi_c[i], evals[i], kinds[i], amps[i] = k_c * p.A, evaluations, BIFURCATIONS.index(kind), amp
     to_km = p.g / p.D0
     extra, attrs = (_normal_form(p, v, mu1, gamma, inertial, kinds, model, model_tol, state_law, bistable_band, to_km,
                                  bifurcation) if lyapunov else ({}, {}))
@@ -233,7 +289,7 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
                "state_law": state_law,
                "model": model + (f" (model_tol {model_tol:g}: inertial where gamma/A > model_tol)"
                                  if model == "auto" else ""),
-               "method": (f"bisection on the sign of the growth rate measured over {SIGN_CYCLES} cycles of a "
+               "method": (f"regula falsi (Illinois) on the growth rate measured over {SIGN_CYCLES} cycles of a "
                           f"{SIGN_PERTURBATION:g} perturbation (dp5, local rtol {STEPPER_RTOL:g}); type from runs "
                           f"at {TYPE_DISTANCE:g} and {4 * TYPE_DISTANCE:g} below and above the line"),
                "params": str(p.as_dict()), **attrs},
