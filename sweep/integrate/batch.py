@@ -141,12 +141,13 @@ def _store(i, r, out):
 
 
 @functools.cache
-def driven_batch(law: str = "aging", inertia: bool = False):
+def driven_batch(law: str = "aging", inertia: bool = False, slaved: bool = False):
     """batch(points, k, a, b, g, settings: DrivenSettings, out: DrivenOutputs): the points ``points`` (indices into
     the flat arrays k, a, b, g and ``out``) in parallel, one thread per point at a time (a point's arithmetic does
     not depend on the others), with the quasi-static variant of the driven kernel (g = 0) or the one with
-    ``inertia``. The batch loop is where a target other than the CPU threads would plug in."""
-    point = point_kernel(law, inertia)
+    ``inertia`` (``slaved``: on its slow manifold where inertia is small, :func:`point_kernel`). The batch loop is
+    where a target other than the CPU threads would plug in."""
+    point = point_kernel(law, inertia, slaved)
 
     @njit(parallel=True, nogil=True, cache=cached(inertia))
     def batch(points, k, a, b, g, settings, out):
@@ -154,7 +155,7 @@ def driven_batch(law: str = "aging", inertia: bool = False):
             i = points[j]
             _store(i, point(DrivenParams(k[i], a[i], b[i], g[i]), settings), out)
 
-    return pin(batch, law, "inertial" if inertia else "quasistatic")
+    return pin(batch, law, ("inertial-slaved" if slaved else "inertial") if inertia else "quasistatic")
 
 
 def lanes_batch(relax_runs, lanes: int):

@@ -8,7 +8,11 @@ controller, or, where the inertial mode is stiff (h times its rate A/(gamma xi')
 RODAS3 (:mod:`sweep.integrate.solvers.rosenbrock_step`) with the analytic Jacobian and the I controller; what is
 recorded is
 the cycle history below. Near steady sliding (xi' ~ 1, where the Hopf line is located) the explicit stepper stays
-in use. A slip velocity beyond RUNAWAY_XI_DOT ends the point as ``runaway`` (the quasi-static model breaks down:
+in use. The driven scene's inertial points (``point_kernel(..., slaved=True)``) run on the slow manifold of the
+inertial model (w slaved to first order, :func:`sweep.integrate.models.driven.make_slaved_rhs`, the explicit stepper)
+wherever the inertial term is small (:data:`sweep.accuracy.SLAVED_INERTIA`): the stick phases and the decay after a
+slip, which took ~2/3 of a stick-slip cycle's steps as RODAS3 steps. A slip velocity beyond RUNAWAY_XI_DOT ends
+the point as ``runaway`` (the quasi-static model breaks down:
 m2 = 0 below the Hopf line overflows in finite time), before any exponent can overflow.
 
 The run starts from steady sliding with the spring stretched by ``perturbation`` (z(0) = perturbation, u(0) = 0).
@@ -51,13 +55,21 @@ from ..accuracy import (
     MIN_CYCLES,
     NEUTRAL_SPREAD,
     NEUTRAL_START,
+    SLAVED_INERTIA,
     STATIONARY_TOL,
     STIFF_SWITCH,
     W_RUNAWAY,
 )
 from ..jitcache import pin, pin_module
 from ..status import Status
-from .models.driven import DrivenParams, inertial_system, log_velocity_rate, make_driven_rhs, stiffness
+from .models.driven import (
+    DrivenParams,
+    inertial_system,
+    log_velocity_rate,
+    make_driven_rhs,
+    make_slaved_rhs,
+    stiffness,
+)
 from .models.state_laws import STATE_LAWS
 from .solvers import DP5, RODAS3
 from .solvers.controllers import I_CONTROLLER, PI_CONTROLLER, accepted_factor, rejected_factor
@@ -158,11 +170,12 @@ def _make_advance(rhs, with_inertia: bool, variant: tuple[str, str]):
     return pin(advance, *variant)
 
 
-def _make_extremum(rhs, advance, variant: tuple[str, str]):
+def _make_extremum(rhs, advance, variant: tuple[str, ...], slaved: bool = False):
     """extremum(stiff, y0, h, dz0, dz1, p, K, ys, yt, err, work, dy) -> (theta h, z there): the extremum of z inside
     a step of size h from y0 where z' changes sign (dz0 at the start, dz1 at the end): linear interpolation of z' as
     a first guess, then Newton on exact partial steps of size theta h with the step's own method
-    (z'' = -xi' (ln xi')')."""
+    (z'' = -xi' (ln xi')'; on the slaved inertial form, ``slaved``, (ln xi')' is the quasi-static balance's rate: a
+    Newton slope, exact to O(g e^w))."""
 
     @njit(fastmath=FAST, error_model="numpy")
     def extremum(stiff, y0, h, dz0, dz1, p, K, ys, yt, err, work, dy):
@@ -171,7 +184,8 @@ def _make_extremum(rhs, advance, variant: tuple[str, str]):
             rhs(y0, p, K[0])
             advance(stiff, y0, theta * h, p, K, ys, yt, err, work)
             lw = rhs(yt, p, dy)
-            ddz = -math.exp(min(lw, EXP_MAX)) * log_velocity_rate(yt, dy, p)
+            rate_of = DrivenParams(p.k, p.a, p.b, 0.0) if slaved else p
+            ddz = -math.exp(min(lw, EXP_MAX)) * log_velocity_rate(yt, dy, rate_of)
             if ddz == 0.0 or not math.isfinite(ddz):
                 break
             delta = -dy[0] / (ddz * h)
@@ -262,13 +276,35 @@ def scalar_parts(law: str, with_inertia: bool):
     return rhs, advance, _make_extremum(rhs, advance, variant)
 
 
-def _make_simulate(law: str, with_inertia: bool):
+def _slaved_parts(law: str):
+    """(rhs, advance, extremum) of the inertial model on its slow manifold (:func:`make_slaved_rhs`), made once per
+    process."""
+    rhs = make_slaved_rhs(STATE_LAWS[law].rate)
+    variant = (law, "slaved")
+    advance = _make_advance(rhs, True, variant)  # (z, u, w), always called with stiff False
+    return rhs, advance, _make_extremum(rhs, advance, variant, slaved=True)
+
+
+@njit(inline="always", fastmath=FAST, error_model="numpy")
+def _inertia_size(y, p):
+    """The inertial term against the slow manifold's bounds (:data:`SLAVED_INERTIA`): max(-P/low, P/high,
+    g e^w/low) with P = gamma xi''/A = balance - w at the inertial state y = (z, u, w); the slaved form holds where
+    this is <= 1."""
+    balance = p.k * y[0] - y[1] * (p.a + p.b * y[1]) - y[1]
+    low, high = SLAVED_INERTIA
+    return max((y[2] - balance) / low, (balance - y[2]) / high, p.g * math.exp(min(y[2], EXP_MAX)) / low)
+
+
+def _make_simulate(law: str, with_inertia: bool, slaved: bool = False):
     """simulate(p, settings) -> DrivenResult for one state law, compiled for the quasi-static model only
     (``with_inertia`` False: the stiff stepper is not compiled into the loop, which was 18 % slower with it, and
-    compiling takes half the time) or for both."""
+    compiling takes half the time) or for both; with ``slaved`` (inertial only) the inertial model runs on its slow
+    manifold where inertia is below :data:`SLAVED_INERTIA` (:func:`make_slaved_rhs`: the stick phases and the
+    decay after a slip, where the full system took ~2/3 of the steps of a stick-slip cycle, all RODAS3)."""
     rhs, advance, extremum = scalar_parts(law, with_inertia)
+    rhs_s, advance_s, extremum_s = _slaved_parts(law) if slaved else (rhs, advance, extremum)
     n = _size(with_inertia)
-    variant = (law, "inertial" if with_inertia else "quasistatic")
+    variant = (law, ("inertial-slaved" if slaved else "inertial") if with_inertia else "quasistatic")
 
     @njit(cache=cached(with_inertia), fastmath=FAST, error_model="numpy")
     def simulate(p, settings):
@@ -291,15 +327,19 @@ def _make_simulate(law: str, with_inertia: bool):
         w_peak = -math.inf
         err_prev, rejected = 1e-4, False
         work = scratch(n)
+        on_manifold = False  # the slaved form in use (``slaved`` only)
         rhs(y, p, dy)
         dz = dy[0]
         while steps < settings.max_steps:
             for m in range(n):  # (element loops: a slice assignment compiles numba's shape-mismatch error path, ~2 s)
                 K[0, m] = dy[m]
             # explicit where it is stable, RODAS3 where the inertial mode's rate would hold the explicit step down
-            stiff = with_inertia and p.g > 0.0 and h * stiffness(y, p) > STIFF_SWITCH
+            stiff = with_inertia and p.g > 0.0 and not on_manifold and h * stiffness(y, p) > STIFF_SWITCH
             q = RODAS3_ORDER if stiff else DP5_ORDER
-            done, lw_fsal = advance(stiff, y, h, p, K, ys, y_new, err_v, work)
+            if on_manifold:
+                done, lw_fsal = advance_s(False, y, h, p, K, ys, y_new, err_v, work)
+            else:
+                done, lw_fsal = advance(stiff, y, h, p, K, ys, y_new, err_v, work)
             steps += 1
             scale = rtol * _largest(size, y_new)
             err = _largest(0.0, err_v) / scale if done else math.nan
@@ -316,6 +356,8 @@ def _make_simulate(law: str, with_inertia: bool):
                 lw1 = lw_fsal
                 for m in range(n):
                     dy[m] = K[_STAGES - 1, m]
+            if on_manifold:  # w follows the slow flow (make_slaved_rhs)
+                y_new[2] = lw1
             dz1 = dy[0]
             w_peak = max(w_peak, lw1)
             if lw1 > W_RUNAWAY:  # an accepted state: the slip velocity itself is past the threshold
@@ -328,7 +370,10 @@ def _make_simulate(law: str, with_inertia: bool):
             if norm < 0.1 * perturbation and not math.isfinite(t_tenth):
                 norm_tenth, t_tenth = norm, tau + h
             if dz > 0.0 and dz1 <= 0.0:  # a maximum of z: a cycle ends
-                dt, z_top = extremum(stiff, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
+                if on_manifold:
+                    dt, z_top = extremum_s(False, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
+                else:
+                    dt, z_top = extremum(stiff, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
                 t_peak = tau + dt
                 if z_min < math.inf and math.isfinite(t_max_prev):
                     cycles += 1
@@ -346,10 +391,22 @@ def _make_simulate(law: str, with_inertia: bool):
                         return DrivenResult(Regime.UNDECIDED, OK, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
                 t_max_prev = t_peak
             elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
-                z_min = extremum(stiff, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
+                if on_manifold:
+                    z_min = extremum_s(False, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
+                else:
+                    z_min = extremum(stiff, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
             for m in range(n):
                 y[m] = y_new[m]
             tau += h
+            if slaved:  # onto the slow manifold where inertia is small, back to the full system past twice that
+                inertia = _inertia_size(y, p)
+                if on_manifold != (inertia <= (2.0 if on_manifold else 1.0)):
+                    on_manifold = not on_manifold
+                    if on_manifold:  # w onto the manifold (moves by O(inertia^2))
+                        y[2] = rhs_s(y, p, dy)
+                    else:  # w is the manifold's: the full system starts without an initial layer
+                        rhs(y, p, dy)
+                    dz1 = dy[0]
             dz = dz1
             size = max(size, abs(y[0]))
             factor, err_prev = accepted_factor(I_CONTROLLER if stiff else PI_CONTROLLER, err, err_prev, q, rejected)
@@ -361,13 +418,14 @@ def _make_simulate(law: str, with_inertia: bool):
 
 
 @functools.cache
-def point_kernel(law: str = "aging", inertia: bool = False):
+def point_kernel(law: str = "aging", inertia: bool = False, slaved: bool = False):
     """simulate(p: DrivenParams, settings: DrivenSettings) -> DrivenResult for a state law: the quasi-static variant
-    (p.g = 0) or, with ``inertia``, the variant that also runs the inertial model (p.g > 0; aging law only). Each
-    is compiled on first use, so that a scene compiles only the variant its points need."""
+    (p.g = 0) or, with ``inertia``, the variant that also runs the inertial model (p.g > 0; aging law only), with
+    ``slaved`` on its slow manifold where inertia is small (:data:`SLAVED_INERTIA`). Each is compiled on first use,
+    so that a scene compiles only the variant its points need."""
     if inertia and law != "aging":
         raise ValueError(f"the driven scene runs with inertia under the aging law only, not {law!r}")
-    return _make_simulate(law, inertia)
+    return _make_simulate(law, inertia, slaved and inertia)
 
 
 def simulate_point(p: DrivenParams, settings: DrivenSettings, law: str = "aging") -> DrivenResult:

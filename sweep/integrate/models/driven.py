@@ -28,7 +28,7 @@ from ...jitcache import pin, pin_module
 from ..solvers.fastmath import FAST
 from ..solvers.vmath import EXP_MAX
 
-__all__ = ["DrivenParams", "inertial_system", "log_velocity_rate", "make_driven_rhs", "stiffness"]
+__all__ = ["DrivenParams", "inertial_system", "log_velocity_rate", "make_driven_rhs", "make_slaved_rhs", "stiffness"]
 
 
 class DrivenParams(NamedTuple):
@@ -72,6 +72,31 @@ def make_driven_rhs(law, inertia: bool = False):
             return lw
 
     return pin(rhs, law.py_func.__name__, "inertial" if inertia else "quasistatic")
+
+
+def make_slaved_rhs(law):
+    """rhs(y, p, dy) -> w of the inertial equations (p.g > 0) on their slow manifold, to first order in the
+    inertial term: where the stiff mode relaxes far faster than the slow ones, gamma xi''/A = g e^w w' = balance - w
+    is slaved to the quasi-static flow, and
+
+        w = balance - g e^balance balance'    (+ O((g e^w w')^2)),    balance' = k z' - (a + 2 b u + 1) u',
+
+    with z', u' the quasi-static rates at w = balance. y = (z, u, w) as in the inertial model, but w is no state here:
+    dy[2] = 0 and the driver writes the returned w into y[2] after each accepted step (sweep/integrate/driven.py,
+    :data:`sweep.accuracy.SLAVED_INERTIA`). The same explicit stepper as the quasi-static model then runs the stick
+    phases, where the full system would need RODAS3 at h A/(gamma xi') up to 1e14."""
+
+    @njit(fastmath=FAST, error_model="numpy")
+    def rhs(y, p, dy):
+        z, u = y[0], y[1]
+        balance = p.k * z - u * (p.a + p.b * u) - u
+        e0 = math.exp(min(balance, EXP_MAX))
+        w = balance - p.g * e0 * (p.k * (1.0 - e0) - (p.a + 2.0 * p.b * u + 1.0) * law(e0, u, balance + u))
+        e = math.exp(min(w, EXP_MAX))
+        dy[0], dy[1], dy[2] = 1.0 - e, law(e, u, w + u), 0.0
+        return w
+
+    return pin(rhs, law.py_func.__name__, "slaved")
 
 
 @njit(inline="always", fastmath=FAST, error_model="numpy")

@@ -50,7 +50,8 @@ def driven_chunk(scene: Scene, plan: Plan) -> Callable[[np.ndarray], dict[str, n
                 _, run_batch = driven_lanes()
                 run_batch(DrivenPoints(k, a, b), DrivenJob(first, *settings), lane_groups(where.size), out)
             else:
-                driven_batch(scene.state_law, with_inertia)(where, k, a, b, g, settings, out)
+                # inertial points on the slow manifold where inertia is small (sweep/integrate/driven.py)
+                driven_batch(scene.state_law, with_inertia, with_inertia)(where, k, a, b, g, settings, out)
         return out._asdict()
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
