@@ -237,6 +237,8 @@ def _cmd_info(args: argparse.Namespace) -> int:
         if name in ds and "flag_meanings" in ds[name].attrs:
             print("  " + flag_summary(ds, name))
     for name, var in ds.data_vars.items():
+        if var.dtype.kind not in "biuf":  # a fit's labels and messages: text
+            continue
         vals = var.values[np.isfinite(var.values)] if var.dtype.kind == "f" else var.values
         rng = f"{float(vals.min()):.4g} .. {float(vals.max()):.4g}" if vals.size else "all NaN"
         print(f"  {name:18s} [{var.attrs.get('units', '')}] {rng}  {var.attrs.get('long_name', '')}")

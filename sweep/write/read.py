@@ -1,9 +1,10 @@
 """Which of sweep's own files a path holds, read with a one-line error for anything else.
 
-sweep writes three kinds of netCDF file: a stop sweep (``sweep run``, ``sweep reproduce``: variable ``xi_inf``), a
-driven sweep (``regime``) and a Hopf line (``sweep hopf``: ``K_over_M_c`` and ``bifurcation``). Every command that
-reads a file goes through :func:`read_sweep_file`, so a missing file, a file that is not netCDF and a netCDF file
-of some other program are each refused with an :class:`~sweep.errors.InputError` naming the path.
+sweep writes these kinds of netCDF file: one per protocol (a stop sweep of ``sweep run``, ``sweep reproduce``:
+variable ``xi_inf``; a driven sweep: ``regime``; a load history: ``mu_end``), a Hopf line (``sweep hopf``:
+``K_over_M_c`` and ``bifurcation``) and a fit (``sweep fit``: attribute ``sweep_kind = "fit"``, ``fit_status``).
+Every command that reads a file goes through :func:`read_sweep_file`, so a missing file, a file that is not netCDF
+and a netCDF file of some other program are each refused with an :class:`~sweep.errors.InputError` naming the path.
 """
 
 from __future__ import annotations
@@ -18,20 +19,23 @@ from ..errors import InputError
 
 __all__ = ["KINDS", "file_kind", "open_sweep_file", "read_sweep_file"]
 
-KINDS = (*protocols.names(), "hopf")
-"""The kinds of sweep's files: one per protocol (sweep/protocols/), and the Hopf line of ``sweep hopf``."""
+KINDS = (*protocols.names(), "hopf", "fit")
+"""The kinds of sweep's files: one per protocol (sweep/protocols/), the Hopf line of ``sweep hopf`` and the fit of
+``sweep fit`` (sweep.fit)."""
 
 
 def file_kind(ds: xr.Dataset) -> str:
-    """"hopf" (sweep.locate_hopf), "driven" or "stop" (sweep.run_sweep) from the variables of the file;
-    :class:`InputError` for a Dataset that is none of them."""
+    """"hopf" (sweep.locate_hopf), "fit" (sweep.fit) or the protocol's name (sweep.run_sweep: "stop", "driven",
+    "history") from the variables of the file; :class:`InputError` for a Dataset that is none of them."""
     if "K_over_M_c" in ds.data_vars and "bifurcation" in ds:
         return "hopf"
+    if ds.attrs.get("sweep_kind") == "fit" and "fit_status" in ds.data_vars:
+        return "fit"
     protocol = protocols.file_protocol(ds)
     if protocol is not None:
         return protocol.name
-    raise InputError("not a sweep file: expected xi_inf (stop sweep), regime (driven sweep) or K_over_M_c (Hopf "
-                     f"line); found {sorted(ds.data_vars)}")
+    raise InputError("not a sweep file: expected xi_inf (stop sweep), regime (driven sweep), mu_end (load history), "
+                     f"K_over_M_c (Hopf line) or fit_status (fit); found {sorted(ds.data_vars)}")
 
 
 def open_sweep_file(path: str | os.PathLike, load: bool = True) -> xr.Dataset:
@@ -66,7 +70,7 @@ def read_sweep_file(path: str | os.PathLike, load: bool = True) -> tuple[xr.Data
         raise InputError(str(exc)) from None
     kind = file_kind(ds)
     # one point (sweep.solve_point) saved as 0-d; a grid's first axis is K_over_M or the laboratory's k
-    if kind != "hopf" and not any({first, "V"} <= set(ds.dims) for first in ("K_over_M", "k")):
+    if kind not in ("hopf", "fit") and not any({first, "V"} <= set(ds.dims) for first in ("K_over_M", "k")):
         ds = ds.expand_dims(("K_over_M", "V"))
     return ds, kind
 

@@ -105,3 +105,24 @@ def test_fit_command_on_relaxed_slips_csv_and_a_netcdf_curve(tmp_path, capsys):
             assert float(ds[f"{name}_lower"][0]) <= SAMPLE1[name] <= float(ds[f"{name}_upper"][0]), name
             assert int(ds[f"{name}_label"][0]) == 0, name
     assert out.with_suffix(".png").is_file()
+
+
+def test_a_fit_file_is_opened_described_and_drawn(tmp_path, capsys):
+    """A file of ``sweep fit`` is one of sweep's files: sweep.open reads it, ``sweep info`` describes it (its free
+    parameters' ranges, no text variables), ``sweep plot`` draws it again (data, fit, residuals, profiles)."""
+    import sweep
+
+    _write_curve(tmp_path / "c1.csv", 1e-6, 1)
+    (tmp_path / "fit.toml").write_text('preset = "sample2"\nfree = ["A", "m1"]\n[[data]]\nfile = "c1.csv"\n')
+    out = tmp_path / "fit.nc"
+    assert main(["fit", str(tmp_path / "fit.toml"), "-o", str(out)]) == 0
+    ds = sweep.open(out)
+    assert int(ds["fit_status"][0]) == 0 and "A_lower" in ds
+    capsys.readouterr()
+    assert main(["info", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "(fit file)" in text and "\n  A " in text and "fit_status" in text
+    png = tmp_path / "again.png"
+    assert main(["plot", str(out), "-o", str(png)]) == 0 and png.stat().st_size > 10_000
+    assert main(["plot", str(out), "-o", str(tmp_path / "v.png"), "--variable", "A"]) == 2
+    assert "--variable is for sweep files" in capsys.readouterr().err
