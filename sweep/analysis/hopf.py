@@ -104,13 +104,17 @@ def _locate(a: float, b: float, g: float, rtol: float) -> Search:
     The growth rate is a smooth function of k through the line (linear for the quasi-static model: Re sigma =
     (a - k)/2), so after the initial bracket a (1 + g) (1 -+ BRACKET) (widened by the same factors until the signs
     differ) each round estimates the root x from the rates measured so far (:func:`_root_estimate`, inside the
-    bracket) and measures the rate at x, or, once x has settled (moved by less than STRADDLE rtol x since the last
-    round; the first estimate is compared with the linear value), at both sides x (1 -+ STRADDLE rtol). The bracket
-    is the tightest pair of measured points with opposite signs; K_c is its midpoint once narrower than ``rtol``.
-    A quasi-static line is bracketed after 4 runs, an inertial one (a curved rate) after 4 to 7 (bisection took
-    2 + log2(0.2/rtol): 10 at rtol 1e-3). Safeguard (Brent's): an estimate outside the bracket, or two rounds in a
-    row that do not halve it, make the next round a bisection (the midpoint), so the bracket at least halves every
-    third round.
+    bracket) and measures the rate at x, or, once x has settled, at both sides x -+ s: s = STRADDLE rtol x, or
+    less where an end of the bracket is closer (that end is then one side; s >= STRADDLE rtol x / 10). Settled: x
+    moved by less than STRADDLE rtol x since the last round (the first estimate, from the chord, is compared with
+    the linear value and must be within a quarter of that). The bracket is the tightest pair of measured points
+    with opposite signs; K_c is its midpoint once narrower than ``rtol`` after a round at both sides of a settled
+    estimate (a single run near the root can leave a bracket narrower than rtol with the root at one end), or
+    narrower than rtol / 10. Measured (sample2; the inertial m2 = 0
+    line at gamma/A 1e-3..10; rtol 1e-3..1e-8): 4 to 6 runs (bisection: 2 + log2(0.2/rtol), 10 at rtol 1e-3), the
+    midpoint within 0.03 rtol of the linear value. Safeguard (Brent's): an estimate outside the bracket, or two
+    rounds in a row that do not halve it, make the next round a bisection (the midpoint), so the bracket at least
+    halves every third round.
 
     Inertia moves the line by g = gamma/A relative; below INERTIA_NEGLIGIBLE x rtol that shift is far inside the
     bracket, and the explicit driven stepper, whose steps follow the inertial time gamma/A, would take ~1/g steps
@@ -132,15 +136,21 @@ def _locate(a: float, b: float, g: float, rtol: float) -> Search:
     if not (r_lo > 0.0 > r_hi):
         return math.nan, evaluations
     points = [(lo, r_lo), (hi, r_hi)]
-    previous, slow = a * (1.0 + g), 0  # the last estimate; rounds in a row that did not halve the bracket
-    while (hi - lo) > rtol * 0.5 * (hi + lo):
+    # the last estimate (first the linear value, trusted to a quarter: the measured line is within ~2e-6 of it, the
+    # chord's root is not where the rate bends) and the rounds in a row that did not halve the bracket
+    previous, trust, slow = a * (1.0 + g), 0.25, 0
+    centred = False  # the last round measured both sides of a settled estimate
+    while (hi - lo) > rtol * 0.5 * (hi + lo) or not (centred or (hi - lo) <= 0.1 * rtol * 0.5 * (hi + lo)):
         half = STRADDLE * rtol * 0.5 * (lo + hi)
         x = _root_estimate(points)
         if slow >= 2 or not lo < x < hi:
             x, slow = 0.5 * (lo + hi), 0
-        x = min(max(x, lo + half), hi - half)
-        ks = [x - half, x + half] if abs(x - previous) <= half else [x]
-        previous = x
+        if abs(x - previous) <= trust * half:  # settled: a bracket centred on x (an end of the bracket as a side)
+            side = max(min(half, x - lo, hi - x), 0.1 * half)
+            ks, centred = [k for k in (x - side, x + side) if lo < k < hi], True
+        else:
+            ks, centred = [x], False
+        previous, trust = x, 1.0
         measured = list(zip(ks, (yield from rates(ks))))
         evaluations += len(ks)
         for k, r in measured:

@@ -75,8 +75,8 @@ def run_many(runs: Sequence[Run], law: str = "aging") -> list[DrivenResult]:
             if not where.size:
                 continue
             if not with_inertia and law in LANE_LAWS:
-                # nearest the line first (the slowest transients), so that they do not run alone at the end
-                first = where[np.argsort(np.abs(a[where] - k[where]) / a[where], kind="stable")]
+                # the slowest transients first (growth rate ~ |a - k|/2 per tau), so that none runs alone at the end
+                first = where[np.argsort(np.abs(a[where] - k[where]), kind="stable")]
                 driven_lanes()[1](DrivenPoints(k, a, b), DrivenJob(first, *settings), lane_groups(where.size), out)
             else:
                 driven_batch(law, with_inertia)(where, k, a, b, g, settings, out)
