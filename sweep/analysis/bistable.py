@@ -9,7 +9,9 @@ Measured with the driven simulation (sweep/integrate/driven.py) in the relative 
 line: a large start (LARGE_PERTURBATION, or BIG_START x the stick-slip amplitude just below the line, whichever is
 larger) ends in stick-slip inside the band and in steady sliding above it; d is bracketed by steps of x3 from
 D_FIRST, then bisected geometrically until d_hi / d_lo - 1 <= ``rtol``. At the final d_lo a small start
-(SIGN_PERTURBATION x 10) must decay: both attractors coexist there (bistability checked, not assumed).
+(SIGN_PERTURBATION x 10) must decay: both attractors coexist there (bistability checked, not assumed). The runs
+are those of sweep/analysis/hopf_batch.py (stepper rtol STEPPER_RTOL): :func:`band_search` is the search of one
+velocity, which sweep.locate_hopf advances at all velocities in lockstep.
 """
 
 from __future__ import annotations
@@ -17,13 +19,13 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-from ..accuracy import LARGE_PERTURBATION, STEPPER_RTOL, TYPE_CYCLES, TYPE_DISTANCE
+from ..accuracy import LARGE_PERTURBATION, TYPE_CYCLES, TYPE_DISTANCE
 from ..errors import InputError
-from ..integrate.driven import DrivenParams, DrivenSettings, Regime, simulate_point
+from ..integrate.driven import Regime
+from .hopf_batch import Run, Search, drive
 
-__all__ = ["Band", "bistable_band"]
+__all__ = ["Band", "band_search", "bistable_band", "check_band_inputs"]
 
-MAX_STEPS = 20_000_000
 D_FIRST = 1e-4
 """First relative distance above the line tried (the band is ~1e-3 wide at gamma/A = 0.1, m2 = 0)."""
 D_LAST = 0.5
@@ -52,29 +54,19 @@ class Band(NamedTuple):
     """Runs that ended undecided (budget out): they stop the bisection, the bracket stays as it was."""
 
 
-def _regime(k: float, a: float, b: float, g: float, start: float, law: str) -> tuple[int, float]:
-    r = simulate_point(DrivenParams(k, a, b, g), DrivenSettings(start, STEPPER_RTOL, TYPE_CYCLES, MAX_STEPS), law)
-    return int(r.regime), float(r.amplitude)
-
-
-def bistable_band(a: float, b: float, g: float, rtol: float = 1e-2, law: str = "aging") -> Band:
-    """The band at the reduced parameters a = mu1/A > 0, b = m2/A, g = gamma/A (0: quasi-static) on the line
-    k_c = a (1 + g), to a relative precision ``rtol`` of its upper edge d_hi (module docstring)."""
-    if not (math.isfinite(a) and a > 0.0):
-        raise InputError(f"a = mu1/A must be finite and > 0 (a Hopf line exists), got {a!r}")
-    if not (math.isfinite(g) and g >= 0.0) or not math.isfinite(b):
-        raise InputError(f"g = gamma/A must be finite and >= 0 and b = m2/A finite, got g={g!r}, b={b!r}")
-    if not (math.isfinite(rtol) and 1e-6 <= rtol <= 1.0):
-        raise InputError(f"rtol must be in [1e-6, 1] (relative precision of the band's edge), got {rtol!r}")
+def band_search(a: float, b: float, g: float, rtol: float = 1e-2) -> Search:
+    """The search (sweep/analysis/hopf_batch.py: rounds of runs, many velocities in lockstep) behind
+    :func:`bistable_band`; returns its :class:`Band`."""
     k_c = a * (1.0 + g)
+    run = lambda d, start: [Run(k_c * (1.0 + d), a, b, g, start, TYPE_CYCLES)]  # noqa: E731
     runs, undecided = 1, 0
-    below, amp = _regime(k_c * (1.0 - TYPE_DISTANCE), a, b, g, SMALL_START, law)
-    large = max(LARGE_PERTURBATION, BIG_START * amp if below == Regime.STICK_SLIP else 0.0)
+    below = (yield run(-TYPE_DISTANCE, SMALL_START))[0]
+    large = max(LARGE_PERTURBATION, BIG_START * below.amplitude if below.regime == Regime.STICK_SLIP else 0.0)
 
-    def sticks(d: float) -> bool | None:
+    def sticks(d: float) -> Search:
         nonlocal runs, undecided
         runs += 1
-        regime = _regime(k_c * (1.0 + d), a, b, g, large, law)[0]
+        regime = (yield run(d, large))[0].regime
         if regime in (Regime.STICK_SLIP, Regime.NEUTRAL):
             return True
         if regime == Regime.STEADY:
@@ -84,14 +76,14 @@ def bistable_band(a: float, b: float, g: float, rtol: float = 1e-2, law: str = "
 
     d_lo, d_hi = 0.0, math.inf
     d = D_FIRST
-    first = sticks(d)
+    first = yield from sticks(d)
     if first is None:
         return Band(0.0, math.inf, False, large, runs, undecided)
     if first:
         d_lo = d
         while d_hi == math.inf and d < D_LAST:
             d = min(3.0 * d, D_LAST)
-            s = sticks(d)
+            s = yield from sticks(d)
             if s is None:
                 return Band(d_lo, math.inf, False, large, runs, undecided)
             d_lo, d_hi = (d, d_hi) if s else (d_lo, d)
@@ -99,19 +91,36 @@ def bistable_band(a: float, b: float, g: float, rtol: float = 1e-2, law: str = "
         d_hi = d
         while d_lo == 0.0 and d > D_SMALLEST:
             d = d / 10.0
-            s = sticks(d)
+            s = yield from sticks(d)
             if s is None:
                 return Band(0.0, d_hi, False, large, runs, undecided)
             d_lo, d_hi = (d, d_hi) if s else (d_lo, d)
     if d_lo > 0.0 and math.isfinite(d_hi):
         while d_hi / d_lo - 1.0 > rtol:
             mid = math.sqrt(d_lo * d_hi)
-            s = sticks(mid)
+            s = yield from sticks(mid)
             if s is None:
                 break
             d_lo, d_hi = (mid, d_hi) if s else (d_lo, mid)
     bistable = False
     if d_lo > 0.0:
         runs += 1
-        bistable = _regime(k_c * (1.0 + d_lo), a, b, g, SMALL_START, law)[0] == Regime.STEADY
+        bistable = (yield run(d_lo, SMALL_START))[0].regime == Regime.STEADY
     return Band(d_lo, d_hi, bistable, large, runs, undecided)
+
+
+def check_band_inputs(a: float, b: float, g: float, rtol: float) -> None:
+    """InputError unless a = mu1/A > 0, g = gamma/A >= 0, b finite and rtol in [1e-6, 1] (before any run)."""
+    if not (math.isfinite(a) and a > 0.0):
+        raise InputError(f"a = mu1/A must be finite and > 0 (a Hopf line exists), got {a!r}")
+    if not (math.isfinite(g) and g >= 0.0) or not math.isfinite(b):
+        raise InputError(f"g = gamma/A must be finite and >= 0 and b = m2/A finite, got g={g!r}, b={b!r}")
+    if not (math.isfinite(rtol) and 1e-6 <= rtol <= 1.0):
+        raise InputError(f"rtol must be in [1e-6, 1] (relative precision of the band's edge), got {rtol!r}")
+
+
+def bistable_band(a: float, b: float, g: float, rtol: float = 1e-2, law: str = "aging") -> Band:
+    """The band at the reduced parameters a = mu1/A > 0, b = m2/A, g = gamma/A (0: quasi-static) on the line
+    k_c = a (1 + g), to a relative precision ``rtol`` of its upper edge d_hi (module docstring)."""
+    check_band_inputs(a, b, g, rtol)
+    return drive([band_search(a, b, g, rtol)], law)[0]

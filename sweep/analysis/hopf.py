@@ -321,8 +321,12 @@ def _normal_form(p: FrictionParams, v: np.ndarray, mu1: np.ndarray, gamma: np.nd
         agree[compared] = np.where(sim[compared] == by_l1[compared], 1, 2)
     upper = np.full(v.size, np.nan)
     if band:
-        for i in np.flatnonzero(line.kind == TYPES.index("subcritical")):
-            found = bistable.bistable_band(mu1[i] / p.A, p.m2 / p.A, gamma[i] / p.A, BAND_RTOL, state_law)
+        inverted = np.flatnonzero(line.kind == TYPES.index("subcritical"))
+        for i in inverted:
+            bistable.check_band_inputs(mu1[i] / p.A, p.m2 / p.A, gamma[i] / p.A, BAND_RTOL)
+        bands = drive([bistable.band_search(mu1[i] / p.A, p.m2 / p.A, gamma[i] / p.A, BAND_RTOL) for i in inverted],
+                      state_law)
+        for i, found in zip(inverted, bands):
             if found.bistable and math.isfinite(found.d_hi):
                 upper[i] = mu1[i] * (1.0 + gamma[i] / p.A) * (1.0 + found.d_hi) * to_km
     flags = lambda names: {"flag_values": np.arange(len(names), dtype=np.int8), "flag_meanings": " ".join(names)}  # noqa: E731
