@@ -7,12 +7,13 @@ in physical units and the paper's variables, written from the equations and not 
     aging: dphi/dt = 1 - v phi/D0;   slip: dphi/dt = -(v phi/D0) ln(v phi/D0)
 
 integrated in (mu, ln phi) with Radau at rtol 1e-10 segment by segment; peaks located by solve_ivp's events
-(dmu/dt = 0, falling)."""
+(dmu/dt = 0, falling). With inertia (Newton's law, PHYSICS.md 7): inertial_reference_at in t, and
+inertial_reference_mapped in a plunge-resolving time for stiff springs and fast slides."""
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy.integrate import Radau, solve_ivp
 
 G = 9.81
 
@@ -150,3 +151,110 @@ def inertial_reference_at(A, m1, m2, D0, K_over_M, velocities, durations, times,
         segs.append((f_start, y[0], max(peak, y[0])))
         start = end
     return out, segs
+
+
+NU = 1e-6
+"""Weight [s] of the reference's time map dt/dtheta = 1/(1 + NU R (1 + P^2)) (inertial_reference_mapped)."""
+
+
+def inertial_reference_mapped(A, m1, m2, D0, K_over_M, velocities, durations, times, m0=0.3, V0=1e-6, g=G,
+                              rtol=1e-10):
+    """The history with inertia as :func:`inertial_reference_at`, for stiff springs and fast slides (k G large), where
+    an inertial swing ends in a plunge that Radau cannot follow in t ("step size less than spacing"). The state
+    carries the inertial term itself, P = (f - mu)/A (so that it keeps its own relative accuracy when tiny), with
+    ln v = (f - mu_d(D0/phi))/A - ln(phi/D0) - P and R = g A/v:
+
+        df/dt = k_lab (v_lp - v),   d ln phi/dt = 1/phi - v/D0,
+        dP/dt = (df/dt)/A - ((m1 - 2 m2 L)/A + 1) d ln phi/dt - R P,   L = ln(D0/(phi V0)),
+
+    integrated by scipy's Radau class stepped by hand, with its analytic Jacobian, in a time theta with dt/dtheta =
+    1/(1 + NU R (1 + P^2)) (t a fourth state; the map of tests/reference_inertial.py): theta = t up to rounding
+    where 1/R >> NU, and where not (a plunge, or a slider at rest: R up to 1e30/s) P relaxes at ~1/(NU (1 + P^2))
+    per unit theta, smoothly. A sample time or a segment's end inside a step is reached by a plain Radau run in t
+    (no map) from the step's start. Returns f at ``times`` (sorted, [s])."""
+    k_lab = K_over_M / g
+    l0 = np.log(D0 / V0)
+
+    def parts(y):
+        f, lphi, P = y[0], y[1], y[2]
+        L = l0 - lphi
+        lv = (f - (m0 - m1 * L + m2 * L * L)) / A - (lphi - np.log(D0)) - P
+        return f, lphi, P, L, lv
+
+    def rates(y, v_lp):
+        f, lphi, P, L, lv = parts(y)
+        v = np.exp(lv)
+        df = k_lab * (v_lp - v)
+        dl = np.exp(-lphi) - v / D0
+        inv_r = np.exp(lv) / (g * A)  # 1/R
+        return df, dl, P, L, inv_r, (df / A - ((m1 - 2 * m2 * L) / A + 1.0) * dl)
+
+    def rhs_t(t, y, v_lp):
+        df, dl, P, L, inv_r, drive = rates(y, v_lp)
+        return [df, dl, drive - P / inv_r]
+
+    def rhs_theta(theta, y, v_lp):
+        df, dl, P, L, inv_r, drive = rates(y, v_lp)
+        W = inv_r / (inv_r + NU * (1.0 + P * P))  # 1/(1 + NU R (1 + P^2))
+        RW = 1.0 / (inv_r + NU * (1.0 + P * P))
+        return [W * df, W * dl, W * drive - P * RW, W]
+
+    def jac_theta(theta, y, v_lp):
+        """d(rhs_theta)/dy, analytic (finite differences fail where R is huge)."""
+        f, lphi, P, L, lv = parts(y)
+        v = np.exp(lv)
+        df, dl, _, _, q, drive = rates(y, v_lp)
+        dlv = np.array([1.0 / A, -(m1 - 2 * m2 * L) / A - 1.0, -1.0, 0.0])
+        e_p = np.array([0.0, 0.0, 1.0, 0.0])
+        d_df = -k_lab * v * dlv
+        d_dl = -(v / D0) * dlv + np.array([0.0, -np.exp(-lphi), 0.0, 0.0])
+        c = (m1 - 2 * m2 * L) / A + 1.0
+        d_drive = d_df / A - c * d_dl - dl * np.array([0.0, 2 * m2 / A, 0.0, 0.0])
+        D = q + NU * (1.0 + P * P)
+        d_D = q * dlv + 2 * NU * P * e_p
+        W, RW = q / D, 1.0 / D
+        d_W = q * dlv / D - q * d_D / D**2
+        d_RW = -d_D / D**2
+        return np.array([d_W * df + W * d_df, d_W * dl + W * d_dl,
+                         d_W * drive + W * d_drive - e_p * RW - P * d_RW, d_W])
+
+    atol = [1e-14, 1e-12, 1e-14, 1e-14]
+    v1 = velocities[0]
+    L1 = l0 - np.log(D0 / v1)
+    y = np.array([m0 - m1 * L1 + m2 * L1 * L1, np.log(D0 / v1), 0.0])
+    times = np.asarray(times, float)
+    out = np.full(times.size, np.nan)
+    i, start = 0, 0.0
+    for v_lp, end in zip(velocities, np.cumsum(durations)):
+        stops = [*times[(times > start) & (times < end)], end]
+        while i < times.size and times[i] <= start:
+            out[i] = y[0]
+            i += 1
+        solver = Radau(lambda th, z, v=v_lp: rhs_theta(th, z, v), 0.0, np.append(y, start), np.inf, rtol=rtol,
+                       atol=atol, first_step=1e-9, jac=lambda th, z, v=v_lp: jac_theta(th, z, v))
+        for stop in stops:
+            while True:
+                prev = solver.y.copy()
+                if prev[3] >= stop:
+                    break
+                solver.step()
+                assert solver.status != "failed", (solver.status, solver.t, solver.y)
+                if solver.status == "running" and solver.step_size < 1e-10 * solver.t:
+                    # theta grew huge while the slider stood (R huge): restart it at 0, so that it can resolve
+                    # the small steps to come (the system is autonomous in theta)
+                    solver = Radau(lambda th, z, v=v_lp: rhs_theta(th, z, v), 0.0, solver.y.copy(), np.inf,
+                                   rtol=rtol, atol=atol, first_step=solver.step_size,
+                                   jac=lambda th, z, v=v_lp: jac_theta(th, z, v))
+                if solver.y[3] > stop:  # the stop is inside this step: plain Radau in t from its start
+                    sol = solve_ivp(rhs_t, (prev[3], stop), prev[:3], method="Radau", rtol=rtol, atol=atol[:3],
+                                    args=(v_lp,), first_step=min(stop - prev[3], 1e-9))
+                    assert sol.success, sol.message
+                    solver = Radau(lambda th, z, v=v_lp: rhs_theta(th, z, v), 0.0, np.append(sol.y[:, -1], stop),
+                                   np.inf, rtol=rtol, atol=atol, first_step=1e-9,
+                                   jac=lambda th, z, v=v_lp: jac_theta(th, z, v))
+                    break
+            while i < times.size and times[i] <= solver.y[3]:
+                out[i] = solver.y[0]
+                i += 1
+        y, start = solver.y[:3].copy(), end
+    return out
