@@ -33,7 +33,9 @@ class Status(IntEnum):
     atol: the value is kept for inspection and must not be trusted to rtol."""
     QUASISTATIC_BREAKDOWN = 6
     """Driven scene: the slip velocity passed the threshold in the file's attrs (regime runaway): the quasi-static
-    model no longer describes the point (inertia is needed)."""
+    model no longer describes the point (inertia is needed). History scene and friction_at: the quasi-static run
+    ran away (slip velocity past 1e8 V) where no inertial model reran it (model "quasistatic", slip law), or the
+    slip law where some segment needs inertia."""
     MODEL_ERROR_ABOVE_TOL = 7
     """Stop scene with model="auto" and time-resolved observables: the quasi-static model's estimated error
     (``model_error``) exceeds model_tol, and the inertial model computes the relaxed slip only: the quasi-static
