@@ -105,7 +105,7 @@ def band_search(a: float, b: float, g: float, rtol: float = 1e-2) -> Search:
     bistable = False
     if d_lo > 0.0:
         runs += 1
-        bistable = (yield run(d_lo, SMALL_START))[0].regime == Regime.STEADY
+        bistable = bool((yield run(d_lo, SMALL_START))[0].regime == Regime.STEADY)
     return Band(d_lo, d_hi, bistable, large, runs, undecided)
 
 
