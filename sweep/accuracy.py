@@ -36,6 +36,12 @@ STIFF_SWITCH = 1.5
 stable up to ~3.3 on the negative axis; half of that leaves the explicit steps accuracy-limited)."""
 MIN_CYCLES = 3
 """Cycles needed before a regime is decided from their amplitudes (three growth rates)."""
+REBOUND = 1e-4
+"""A maximum of z whose cycle (half its rise from the last minimum) is below REBOUND x the previous cycle's amplitude
+is a rebound inside a slip (the slider nearly stops and slips on), not the end of a cycle: it is skipped, and the
+cycle runs on to the next maximum with the lower of the minima. Issue 35's grid: 2 inertial points rebounded by
+6.5e-6 in z after each slip of amplitude 9.9, so their cycles alternated 9.9 / 6e-6 and never became stationary
+(undecided after max_steps, 1e6 steps each)."""
 SLAVED_INERTIA = (1e-3, 3e-4)
 """(low, high): the inertial driven model runs on its slow manifold (w = ln xi' slaved to first order,
 sweep/integrate/models/driven.py ``make_slaved_rhs``, the explicit stepper) where the inertial term

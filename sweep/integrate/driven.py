@@ -17,7 +17,8 @@ m2 = 0 below the Hopf line overflows in finite time), before any exponent can ov
 
 The run starts from steady sliding with the spring stretched by ``perturbation`` (z(0) = perturbation, u(0) = 0).
 Each cycle of the oscillation is cut at its maximum of z (z' = 1 - e^w turns negative, located by Newton on exact
-partial steps, so the peak is as accurate as the stepper) and its minimum; with a_k = half the peak-to-peak
+partial steps, so the peak is as accurate as the stepper) and its minimum (a maximum whose rise is below
+REBOUND x the last cycle's amplitude is a rebound inside a slip, skipped); with a_k = half the peak-to-peak
 stretch of cycle k and T_k the time between its maxima, the observables are
 
     growth_rate = ln(a_k/a_(k-1)) / T_k    (reduced, per unit tau; Re sigma of the linear theory while small),
@@ -55,6 +56,7 @@ from ..accuracy import (
     MIN_CYCLES,
     NEUTRAL_SPREAD,
     NEUTRAL_START,
+    REBOUND,
     SLAVED_INERTIA,
     STATIONARY_TOL,
     STIFF_SWITCH,
@@ -320,6 +322,7 @@ def _make_simulate(law: str, with_inertia: bool, slaved: bool = False):
         per = np.full(HISTORY, np.nan)
         grow = np.full(HISTORY, np.nan)
         z_min, t_max_prev = math.inf, math.nan
+        after_rebound = False  # the last maximum was a rebound (REBOUND)
         norm_tenth, t_tenth = math.nan, math.nan
         amp_first = math.nan
         a_start = _linear_amplitude(p, perturbation)
@@ -375,7 +378,8 @@ def _make_simulate(law: str, with_inertia: bool, slaved: bool = False):
                 else:
                     dt, z_top = extremum(stiff, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
                 t_peak = tau + dt
-                if z_min < math.inf and math.isfinite(t_max_prev):
+                rebound = 0.5 * (z_top - z_min) < REBOUND * amp[-1]  # not a cycle end (False before two cycles)
+                if not rebound and z_min < math.inf and math.isfinite(t_max_prev):
                     cycles += 1
                     for i in range(HISTORY - 1):
                         amp[i], per[i], grow[i] = amp[i + 1], per[i + 1], grow[i + 1]
@@ -389,12 +393,15 @@ def _make_simulate(law: str, with_inertia: bool, slaved: bool = False):
                         return DrivenResult(regime, OK, grow[-1], per[-1], amplitude, cycles, steps, w_peak)
                     if cycles >= settings.max_cycles:
                         return DrivenResult(Regime.UNDECIDED, OK, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
-                t_max_prev = t_peak
-            elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
+                if not rebound:
+                    t_max_prev = t_peak
+                after_rebound = rebound
+            elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z (the lower one where the maximum between was a rebound)
                 if on_manifold:
-                    z_min = extremum_s(False, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
+                    z_new = extremum_s(False, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
                 else:
-                    z_min = extremum(stiff, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
+                    z_new = extremum(stiff, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
+                z_min = min(z_min, z_new) if after_rebound else z_new
             for m in range(n):
                 y[m] = y_new[m]
             tau += h

@@ -36,7 +36,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..accuracy import DECAYED, W_RUNAWAY
+from ..accuracy import DECAYED, REBOUND, W_RUNAWAY
 from ..jitcache import pin, pin_module
 from .batch import lanes_in_threads
 from .driven import (
@@ -205,6 +205,7 @@ class _Lanes(NamedTuple):
     norm_tenth: np.ndarray
     t_tenth: np.ndarray
     cycles: np.ndarray
+    after_rebound: np.ndarray
 
 
 @functools.cache
@@ -230,6 +231,7 @@ def _make_kernels():
         bk.z_min[lane], bk.t_max_prev[lane], bk.amp_first[lane] = math.inf, math.nan, math.nan
         bk.a_start[lane] = _linear_amplitude(DrivenParams(k, a, b, 0.0), pert)
         bk.norm_tenth[lane], bk.t_tenth[lane], bk.cycles[lane] = math.nan, math.nan, 0
+        bk.after_rebound[lane] = False
 
     @njit(inline="always", fastmath=FAST, error_model="numpy")
     def finish(out, i, regime, status, grow, per, amplitude, cycles, steps, w_peak):
@@ -271,7 +273,8 @@ def _make_kernels():
             if dz > 0.0 and dz1 <= 0.0:  # a maximum of z: a cycle ends
                 dt, z_top = extremum(False, y0, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
                 t_peak = tau + dt
-                if bk.z_min[lane] < math.inf and math.isfinite(bk.t_max_prev[lane]):
+                rebound = 0.5 * (z_top - bk.z_min[lane]) < REBOUND * amp[-1]  # the driver's rule
+                if not rebound and bk.z_min[lane] < math.inf and math.isfinite(bk.t_max_prev[lane]):
                     cycles += 1
                     bk.cycles[lane] = cycles
                     for m in range(HISTORY - 1):
@@ -288,9 +291,12 @@ def _make_kernels():
                     if cycles >= job.max_cycles:
                         finish(out, i, Regime.UNDECIDED, OK, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
                         return True
-                bk.t_max_prev[lane] = t_peak
+                if not rebound:
+                    bk.t_max_prev[lane] = t_peak
+                bk.after_rebound[lane] = rebound
             elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
-                bk.z_min[lane] = extremum(False, y0, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
+                z_new = extremum(False, y0, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
+                bk.z_min[lane] = min(bk.z_min[lane], z_new) if bk.after_rebound[lane] else z_new
             # the accepted step, committed
             st[_Z * W + lane], st[_U * W + lane] = ze, ue
             st[_DZ * W + lane], st[_DU * W + lane] = dz1, st[_DUE * W + lane]
@@ -321,7 +327,7 @@ def _make_kernels():
                     bk.amp_first[lane]
                 bk.a_start[to], bk.norm_tenth[to], bk.t_tenth[to] = bk.a_start[lane], bk.norm_tenth[lane], \
                     bk.t_tenth[lane]
-                bk.cycles[to] = bk.cycles[lane]
+                bk.cycles[to], bk.after_rebound[to] = bk.cycles[lane], bk.after_rebound[lane]
                 lane_point[to], lane_point[lane] = lane_point[lane], -1
             to += 1
 
@@ -331,7 +337,7 @@ def _make_kernels():
         st = np.zeros(_N_FIELDS * W)
         bk = _Lanes(np.full((W, HISTORY), np.nan), np.full((W, HISTORY), np.nan), np.full((W, HISTORY), np.nan),
                     np.full(W, math.inf), np.full(W, np.nan), np.full(W, np.nan), np.full(W, np.nan),
-                    np.full(W, np.nan), np.full(W, np.nan), np.zeros(W, np.int64))
+                    np.full(W, np.nan), np.full(W, np.nan), np.zeros(W, np.int64), np.zeros(W, np.bool_))
         lane_point = np.full(W, -1, np.int64)
         y0, ys, yt, err_v, dyt = np.empty(2), np.empty(2), np.empty(2), np.empty(2), np.empty(2)
         K = np.empty((_DP5_STAGES, 2))
