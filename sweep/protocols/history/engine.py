@@ -146,13 +146,14 @@ def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dic
             return {**_outputs(plan, points, run_inertial), "model": np.zeros(0, np.int8)}
         out: dict[str, np.ndarray] = {}
         for rows, run in ((np.flatnonzero(~inert), run_sampled), (np.flatnonzero(inert), run_inertial)):
-            _merge(out, rows, _outputs(plan, points[rows], run), points.size)
+            _merge(out, rows, run, plan, points)
         if plan.model == "auto" and plan.state_law == "aging":  # the quasi-static runaway: inertia is needed there
             again = np.flatnonzero((out["status"] == Status.QUASISTATIC_BREAKDOWN) & ~inert)
-            steps = out["steps"][again]
-            _merge(out, again, _outputs(plan, points[again], run_inertial), points.size)
-            out["steps"][again] += steps
-            inert[again] = True
+            if again.size:
+                steps = out["steps"][again]
+                _merge(out, again, run_inertial, plan, points)
+                out["steps"][again] += steps
+                inert[again] = True
         out["model"] = inert.astype(np.int8)
         if plan.healing:
             t_hold = hold_before(plan.ratios[points], plan.durations[points] / plan.scale[points, None])
@@ -162,13 +163,15 @@ def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dic
     return compute
 
 
-def _merge(out: dict[str, np.ndarray], rows: np.ndarray, part: dict[str, np.ndarray], n: int) -> None:
-    """The outputs ``part`` of the chunk's points ``rows`` into ``out`` (arrays of n points made on first use)."""
+def _merge(out: dict[str, np.ndarray], rows: np.ndarray, run: Callable, plan: HistoryPlan, points: np.ndarray
+           ) -> None:
+    """The outputs of ``run`` (:func:`_outputs`) at the chunk's ``points[rows]`` into ``out`` (arrays over all the
+    chunk's points, made on first use); nothing where ``rows`` is empty."""
     if not rows.size:
         return
-    for name, x in part.items():
+    for name, x in _outputs(plan, points[rows], run).items():
         if name not in out:
-            out[name] = np.empty((n, *x.shape[1:]), x.dtype)
+            out[name] = np.empty((points.size, *x.shape[1:]), x.dtype)
         out[name][rows] = x
 
 
