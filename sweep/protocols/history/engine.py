@@ -138,7 +138,8 @@ def _add_samples(out: dict[str, np.ndarray], samples: dict[str, np.ndarray]) -> 
 def history_chunk(scene: Scene, plan: HistoryPlan) -> Callable[[np.ndarray], dict[str, np.ndarray]]:
     """compute(points) -> per-point arrays (observables and their errors (points, segments); mu_t and its error
     (points, times) where asked for; the healing rate beta and its error of a slide-hold-slide series; model,
-    status, steps)."""
+    status, steps). With model "auto" (aging law) a point whose quasi-static runs ran away (quasistatic_breakdown)
+    is run again with inertia, its steps the sum of both."""
 
     def compute(points: np.ndarray) -> dict[str, np.ndarray]:
         inert = plan.inertial[points].copy()

@@ -55,9 +55,10 @@ class HistoryProtocol(Protocol):
         return frozenset({("quasistatic", law) for law in LAW_CODES} | {("inertial", "aging")})
 
     def supports(self, model: str, state_law: str) -> bool:
-        """Model "auto" runs the inertial model where some segment's gamma/A exceeds model_tol and the quasi-static
-        one elsewhere; with a law that has no inertial model it runs where the quasi-static model is enough
-        (:meth:`check` refuses a scene where inertia would matter)."""
+        """Model "auto" runs the inertial model where some segment's gamma/A exceeds model_tol or where the
+        quasi-static run runs away (a spring softer than critical), and the quasi-static one elsewhere; with a law
+        that has no inertial model it runs where the quasi-static model is enough (:meth:`check` refuses a scene
+        where inertia would matter; a runaway, known only once run, is flagged quasistatic_breakdown)."""
         return ("quasistatic" if model == "auto" else model, state_law) in self.models
 
     def make_options(self, scene: Scene, given: Mapping[str, Any]) -> Options:
