@@ -4,9 +4,10 @@ driven scene changes sign, and the type of the bifurcation decided from simulati
 For each V: the line is bracketed around the linear prediction chi_c = mu1(V) (1 + gamma/A) (gamma = 0 for the
 quasi-static model), the sign of the growth rate measured from the simulated envelope
 (sweep/integrate/models/driven.py, a perturbation of SIGN_PERTURBATION, SIGN_CYCLES cycles) is checked at both ends,
-and the bracket is bisected until its relative width is below ``rtol`` (default 0.1 %); K_over_M_c is its midpoint.
-The linear value is stored beside it. Where mu1(V) <= 0 there is no line (steady sliding is stable at every
-stiffness): NaN and bifurcation "none".
+and the bracket is narrowed around the root estimated from the measured rates until its relative width is below
+``rtol`` (default 0.1 %; :func:`_locate`); K_over_M_c is its midpoint. The linear value is stored beside it. Where
+mu1(V) <= 0 there is no line (steady sliding is stable at every stiffness): NaN and bifurcation "none". The
+searches of all velocities advance in lockstep, each round's driven runs in one batch (sweep/analysis/hopf_batch.py).
 
 The bifurcation type is decided from simulations, never assumed:
 
@@ -77,7 +78,11 @@ BAND_RTOL = 1e-2
 
 
 SMALL_START = 1e-4
-"""Initial stretch of the small starts of the type decision."""
+"""Initial stretch of the small starts above the line (which must decay where the line is subcritical)."""
+BELOW_START = 1e-3
+"""Initial stretch of the runs below the line, which grow into the limit cycle (amplitudes 0.07..0.4 at 0.4 % below
+sample2's line): against 1e-4, the same regimes and amplitudes within 9e-8, 17 % fewer steps (45 velocities at
+0.4 and 1.6 % below the line)."""
 STRADDLE = 0.45
 """Once the root estimate x has settled (it moved by less than STRADDLE rtol x in the last round), the growth rate
 is measured at x (1 -+ STRADDLE rtol): where the signs differ there, the bracket left is 0.9 rtol wide."""
@@ -174,8 +179,8 @@ def _bifurcation(k_c: float, a: float, b: float, g: float, rtol: float) -> Searc
     run = lambda x, start: Run(x, a, b, g, start, TYPE_CYCLES, TYPE_RTOL)  # noqa: E731
     outcome = lambda r: (int(r.regime), float(r.amplitude))  # noqa: E731
     distances = TYPE_DISTANCE * np.array([1.0, 2.0, 4.0])
-    near, far = map(outcome, (yield [run(k_c * (1.0 - distances[0]), SMALL_START),
-                                     run(k_c * (1.0 - distances[2]), SMALL_START)]))
+    near, far = map(outcome, (yield [run(k_c * (1.0 - distances[0]), BELOW_START),
+                                     run(k_c * (1.0 - distances[2]), BELOW_START)]))
     below = [near, None, far]
     amp_near = near[1] if near[0] == Regime.STICK_SLIP else math.nan
     for _ in range(2):
@@ -186,7 +191,7 @@ def _bifurcation(k_c: float, a: float, b: float, g: float, rtol: float) -> Searc
                 return "supercritical", amp_near
         if below[1] is not None:
             break
-        below[1] = outcome((yield [run(k_c * (1.0 - distances[1]), SMALL_START)])[0])
+        below[1] = outcome((yield [run(k_c * (1.0 - distances[1]), BELOW_START)])[0])
     # a large start: at least the size of the stick-slip cycles found below, which a subcritical (inverted) line
     # keeps on its stable side too, within a window that can be narrow (two distances above the line, the closer
     # one still outside the located bracket)
@@ -218,16 +223,16 @@ def locate_hopf(params: FrictionParams, V: Sequence[float], model: str = "auto",
                 progress: bool | None = False, lyapunov: bool = True, bistable_band: bool = False) -> xr.Dataset:
     """The Hopf line over the velocities ``V`` [m s-1] (Dataset over V).
 
-    Variables: ``K_over_M_c`` [s-2] located by simulation (bisection on the sign of the measured growth rate to a
-    relative width ``rtol``), ``K_over_M_c_linear`` [s-2] (eq. 3), ``chi_c`` [1], ``Omega_c`` [s-1] (eq. 4),
-    ``bifurcation`` (flag: none / supercritical / subcritical / degenerate / undetermined; decided from
-    simulations, module docstring) and ``limit_cycle_amplitude`` [1] just below a supercritical line. NaN and
-    "none" where mu1(V) <= 0: steady sliding is then stable at every stiffness. ``model``: "quasistatic",
-    "inertial" (the full Newton equation with gamma = V^2/(g D0); linear line chi_c = mu1 (1 + gamma/A)) or "auto"
-    (default): per V, inertial where gamma/A > ``model_tol``, the relative shift of the line by inertia (flag
-    variable ``model``). ``state_law``: "aging" (the paper's) or "slip" (quasi-static only; docs/physics.md 7).
-    ``progress``: a bar over the velocities on stderr (None: on an interactive terminal once the run takes more
-    than ~2 s; sweep/run/progress.py).
+    Variables: ``K_over_M_c`` [s-2] located by simulation (the midpoint of a bracket of opposite signs of the
+    measured growth rate, relative width < ``rtol``), ``K_over_M_c_linear`` [s-2] (eq. 3), ``chi_c`` [1],
+    ``Omega_c`` [s-1] (eq. 4), ``bifurcation`` (flag: none / supercritical / subcritical / degenerate /
+    undetermined; decided from simulations, module docstring) and ``limit_cycle_amplitude`` [1] just below a
+    supercritical line. NaN and "none" where mu1(V) <= 0: steady sliding is then stable at every stiffness.
+    ``model``: "quasistatic", "inertial" (the full Newton equation with gamma = V^2/(g D0); linear line chi_c = mu1
+    (1 + gamma/A)) or "auto" (default): per V, inertial where gamma/A > ``model_tol``, the relative shift of the
+    line by inertia (flag variable ``model``). ``state_law``: "aging" (the paper's) or "slip" (quasi-static only;
+    docs/physics.md 7). ``progress``: a bar over the velocities on stderr (None: on an interactive terminal once the
+    run takes more than ~2 s; sweep/run/progress.py).
 
     ``lyapunov`` (default True; analytic, ~1 ms): the variables ``l1`` [1], ``l1_error`` [1], ``bifurcation_l1``
     (flag: none / supercritical / subcritical / degenerate from the sign of l1 against its error) and

@@ -6,8 +6,10 @@ generator, a search yields each round's runs (a list of :class:`Run`) and receiv
 :class:`sweep.integrate.driven.DrivenResult`, in the same order), and returns its answer. :func:`drive` advances the
 searches of all velocities in lockstep: the runs of one round of every search go to the driven batch entry points in
 one call, grouped by their settings: the quasi-static points of the aging law in SIMD lanes
-(sweep/integrate/lanes_driven.py, 16 points in flight per thread), the others (inertia, the slip law) one point per
-thread (:func:`sweep.integrate.batch.driven_batch`). A point's numbers do not depend on the others in its batch.
+(sweep/integrate/lanes_driven.py, 16 points in flight per thread); the others (inertia, the slip law) one after the
+other with the one-point driver (:func:`sweep.integrate.driven.simulate_point`; the threaded
+:func:`sweep.integrate.batch.driven_batch` compiled its parallel loop for the inertial model in every process:
+11.8 s instead of 7.1 s before the first inertial line). A point's numbers do not depend on the others in its batch.
 The lanes' numbers differ from the one-point driver's at the stepper's tolerance (their own exponential and
 controller powers; sweep/integrate/lanes_driven.py).
 """
@@ -20,8 +22,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..accuracy import STEPPER_RTOL
-from ..integrate.batch import driven_batch
-from ..integrate.driven import DrivenOutputs, DrivenResult, DrivenSettings
+from ..integrate.driven import DrivenOutputs, DrivenParams, DrivenResult, DrivenSettings, simulate_point
 from ..integrate.lanes_driven import DrivenJob, DrivenPoints, driven_lanes
 from ..protocols.driven.chunk import LANE_LAWS, lane_groups
 
@@ -78,8 +79,10 @@ def run_many(runs: Sequence[Run], law: str = "aging") -> list[DrivenResult]:
                 # the slowest transients first (growth rate ~ |a - k|/2 per tau), so that none runs alone at the end
                 first = where[np.argsort(np.abs(a[where] - k[where]), kind="stable")]
                 driven_lanes()[1](DrivenPoints(k, a, b), DrivenJob(first, *settings), lane_groups(where.size), out)
-            else:
-                driven_batch(law, with_inertia)(where, k, a, b, g, settings, out)
+            else:  # the one-point driver in turn (its parallel batch would add ~5 s of compiling per process)
+                for i in where:
+                    for field, value in zip(out, simulate_point(DrivenParams(k[i], a[i], b[i], g[i]), settings, law)):
+                        field[i] = value
     return [DrivenResult(*(field[i] for field in out)) for i in range(n)]
 
 
