@@ -7,6 +7,10 @@
 * locating the line over 50 velocities (sample2, V 0.1..6 um/s where mu1 > 0, and 10..100 um/s where it is not):
   sweep.locate_hopf by simulation (with and without the bifurcation type) vs the analytic line (eq. 3), side by
   side, and the largest relative distance between the two lines;
+* the same 50 velocities A/B against the code before (key "line_ab"; --base, default /tmp/hopf_base, a ``git
+  worktree add`` of an older commit): each tree in fresh subprocesses of this script, alternating, best of 3, one
+  thread (and this tree on two): times with and without the type, the speed-up (target 10x with the type), types,
+  located lines and amplitudes compared;
 * throughput of the driven scene: run_sweep on a 40 x 20 (K/M, V) grid of sample2, quasi-static, points per
   second, per regime (mean steps and cycles), 1 thread and 2 threads; and with model="auto", where the
   quasi-static breakdowns (regime runaway) are run again with inertia (gamma/A 2e-5..2e-3 there: stiff);
@@ -19,7 +23,7 @@
 
 Writes benchmarks/results/hopf.json and hopf.png. Run: python benchmarks/hopf.py (~1 min on 2 cores).
 
-    python benchmarks/hopf.py [--quick] [--out benchmarks/results/hopf.json] [--no-png] [--only-lyapunov]
+    python benchmarks/hopf.py [--quick] [--out benchmarks/results/hopf.json] [--no-png] [--only-lyapunov] [--base DIR]
 
 --only-lyapunov: the "lyapunov" part alone (~30 s), written to --out (default benchmarks/results/lyapunov.json).
 
@@ -33,7 +37,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -161,14 +168,90 @@ def lyapunov_part(quick: bool) -> dict:
                         "band_5_velocities_under_30_s": t_band < 30.0}}
 
 
+def line_worker(tree: str, threads: int, quick: bool) -> None:
+    """One tree's measurement of the 50-velocity line (--worker; PYTHONPATH = the tree): JSON on stdout."""
+    assert Path(sweep.__file__).resolve().is_relative_to(Path(tree).resolve()), sweep.__file__
+    v_line = V_LINE_QUICK if quick else V_LINE
+    sweep.locate_hopf(PARAMS, v_line[:2])  # kernels loaded (or compiled) and warm
+    numba.set_num_threads(threads)
+    t0 = time.perf_counter()
+    typed = sweep.locate_hopf(PARAMS, v_line)
+    t_typed = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    sweep.locate_hopf(PARAMS, v_line, bifurcation=False)
+    t_untyped = time.perf_counter() - t0
+    print(json.dumps({"with_type_s": t_typed, "without_type_s": t_untyped, "threads": threads, "sweep": sweep.__file__,
+                      "K_over_M_c": typed["K_over_M_c"].values.tolist(),
+                      "K_over_M_c_linear": typed["K_over_M_c_linear"].values.tolist(),
+                      "bifurcation": typed["bifurcation"].values.tolist(),
+                      "limit_cycle_amplitude": typed["limit_cycle_amplitude"].values.tolist(),
+                      "simulations": typed["simulations"].values.tolist()}))
+
+
+def line_ab(base: Path, quick: bool) -> dict:
+    """locate_hopf over the 50 velocities (with and without the type) in ``base`` (a git worktree of the code
+    before, default /tmp/hopf_base) and in this tree, each in fresh subprocesses of this script (``--worker``,
+    PYTHONPATH = the tree, the numba cache of the tree), alternating base, new, base, new, ...; best wall time of
+    each; 1 thread, and this tree on 2 threads. Where the base tree is missing, this tree against itself."""
+    root = Path(__file__).resolve().parents[1]
+    base = base if (base / "sweep" / "__init__.py").is_file() else root
+    trees = {"base": base, "new": root}
+
+    def worker(tree: Path, threads: int) -> dict:
+        cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", str(tree), "--threads", str(threads)]
+        proc = subprocess.run(cmd + ["--quick"] * quick, env={**os.environ, "PYTHONPATH": str(tree)},
+                              capture_output=True, text=True, cwd=tempfile.gettempdir())
+        if proc.returncode:
+            raise RuntimeError(f"worker failed ({' '.join(cmd)}):\n{proc.stderr[-4000:]}")
+        return {**json.loads(proc.stdout.strip().splitlines()[-1]), "loadavg": loadavg()}
+
+    rows = {name: [] for name in trees}
+    for _ in range(1 if quick else 3):
+        for name, tree in trees.items():
+            rows[name].append(worker(tree, 1))
+    two = worker(root, 2)
+    best = {key: {name: min(r[key] for r in rows[name]) for name in trees} for key in ("with_type_s", "without_type_s")}
+    b, n = rows["base"][0], rows["new"][0]
+    kb, kn, lin = np.array(b["K_over_M_c"]), np.array(n["K_over_M_c"]), np.array(n["K_over_M_c_linear"])
+    has = np.isfinite(lin)
+    amp_b, amp_n = np.array(b["limit_cycle_amplitude"]), np.array(n["limit_cycle_amplitude"])
+    both = np.isfinite(amp_b) & np.isfinite(amp_n)
+    rtol = 1e-3  # locate_hopf's default
+    return {"base_tree": str(base), "base_commit": subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=base,
+                                                                   capture_output=True, text=True).stdout.strip(),
+            "velocities": len(lin), "with_line": int(has.sum()),
+            "seconds_with_type_1thread": best["with_type_s"], "seconds_without_type_1thread": best["without_type_s"],
+            "speedup_with_type_1thread": best["with_type_s"]["base"] / best["with_type_s"]["new"],
+            "speedup_without_type_1thread": best["without_type_s"]["base"] / best["without_type_s"]["new"],
+            "new_seconds_with_type_2threads": two["with_type_s"],
+            "types_equal": b["bifurcation"] == n["bifurcation"],
+            "same_velocities_without_line": bool(np.array_equal(np.isnan(kb), np.isnan(kn))),
+            "max_rel_diff_K_over_M_c_new_vs_base": float(np.max(np.abs(kn[has] / kb[has] - 1))),
+            "within_rtol_of_base": bool(np.all(np.abs(kn[has] / kb[has] - 1) <= rtol)),
+            "max_rel_distance_to_linear": {"base": float(np.max(np.abs(kb[has] / lin[has] - 1))),
+                                           "new": float(np.max(np.abs(kn[has] / lin[has] - 1)))},
+            "limit_cycle_amplitude_max_rel_diff": float(np.max(np.abs(amp_n[both] / amp_b[both] - 1)))
+            if both.any() else None,
+            "simulations_per_velocity_mean": {name: float(np.mean(np.array(r[0]["simulations"])[has]))
+                                              for name, r in rows.items()},
+            "rows": rows, "new_2threads": {k: v for k, v in two.items() if k.endswith("_s") or k == "loadavg"},
+            "target": {"speedup_with_type_1thread": 10.0,
+                       "met": best["with_type_s"]["base"] / best["with_type_s"]["new"] >= 10.0}}
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="tiny sets, one timed call each (a smoke run)")
     ap.add_argument("--out", type=Path, default=OUT / "hopf.json", help="the JSON (the PNG beside it, .png)")
     ap.add_argument("--no-png", action="store_true")
     ap.add_argument("--only-lyapunov", action="store_true", help="the type of the line from l1 alone")
+    ap.add_argument("--base", type=Path, default=Path("/tmp/hopf_base"), help="the tree before (line A/B)")
+    ap.add_argument("--worker", help=argparse.SUPPRESS)
+    ap.add_argument("--threads", type=int, default=1, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     quick = args.quick
+    if args.worker:
+        return line_worker(args.worker, args.threads, quick)
     if args.only_lyapunov:
         out = args.out if args.out != OUT / "hopf.json" else OUT / "lyapunov.json"
         t_start = time.perf_counter()
@@ -188,6 +271,7 @@ def main(argv: list[str] | None = None) -> None:
     (lo, hi, n_fast), deep_shape = ((-1, 1, 2), (4, 2)) if quick else ((-3, 1, 10), (13, 7))
     t_start = time.perf_counter()
     digest0, load0 = sweep_digest(), loadavg()
+    ab = line_ab(args.base, quick)
     sweep.locate_hopf(PARAMS, v_line[:2])  # compile / load the kernels
     numba.set_num_threads(1)
     t_typed, line = best_of(lambda: sweep.locate_hopf(PARAMS, v_line), 1)
@@ -196,6 +280,8 @@ def main(argv: list[str] | None = None) -> None:
                                                        PARAMS.V0, PARAMS.g), 20)
     inertial_params = PARAMS.replace(m2=0.0)  # mu1 = m1 at every V: the inertial line up to gamma/A = 10
     v_fast = np.sqrt(np.logspace(lo, hi, n_fast) * PARAMS.g * PARAMS.D0 * PARAMS.A)
+    # the inertial driven kernel, compiled in every process (INERTIAL_NOT_CACHED), outside the timings
+    sweep.locate_hopf(inertial_params, v_fast[-1:], model="inertial", bifurcation=False, lyapunov=False)
     t_inertial, inertial = best_of(lambda: sweep.locate_hopf(inertial_params, v_fast, model="inertial",
                                                              bifurcation=False), 1)
     t_inertial_typed, inertial_typed = best_of(lambda: sweep.locate_hopf(inertial_params, v_fast, model="inertial"), 1)
@@ -204,6 +290,9 @@ def main(argv: list[str] | None = None) -> None:
     deep = sweep.Scene(protocol="driven", params=inertial_params, model="inertial",
                        K_over_M=np.linspace(0.3, 1.5, deep_shape[0]) * PARAMS.m1 * PARAMS.g / PARAMS.D0,
                        V=np.sqrt(np.logspace(-3, 0, deep_shape[1]) * PARAMS.g * PARAMS.D0 * PARAMS.A))
+    warm = sweep.Scene(protocol="driven", params=inertial_params, model="inertial", K_over_M=deep.K_over_M[:1],
+                       V=deep.V[:1])
+    sweep.run_sweep(warm, progress=False)  # its inertial batch kernel, compiled in every process, outside the timing
     t_deep, deep_ds = best_of(lambda: sweep.run_sweep(deep, progress=False), 1)
     deep_regimes = {r.name.lower(): int(np.count_nonzero(deep_ds["regime"].values == r)) for r in Regime}
     has_line = np.isfinite(lin)
@@ -259,6 +348,7 @@ def main(argv: list[str] | None = None) -> None:
         "driven_grid": {"shape": list(scene.shape), "model": "quasistatic", **driven, "regimes": regimes,
                         "steady_iff_linearly_stable_fraction": float(agree.mean())},
         "driven_grid_auto": driven_auto,
+        "line_ab": ab,
         "lyapunov": lyapunov_part(quick),
         "benchmark_wall_s": time.perf_counter() - t_start,
     }

@@ -333,9 +333,20 @@ def _hopf() -> list[str]:
         "## Hopf line and driven grids", "",
         "`python benchmarks/hopf.py`:", "",
         f"- the Hopf line by simulation over {line['velocities']} velocities: {line['seconds_simulation_1thread']:.3f}"
-        f" s on one thread ({line['seconds_simulation_with_type_1thread']:.1f} s with the bifurcation type), "
+        f" s on one thread ({line['seconds_simulation_with_type_1thread']:.2f} s with the bifurcation type), "
         f"{_sci(line['simulation_over_analytic'])}x the analytic line; largest relative distance to eq. 3: "
         f"{_sci(line['max_rel_distance_to_linear'])};",
+        *([] if "line_ab" not in d else [
+            f"- the same {d['line_ab']['velocities']} velocities against the code of {d['line_ab']['base_commit']} "
+            f"(A/B in one run, one thread): {d['line_ab']['seconds_with_type_1thread']['base']:.2f} -> "
+            f"{d['line_ab']['seconds_with_type_1thread']['new']:.2f} s with the type "
+            f"({_x(d['line_ab']['speedup_with_type_1thread'])}), "
+            f"{d['line_ab']['seconds_without_type_1thread']['base']:.3f} -> "
+            f"{d['line_ab']['seconds_without_type_1thread']['new']:.3f} s without "
+            f"({_x(d['line_ab']['speedup_without_type_1thread'])}); simulations per velocity to locate the line "
+            f"{d['line_ab']['simulations_per_velocity_mean']['base']:.1f} -> "
+            f"{d['line_ab']['simulations_per_velocity_mean']['new']:.1f}; types "
+            + ("unchanged" if d['line_ab']['types_equal'] else "CHANGED") + ";"]),
         f"- a quasi-static driven grid of {grid['shape'][0]} x {grid['shape'][1]} points: "
         f"{_int(grid['threads_1']['points_per_s'])} points/s on 1 thread, {_int(grid['threads_2']['points_per_s'])} "
         "on 2;",
