@@ -18,6 +18,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from ..accuracy import TIGHTER
 from ..errors import InputError
 from ..scene.params import FrictionParams, require_finite
 from ..status import Status
@@ -113,10 +114,14 @@ class RecordStack(ProblemStack):
     def _model(self, layout: np.ndarray, params: np.ndarray, errors: bool = False):
         """mu (U, n_max) in residual order of U blocks (a layout and a parameter set each), NaN where friction_at
         did not give status ok; all stable (a record may hold stick-slip); with ``errors`` their estimates."""
-        from ..protocols.history.forward import friction_at
+        from ..protocols.history.forward import RTOL_RANGE, friction_at
 
         U = layout.size
         mu, err = np.full((U, self.n_max), np.nan), np.full((U, self.n_max), np.nan)
+        # without estimates (the optimisations' rounds): friction_at's pair one decade looser, whose tighter run is
+        # at rtol/TIGHTER, as the stop path's single run (sweep.fit.forward); ~0.65x the cost; the best fits are
+        # checked at rtol with estimates (sweep.fit.core), the difference counted in engine_error
+        rtol = self.rtol if self.estimates else min(self.rtol * TIGHTER, RTOL_RANGE[1])
         k_free = "k" in self.space.names
         for u in np.unique(layout):
             rows, q = np.flatnonzero(layout == u), self.representative[u]
@@ -126,7 +131,7 @@ class RecordStack(ProblemStack):
                 k = p[:, 4] if k_free or k_rec is None else np.full(rows.size, k_rec)
                 lab = {"A": p[:, 0], "m1": p[:, 1] - p[:, 0], "m2": np.zeros(rows.size), "D0": p[:, 2],
                        "m0": p[:, 3], "V0": np.full(rows.size, self.V0), "K_over_M": k * self.g}
-                out = friction_at(lab, load, t, rtol=self.rtol)
+                out = friction_at(lab, load, t, rtol=rtol)
                 ok = (out.status == int(Status.OK))[:, None]
                 m = np.where(ok, out.mu, np.nan)
                 if x is not None:  # the record's linear trend: its best slope per set, projected out
