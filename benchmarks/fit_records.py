@@ -2,7 +2,16 @@
 noise estimated) fitted warm, 100 such records in one call (per record: noise draws on one record's times, and
 records of their own times), and scipy's least_squares over solve_ivp
 (LSODA) on the same record from the same start at the same rtol, both with 95 % intervals (sweep: profile
-likelihoods; scipy: from its Jacobian).
+likelihoods; scipy: from its Jacobian), both against the Fisher (linearised) half-widths 1.96 sigma sqrt(diag
+(J^T J)^-1) from the scipy reference's Jacobian (tests/reference_records.py, Radau rtol 1e-10, central differences,
+relative step 1e-4: steps 1e-2..1e-5 agree to 3e-5 of the widths) at the truth.
+
+scipy's Jacobian: forward differences with diff_step = sqrt(rtol) = 1e-3 (its default step, ~1.5e-8, is below the
+integrator's noise at rtol 1e-6: its intervals came out 5x too narrow for a and b; 1e-4..1e-2 give intervals within
+4 % of Fisher). Ratios: ``speedup_vs_scipy`` = scipy's fit over sweep.fit as users call it (global stage, least
+squares, profiles); ``speedup_least_squares_stage`` = scipy's fit over sweep.fit's least-squares stage alone (from
+its global stage's best point, not the same start: sweep has no option to skip the global stage), and the seconds
+per forward solve of each side say where the time goes.
 
     python benchmarks/fit_records.py [--repeats 3] [--out benchmarks/results/fit_records.json]
 
@@ -35,6 +44,8 @@ TRUE = (0.01, 0.015, 1e-5, 0.6)
 START = (0.008, 0.012, 2e-5, 0.6)
 K, NOISE, V, DUR = 2e3, 2e-4, (1e-6, 1e-5), (20.0, 40.0)
 RTOL = 1e-6
+DIFF_STEP = 1e-3
+"""scipy's relative finite-difference step: sqrt(RTOL) (module docstring)."""
 
 
 def scipy_model(theta, t, V0=1e-6):
@@ -58,12 +69,44 @@ def scipy_model(theta, t, V0=1e-6):
 
 def scipy_fit(t, mu):
     scale = np.array(START)
-    res = least_squares(lambda z: scipy_model(z * scale, t) - mu, np.ones(4), method="trf", x_scale=1.0)
+    res = least_squares(lambda z: scipy_model(z * scale, t) - mu, np.ones(4), method="trf", x_scale=1.0,
+                        diff_step=DIFF_STEP)
     dof = t.size - 4
     s2 = 2 * res.cost / dof
     cov = np.linalg.inv(res.jac.T @ res.jac) * s2
     half = student.ppf(0.975, dof) * np.sqrt(np.diag(cov))
-    return res.x * scale, half * scale, res.nfev
+    return res.x * scale, half * scale, res.nfev, res.njev
+
+
+def sweep_solve_seconds(rec: Record) -> dict[str, float]:
+    """Seconds of one friction_at call at TRUE as the least squares run it (without estimates: rtol 10 RTOL, its
+    tighter run at RTOL/10), for 1 set and per set for 5 (a forward-difference round of 4 parameters)."""
+    from sweep.fit.segments import load_history
+    from sweep.protocols.history.forward import friction_at
+
+    load, out = load_history(rec), {}
+    for n in (1, 5):
+        lab = {"A": np.full(n, TRUE[0]), "m1": np.full(n, TRUE[1] - TRUE[0]), "m2": np.zeros(n),
+               "D0": np.full(n, TRUE[2]), "m0": np.full(n, TRUE[3]), "V0": np.full(n, 1e-6), "K_over_M": K * 9.81}
+        friction_at(lab, load, rec.t - rec.t[0], rtol=10 * RTOL)
+        t0 = time.perf_counter()
+        for _ in range(20):
+            friction_at(lab, load, rec.t - rec.t[0], rtol=10 * RTOL)
+        out[f"sets_{n}_per_set_s"] = (time.perf_counter() - t0) / 20 / n
+    return out
+
+
+def fisher_half_widths(t):
+    """1.96 NOISE sqrt(diag (J^T J)^-1) at TRUE, J from the reference by central differences (relative step 1e-4)."""
+    theta = np.array(TRUE)
+    jac = np.empty((t.size, theta.size))
+    for j in range(theta.size):
+        h = 1e-4 * abs(theta[j])
+        up, down = theta.copy(), theta.copy()
+        up[j], down[j] = theta[j] + h, theta[j] - h
+        jac[:, j] = (record_reference(*up, K, list(V), list(DUR), t)[0]
+                     - record_reference(*down, K, list(V), list(DUR), t)[0]) / (2 * h)
+    return 1.96 * NOISE * np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)))
 
 
 def main(argv=None) -> None:
@@ -102,8 +145,15 @@ def main(argv=None) -> None:
         ds_own = sweep.fit(own, free=free, params=params, rtol=RTOL, per_data_set=True)
         many_own.append(time.perf_counter() - t0)
     t0 = time.perf_counter()
-    best_sp, half_sp, nfev = scipy_fit(t, records[0].mu)
+    best_sp, half_sp, nfev, njev = scipy_fit(t, records[0].mu)
     ref.append(time.perf_counter() - t0)
+    fisher = fisher_half_widths(t)
+    ls_stage = json.loads(ds1.attrs["fit_seconds"])["least_squares"]
+    ls_rounds = json.loads(ds1.attrs["fit_rounds"])["least_squares"] if "fit_rounds" in ds1.attrs else None
+    t0 = time.perf_counter()
+    scipy_model(np.array(TRUE), t)
+    scipy_solve = time.perf_counter() - t0
+    sweep_solve = sweep_solve_seconds(records[0])
     ok100 = int(np.sum(ds100["fit_status"].values == 0))
     cover = np.mean([[float(ds100[f"{n}_lower"][q]) <= v <= float(ds100[f"{n}_upper"][q])
                       for n, v in zip(free, TRUE)] for q in range(n_rec)])
@@ -118,10 +168,18 @@ def main(argv=None) -> None:
         "hundred_records_own_times_s": min(many_own), "hundred_records_own_times_s_all": many_own,
         "hundred_records_own_times_ok": int(np.sum(ds_own["fit_status"].values == 0)),
         "hundred_records_own_times_stage_s": json.loads(ds_own.attrs["fit_seconds"]),
-        "scipy_least_squares_s": min(ref), "scipy_nfev": int(nfev), "speedup_vs_scipy": min(ref) / min(one),
+        "scipy_least_squares_s": min(ref), "scipy_nfev": int(nfev), "scipy_njev": int(njev),
+        "scipy_diff_step": DIFF_STEP, "scipy_forward_solves": int(nfev + 4 * njev), "scipy_solve_s": scipy_solve,
+        "speedup_vs_scipy": min(ref) / min(one),
+        "sweep_solve_s": sweep_solve, "sweep_least_squares_stage_s": ls_stage, "sweep_least_squares_rounds": ls_rounds,
+        "speedup_least_squares_stage": min(ref) / ls_stage,
         "sweep_best": {n: float(ds1[n][0]) for n in free},
         "sweep_half_width_95": {n: float(ds1[f"{n}_upper"][0] - ds1[f"{n}_lower"][0]) / 2 for n in free},
         "scipy_best": dict(zip(free, map(float, best_sp))), "scipy_half_width_95": dict(zip(free, map(float, half_sp))),
+        "fisher_half_width_95_at_truth": dict(zip(free, map(float, fisher))),
+        "sweep_over_fisher": {n: float(ds1[f"{n}_upper"][0] - ds1[f"{n}_lower"][0]) / 2 / f
+                              for n, f in zip(free, fisher)},
+        "scipy_over_fisher": {n: float(h / f) for n, h, f in zip(free, half_sp, fisher)},
         "targets": {"one_record_s": 0.5, "hundred_records_s": 10.0, "speedup": 50.0},
     }
     Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
