@@ -133,9 +133,7 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
           for pr, f, u, p in zip(problems, fits, unsolved, n_par)]
     covs = [covariance(f.jac, s) if not u.any() else np.full((space.p, space.p), np.nan)
             for f, s, u in zip(fits, s2, unsolved)]
-    # poor_fit (the misfit against its dof, the noise given) for records only: stop data's tests give a noise 50x too
-    # small on purpose (tests/fit/test_fit_failures.py's issue case, reported ok there)
-    verdicts = [judge(f, c, s, space, MODEL_FAILED, pr.n_residuals - p if pr.noise_given and records else None)
+    verdicts = [judge(f, c, s, space, MODEL_FAILED, pr.n_residuals - p if pr.noise_given else None)
                 for f, c, s, pr, p in zip(fits, covs, s2, problems, n_par)]
     crit = [threshold(pr.noise_given, pr.n_residuals - p) for pr, p in zip(problems, n_par)]
     profs = ivs = labels = None

@@ -15,10 +15,10 @@ A sample's ``fit_status`` is the most severe of (codes in :data:`FIT_STATUS`, in
 * ``failed_solves``: the forward model gave no number for some datum at the best fit (no finite relaxed slip there,
   or a solve that failed). Its covariance, intervals, profiles, noise, misfit and the fitted values of those data
   are not computed: NaN;
-* ``poor_fit`` (code 5, the least severe failure, reported only where nothing else failed; judged for laboratory
-  records, sweep.fit.core): with the noise given, the misfit chi^2 lies more than :data:`POOR_FIT_Z` standard
-  deviations sqrt(2 dof) above its degrees of freedom dof: no parameter set describes the data (a wrong history, a
-  trend not modelled), or the noise given is too small. With the noise estimated the misfit is dof by construction
+* ``poor_fit`` (code 5, the least severe failure, reported only where nothing else failed): with the noise given,
+  the misfit chi^2 lies more than :data:`POOR_FIT_Z` standard deviations sqrt(2 dof) above its degrees of freedom
+  dof: no parameter set describes the data (a wrong model: a wrong history, a trend not modelled, a parameter held
+  at a wrong value), or the noise given is too small. With the noise estimated the misfit is dof by construction
   and says nothing.
 
 ``ok`` is 0; every other status is a failed fit (``sweep fit`` then exits 1).
