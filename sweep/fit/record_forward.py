@@ -32,6 +32,10 @@ __all__ = ["RECORD_FREE", "RecordStack", "make_record_space"]
 RECORD_FREE = ("a", "b", "Dc", "mu0", "k")
 """Parameters a record fit may free, in the order they are reported (k = K/(M g) [1/m])."""
 
+VALUED = (int(Status.OK), int(Status.ERROR_ABOVE_TOL))
+"""friction_at statuses whose values a record fit uses: error_above_tol too (in stick-slip the estimate exceeds the
+error ~9x, and a sawtooth's own truth got it; its error enters engine_error like any other)."""
+
 
 def _default_bounds(name: str, v: Mapping[str, float]) -> tuple[float, float]:
     """a, Dc, k within a factor 10 of the start; b within 5 max(|b|, a) of it; mu0 within 0.2."""
@@ -113,7 +117,8 @@ class RecordStack(ProblemStack):
 
     def _model(self, layout: np.ndarray, params: np.ndarray, errors: bool = False):
         """mu (U, n_max) in residual order of U blocks (a layout and a parameter set each), NaN where friction_at
-        did not give status ok; all stable (a record may hold stick-slip); with ``errors`` their estimates."""
+        did not give a value (status not in VALUED); all stable (a record may hold stick-slip); with ``errors`` their
+        estimates."""
         from ..protocols.history.forward import RTOL_RANGE, friction_at
 
         U = layout.size
@@ -130,9 +135,10 @@ class RecordStack(ProblemStack):
             for (load, t, k_rec), x in zip(self.loads[q], self.trends[q]):
                 k = p[:, 4] if k_free or k_rec is None else np.full(rows.size, k_rec)
                 lab = {"A": p[:, 0], "m1": p[:, 1] - p[:, 0], "m2": np.zeros(rows.size), "D0": p[:, 2],
-                       "m0": p[:, 3], "V0": np.full(rows.size, self.V0), "K_over_M": k * self.g}
+                       "m0": p[:, 3], "V0": np.full(rows.size, self.V0), "K_over_M": k * self.g,
+                       "g": np.full(rows.size, self.g)}  # g = N/M: the machine's inertia (docs/physics.md 7b)
                 out = friction_at(lab, load, t, rtol=rtol)
-                ok = (out.status == int(Status.OK))[:, None]
+                ok = np.isin(out.status, VALUED)[:, None]
                 m = np.where(ok, out.mu, np.nan)
                 if x is not None:  # the record's linear trend: its best slope per set, projected out
                     w2 = self.weights[q, col:col + t.size] ** 2
