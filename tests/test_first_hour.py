@@ -397,7 +397,7 @@ def test_the_simulated_line_over_200_velocities_is_thinned():
     plt.close(fig)
 
 
-def test_hopf_gap_shows_the_bisection_bracket_on_each_point():
+def test_hopf_gap_shows_the_located_bracket_on_each_point():
     import matplotlib.pyplot as plt
     import numpy as np
 
@@ -407,7 +407,7 @@ def test_hopf_gap_shows_the_bisection_bracket_on_each_point():
     ds = sweep.locate_hopf(sweep.presets["sample2"], np.logspace(-7, -6, 4), bifurcation=False)
     fig, ax = new_figure()
     draw_hopf_gap(ax, ds)
-    assert ax.containers and "bisection bracket ± rtol/2" in ax.containers[0].get_label()
+    assert ax.containers and "located bracket ± rtol/2" in ax.containers[0].get_label()
     assert "no gap resolved" in ax.get_title()
     plt.close(fig)
 

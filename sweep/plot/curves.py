@@ -222,16 +222,16 @@ def _draw_hopf_by_type(ax, ds: xr.Dataset, v_um: np.ndarray) -> None:
 
 def draw_hopf_gap(ax, ds: xr.Dataset) -> None:
     """Relative gap between the line located by simulation and the linear theory, against V, each point with the
-    bracket the bisection left it in (relative width <= rtol: bars +- rtol/2). The located value is the midpoint of
-    that bracket, and the halvings of the same initial bracket (+-10 % around the theory) land at the same
-    relative offset at every V: a constant gap inside the bars is the bisection's quantisation, not a bias."""
+    bracket of the sign change the search left it in (relative width <= rtol: bars +- rtol/2; the located value is
+    the bracket's midpoint, centred on the root estimated from the measured growth rates: docs/physics.md 3b). A gap
+    inside the bars is not resolved."""
     v_um = um_per_s(ds)
     with np.errstate(invalid="ignore", divide="ignore"):
         gap = ds["K_over_M_c"].values / ds["K_over_M_c_linear"].values - 1.0
     rtol = float(ds.attrs.get("rtol", np.nan))
     bars = rtol / 2 if np.isfinite(rtol) else None
     ax.errorbar(v_um, gap, yerr=bars, fmt="o", ms=3.5, lw=0.9, capsize=2, color="C0",
-                label="simulation / linear theory - 1" + (f" (bars: bisection bracket ± rtol/2 = {bars:g})"
+                label="simulation / linear theory - 1" + (f" (bars: located bracket ± rtol/2 = {bars:g})"
                                                           if bars else ""))
     ax.axhline(0.0, color="k", lw=0.8, label="linear theory")
     finite = np.isfinite(gap)
