@@ -132,7 +132,7 @@ def plot_hopf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     fig, (ax_line, ax_gap) = new_figure("pair", 2)
     draw_hopf(ax_line, ds)
     draw_hopf_gap(ax_gap, ds)
-    fig.suptitle(caption(ds, "Hopf line: located by simulation (bisection on the measured growth rate) and by the "
+    fig.suptitle(caption(ds, "Hopf line: located by simulation (sign change of the measured growth rate) and by the "
                              "linear theory"), fontsize=9)
     return save(fig, path)
 
