@@ -10,7 +10,8 @@ sweep.fit.stack merges their engine runs, sweep.fit.levenberg iterates every tas
 4. covariance from the Jacobian, profile likelihoods, 95 % intervals and labels (sweep.fit.profiles,
    sweep.fit.uncertainty);
 5. a verdict per sample (sweep.fit.verdict): ``fit_status`` ok, or why the fit failed (failed forward solves at the
-   best point, infinite standard errors, a bound the data push against, no convergence), with one warning line per
+   best point, infinite standard errors, a bound the data push against, no convergence, with the noise given a
+   misfit far above its degrees of freedom, a record's slip events missed by the best fit), with one warning line per
    call (a PlausibilityWarning) naming the failed samples and the advice that matches the cause.
 
 The optimisations' forward solves carry no error estimate (the engine's fine twins cost ~0.6x more, and an
@@ -47,7 +48,7 @@ from .result import build_fit_dataset, trend_count
 from .space import make_space
 from .stack import ProblemStack
 from .uncertainty import NOT_COMPUTED, Interval, covariance, interval, label, noise_variance, threshold
-from .verdict import judge, summary, user_stacklevel
+from .verdict import judge, missed_events, summary, user_stacklevel
 
 __all__ = ["fit", "run_fit"]
 
@@ -135,6 +136,11 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
             for f, s, u in zip(fits, s2, unsolved)]
     verdicts = [judge(f, c, s, space, MODEL_FAILED, pr.n_residuals - p if pr.noise_given else None)
                 for f, c, s, pr, p in zip(fits, covs, s2, problems, n_par)]
+    if records:  # a sawtooth's slip events missed by the best fit (a stable model through it: issue 34)
+        from .events import record_events
+
+        verdicts = [missed_events(v, record_events(pr.data, f.residuals, pr.weights)) if not u.any() else v
+                    for v, pr, f, u in zip(verdicts, problems, fits, unsolved)]
     crit = [threshold(pr.noise_given, pr.n_residuals - p) for pr, p in zip(problems, n_par)]
     profs = ivs = labels = None
     if profiles:

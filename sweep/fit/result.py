@@ -113,7 +113,8 @@ def _per_sample(out: FitOutcome) -> dict[str, xr.Variable]:
                          comment="failed_solves: the model gives no number for some data at the best point; singular: "
                                  "infinite standard errors; at_bound: the misfit would fall beyond a bound; "
                                  "not_converged: the least squares ran out of rounds; poor_fit: with the noise "
-                                 "given, the misfit is far above its degrees of freedom (sweep.fit.verdict)"),
+                                 "given, the misfit is far above its degrees of freedom; events_missed: a record's "
+                                 "slip events missed by the best fit (sweep.fit.verdict)"),
         "misfit": _v("sample", [f.rss / s if ok else np.nan for f, s, ok in zip(out.fits, out.s2, solved)], "1",
                      "sum of squared residuals over the noise variance at the best fit (chi^2; NaN: failed solves)"),
         "degrees_of_freedom": _v("sample", np.array(n) - out.space.p - trend_count(out.problems), "1",

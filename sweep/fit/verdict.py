@@ -19,7 +19,12 @@ A sample's ``fit_status`` is the most severe of (codes in :data:`FIT_STATUS`, in
   the misfit chi^2 lies more than :data:`POOR_FIT_Z` standard deviations sqrt(2 dof) above its degrees of freedom
   dof: no parameter set describes the data (a wrong model: a wrong history, a trend not modelled, a parameter held
   at a wrong value), or the noise given is too small. With the noise estimated the misfit is dof by construction
-  and says nothing.
+  and says nothing;
+* ``events_missed`` (code 6, a record fit's, as severe as poor_fit and named instead of it where both apply): a
+  record shows slip events (the sharp drops of a stick-slip sawtooth, sweep.fit.events) and the model at the best
+  fit a different number of them (a stable model sliding through a sawtooth has none), or one far from a record's
+  event, or a fall that differs from its by more than sweep.fit.events.DROP noise scales of the record: its
+  estimated noise (many times the real one) makes its misfit look right (issue 34).
 
 ``ok`` is 0; every other status is a failed fit (``sweep fit`` then exits 1).
 """
@@ -35,11 +40,13 @@ import numpy as np
 from .local import LocalFit
 from .space import ParamSpace
 
-__all__ = ["BOUND_FLAGS", "FIT_STATUS", "PHYSICAL_LIMITS", "PUSH", "Verdict", "judge", "summary", "user_stacklevel"]
+__all__ = ["BOUND_FLAGS", "FIT_STATUS", "PHYSICAL_LIMITS", "PUSH", "Verdict", "judge", "missed_events", "summary",
+           "user_stacklevel"]
 
-FIT_STATUS = {0: "ok", 1: "not_converged", 2: "at_bound", 3: "singular", 4: "failed_solves", 5: "poor_fit"}
-"""Per sample (CF flag_meanings), 1..4 in increasing severity, 5 below 1: the reported one is the most severe that
-applies."""
+FIT_STATUS = {0: "ok", 1: "not_converged", 2: "at_bound", 3: "singular", 4: "failed_solves", 5: "poor_fit",
+              6: "events_missed"}
+"""Per sample (CF flag_meanings), 1..4 in increasing severity, 5 and 6 below 1: the reported one is the most severe
+that applies."""
 POOR_FIT_Z = 5.0
 """With the noise given, a misfit above dof + POOR_FIT_Z sqrt(2 dof) is a poor fit (chi^2 with dof degrees of
 freedom: mean dof, standard deviation sqrt(2 dof); 5 of them is a p-value below ~1e-5 for dof >= 100)."""
@@ -67,6 +74,9 @@ class Verdict:
     pushed: list[tuple[str, float, str]]
     misfit: tuple[float, int] | None = None
     """(chi^2, degrees of freedom) where the noise was given and the misfit is a poor fit's."""
+    events: list[tuple[str, list[float], list[float]]] | None = None
+    """(record, the falls of its slip events, those of the best fit's) of the records the best fit misses, where
+    events_missed."""
 
     @property
     def failed(self) -> bool:
@@ -115,6 +125,19 @@ def judge(fit: LocalFit, cov: np.ndarray, s2: float, space: ParamSpace, model_fa
     return Verdict(status, flags, unsolved, pushed, poor)
 
 
+def missed_events(verdict: Verdict, missed: list[tuple[str, list[float], list[float]]]) -> Verdict:
+    """``verdict`` with status events_missed where nothing more severe than poor_fit failed and the best fit misses
+    some record's slip events (``missed``: (record, the falls of its events, the model's), as
+    sweep.fit.events.record_events gives them)."""
+    if missed and verdict.status in (0, 5):
+        verdict.status, verdict.events = 6, missed
+    return verdict
+
+
+def _falls(falls: list[float]) -> str:
+    return ", ".join(f"{f:.3g}" for f in falls[:4]) + (", ..." if len(falls) > 4 else "") if falls else "none"
+
+
 def _names(items: list[str]) -> str:
     return ", ".join(items[:8]) + (f" and {len(items) - 8} more" if len(items) > 8 else "")
 
@@ -125,7 +148,7 @@ def summary(names: list[str], verdicts: list[Verdict], max_rounds: int) -> str |
     if not failed:
         return None
     parts = []
-    by = {code: [(n, v) for n, v in failed if v.status == code] for code in (4, 3, 2, 1, 5)}
+    by = {code: [(n, v) for n, v in failed if v.status == code] for code in (4, 3, 2, 1, 5, 6)}
     if by[4]:
         which = _names([f"{n} ({int(v.unsolved.sum())} of {v.unsolved.size} data)" for n, v in by[4]])
         parts.append(f"failed_solves: the model gives no number for some data at the best point ({which}), even "
@@ -148,6 +171,13 @@ def summary(names: list[str], verdicts: list[Verdict], max_rounds: int) -> str |
         parts.append(f"poor_fit: with the noise given, the misfit is far above its degrees of freedom ({which}): no "
                      f"parameter set describes the data, or the noise given is too small; check the noise, the load "
                      f"history (steps) and whether a trend needs a detrend")
+    if by[6]:
+        which = _names([f"{n}: record {r!r} has {len(e)} slip event(s) (falls {_falls(e)}), the best fit "
+                        f"{len(m)} ({_falls(m)})" for n, v in by[6] for r, e, m in v.events])
+        parts.append(f"events_missed: the model at the best fit misses the record's slip events ({which}): it slides "
+                     f"through a stick-slip sawtooth another way (stably where it has none), and an estimated noise "
+                     f"many times the record's hides it; start nearer the truth (with k below (b - a)/Dc the "
+                     f"model can slip), or give the noise")
     return (f"the fit failed for {len(failed)} of {len(verdicts)} sample(s) ({_names([n for n, _ in failed])}): "
             + "; ".join(parts) + " (fit_status in the output)")
 
