@@ -204,12 +204,26 @@ def _cmd_plot(args: argparse.Namespace) -> int:
 
     ds, kind = read_sweep_file(args.file)
     png = args.output or Path(args.file).with_suffix(".png")
+    if kind == "fit":
+        return _plot_fit_file(ds, png, args)
     pictures = picture_paths(png, kind, trajectories=has_trajectories(ds),
                              points=ds.sizes.get("K_over_M", 1) * ds.sizes.get("V", 1), variable=args.variable)
     check_targets({f"picture {i + 1}" if i else "picture": path for i, path in enumerate(pictures)},
                   overwrite=args.overwrite, inputs={"sweep file": args.file})
     for written in plot_file(ds, png, variable=args.variable):
         print(f"wrote {written}")
+    return 0
+
+
+def _plot_fit_file(ds, png: Path, args: argparse.Namespace) -> int:
+    """``sweep plot`` of a fit file: the picture ``sweep fit`` wrote beside it, again (sweep.fit.plot_fit)."""
+    from .fit.plot import plot_fit
+    from .write.targets import check_targets
+
+    if args.variable is not None:
+        raise InputError(f"--variable is for sweep files; a fit file is drawn whole (got {args.variable!r})")
+    check_targets({"picture": png}, overwrite=args.overwrite, inputs={"fit file": args.file})
+    print(f"wrote {plot_fit(ds, png)}")
     return 0
 
 

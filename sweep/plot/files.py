@@ -44,12 +44,8 @@ def plot_file(ds: xr.Dataset, path: str | os.PathLike, variable: str | None = No
     if kind == "hopf":
         check_map_variable(ds, variable)
         return [plot_hopf(ds, path)]
-    if kind == "fit":
-        if variable is not None:
-            raise InputError(f"--variable is for sweep files; a fit file is drawn whole (got {variable!r})")
-        from ..fit.plot import plot_fit
-
-        return [plot_fit(ds, path)]
+    if kind == "fit":  # sweep.fit draws its own files (a later layer than this module's)
+        raise InputError("a fit file is drawn by sweep.fit.plot_fit(ds, path) (or `sweep plot FILE`)")
     return protocols.get(kind).draw(ds, path, variable)
 
 
