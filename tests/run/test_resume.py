@@ -177,7 +177,7 @@ def _wait_for_chunks(out: Path, count: int, proc, timeout: float = 120.0) -> Non
     while len(list(journal_path(out).glob("chunk-*.npz"))) < count:
         assert proc.poll() is None, proc.communicate()
         assert time.time() - t0 < timeout, "the run did not journal chunks in time"
-        time.sleep(0.05)
+        time.sleep(0.01)
 
 
 @pytest.mark.slow
@@ -217,19 +217,24 @@ def test_sigkill_at_random_moments_then_resume_gives_the_uninterrupted_numbers(t
     """The file is written region by region while the chunks compute (sweep/write/regions.py) into a ``.part`` that
     a SIGKILL may leave torn; the journal is what survives. Killed three times at random moments (after a random
     number of chunks, plus a random delay: mid-chunk, mid-journal write, mid-region write), each time resumed by a
-    new process, then resumed to the end: the file holds the uninterrupted run's numbers, no .part or .tmp is left."""
+    new process, then resumed to the end: the file holds the uninterrupted run's numbers, no .part or .tmp is left.
+    80 chunks of one point; the delays are drawn in units of this machine's chunk time (fixed delays of up to 0.3 s
+    let a run finish before its kill once the driven chunks got faster)."""
     from sweep.cli import main
 
+    t0 = time.perf_counter()
+    sweep.run_sweep(driven_scene_40(), progress=False, chunk_size=1)
+    chunk_s = (time.perf_counter() - t0) / 80
     rng = np.random.default_rng(33)
     config = tmp_path / "scene.toml"
     config.write_text(driven_scene_40().to_toml())
     out = tmp_path / "d.nc"
-    args = ["run", str(config), "-o", str(out), "-q", "--chunk-size", "2"]
+    args = ["run", str(config), "-o", str(out), "-q", "--chunk-size", "1"]
     done = 0
     for kill in range(3):
         proc = _cli(args + (["--resume"] if kill else []))
         _wait_for_chunks(out, min(36, done + int(rng.integers(1, 8))), proc)
-        time.sleep(float(rng.uniform(0.0, 0.3)))
+        time.sleep(float(rng.uniform(0.0, 3.0)) * chunk_s)  # mid-chunk, mid-journal write, mid-region write
         proc.kill()
         proc.communicate(timeout=120)
         assert not out.exists()
