@@ -94,6 +94,25 @@ def test_inertial_oscillations_follow_the_cubic(gamma_over_A, chi_over_chi_c):
     assert out["growth_rate"] == pytest.approx(pair.real, rel=2e-3, abs=1e-6)
 
 
+def _radau_inertial(k: float, a: float, b: float, G: float, horizon: float):
+    """Dense scipy Radau solution (analytic Jacobian, rtol 1e-9) of the inertial driven equations in (z, u, w = ln
+    xi') from z = 1e-3 over [0, horizon] (tau): the independent reference of the inertial kernels."""
+    from scipy.integrate import solve_ivp
+
+    def rates(t, y):
+        z, u, w = y
+        return [1 - np.exp(w), np.exp(-u) - np.exp(w), (k * z - u * (a + b * u) - u - w) * np.exp(-w) / G]
+
+    def jac(t, y):
+        z, u, w = y
+        c = np.exp(-w) / G
+        return [[0, 0, -np.exp(w)], [0, -np.exp(-u), -np.exp(w)],
+                [k * c, -(a + 2 * b * u + 1) * c, -(1 + k * z - u * (a + b * u) - u - w) * c]]
+
+    return solve_ivp(rates, (0, horizon), [1e-3, 0, 0], method="Radau", jac=jac, rtol=1e-9, atol=1e-12,
+                     dense_output=True)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("slaved", [False, True])
 def test_inertial_stick_slip_with_stiff_stick_phases_matches_scipy_radau(slaved):
@@ -107,27 +126,14 @@ def test_inertial_stick_slip_with_stiff_stick_phases_matches_scipy_radau(slaved)
     (50k steps, 1.6x the time) and the same last period on the sampling grid, against the 1e-6 (amplitude) and
     1e-4 (period) checked: a margin of > 1e6 on the amplitude; the period's resolution is the sampling grid's
     (3 periods / 3e5 samples = 1e-5 of a period), as before."""
-    from scipy.integrate import solve_ivp
-
     k, a, b, G = 0.75, 1.5, 0.5, 1e-2  # (A = 0.01: the reduced parameters are all the kernel needs)
     out = point_kernel("aging", True, slaved)(DrivenParams(k, a, b, G), DrivenSettings(1e-3, 1e-9, 2000, 5_000_000))
     r = {"regime": Regime(out.regime).name.lower(), "status": Status(out.status).name.lower(),
          "period": out.period, "amplitude": out.amplitude}
     assert r["regime"] == "stick_slip" and r["status"] == "ok"
 
-    def rates(t, y):
-        z, u, w = y
-        return [1 - np.exp(w), np.exp(-u) - np.exp(w), (k * z - u * (a + b * u) - u - w) * np.exp(-w) / G]
-
-    def jac(t, y):
-        z, u, w = y
-        c = np.exp(-w) / G
-        return [[0, 0, -np.exp(w)], [0, -np.exp(-u), -np.exp(w)],
-                [k * c, -(a + 2 * b * u + 1) * c, -(1 + k * z - u * (a + b * u) - u - w) * c]]
-
     horizon = 20 * r["period"]  # the engine decided after 18 cycles
-    sol = solve_ivp(rates, (0, horizon), [1e-3, 0, 0], method="Radau", jac=jac, rtol=1e-9, atol=1e-12,
-                    dense_output=True)
+    sol = _radau_inertial(k, a, b, G, horizon)
     t = np.linspace(horizon - 3 * r["period"], horizon, 300_001)
     z = sol.sol(t)[0]
     assert (z.max() - z.min()) / 2 == pytest.approx(r["amplitude"], rel=1e-6)
@@ -157,25 +163,12 @@ def test_a_rebound_inside_the_slip_is_not_a_cycle(slaved):
     period: stick_slip, its half peak-to-peak stretch that of scipy's Radau (analytic Jacobian, rtol 1e-9) to 1e-6
     and its period to 1e-5 (the peaks' sampling grid: 1e-4 tau, 5e-6 of the period); as two cycles of
     alternating amplitude 9.9 / 6e-6 it never became stationary (undecided after 1e6 steps)."""
-    from scipy.integrate import solve_ivp
-
     k, a, b, G = 1.3461091409855348, 3.9567230876801, 0.4714285714285714, 2.080342840500114e-07
     r = point_kernel("aging", True, slaved)(DrivenParams(k, a, b, G), DrivenSettings(1e-3, 1e-9, 2000, 1_000_000))
     assert r.regime == Regime.STICK_SLIP and r.status == Status.OK
 
-    def rates(t, y):
-        z, u, w = y
-        return [1 - np.exp(w), np.exp(-u) - np.exp(w), (k * z - u * (a + b * u) - u - w) * np.exp(-w) / G]
-
-    def jac(t, y):
-        z, u, w = y
-        c = np.exp(-w) / G
-        return [[0, 0, -np.exp(w)], [0, -np.exp(-u), -np.exp(w)],
-                [k * c, -(a + 2 * b * u + 1) * c, -(1 + k * z - u * (a + b * u) - u - w) * c]]
-
     horizon = 6 * r.period
-    sol = solve_ivp(rates, (0, horizon), [1e-3, 0, 0], method="Radau", jac=jac, rtol=1e-9, atol=1e-12,
-                    dense_output=True)
+    sol = _radau_inertial(k, a, b, G, horizon)
     t = np.linspace(horizon - 2 * r.period, horizon, 400_001)
     z = sol.sol(t)[0]
     assert (z.max() - z.min()) / 2 == pytest.approx(r.amplitude, rel=1e-6)
