@@ -29,6 +29,10 @@ def add_fit_command(add) -> None:
     fit.add_argument("-o", "--output", type=Path, default=DEFAULT_OUT, help=f"netCDF output (default {DEFAULT_OUT})")
     fit.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
     fit.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    fit.add_argument("--search", default=None,
+                     help="global: a coarse grid over the bounds first (default); local: the least squares from the "
+                          "start alone (known start, many records, refits: no guard against local minima); "
+                          "overrides the file's search")
     fit.set_defaults(func=_cmd_fit)
 
 
@@ -41,6 +45,8 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from .result import save_fit
 
     kwargs = load_fit_config(args.config)
+    if args.search is not None:
+        kwargs["search"] = args.search
     png = args.png or args.output.with_suffix(".png")
     check_targets({"data": args.output, "picture": png}, overwrite=args.overwrite, inputs={"fit file": args.config})
     t0 = time.perf_counter()

@@ -5,6 +5,7 @@
     per_data_set = false          # true: each data file its own parameter set
     poor = 0.25                   # relative half-width of a 95 % interval above which "poorly constrained"
     rtol = 1e-6                   # engine accuracy of the least squares and profiles (global stage: global_rtol)
+    search = "global"             # or "local": the least squares from the start, no global grid (sweep.fit)
     [bounds]
     A = [0.001, 0.05]
     [start]
@@ -29,8 +30,8 @@ from .read import RECORD_OPTIONS, read_data
 
 __all__ = ["FIT_KEYS", "load_fit_config"]
 
-FIT_KEYS = {"preset", "params", "free", "per_data_set", "poor", "rtol", "global_rtol", "profiles", "bounds", "start",
-            "data"}
+FIT_KEYS = {"preset", "params", "free", "per_data_set", "poor", "rtol", "global_rtol", "profiles", "search", "bounds",
+            "start", "data"}
 
 
 def load_fit_config(path: str | Path) -> dict[str, Any]:
@@ -55,7 +56,7 @@ def load_fit_config(path: str | Path) -> dict[str, Any]:
                              f"name and a record's {', '.join(RECORD_OPTIONS)}")
         data.append(read_data(path.parent / entry["file"], sample=entry.get("sample"), name=entry.get("name"),
                               record={k: entry[k] for k in RECORD_OPTIONS if k in entry}))
-    kwargs = {k: cfg[k] for k in ("free", "per_data_set", "poor", "rtol", "global_rtol", "profiles", "bounds",
-                                  "start") if k in cfg}
+    kwargs = {k: cfg[k] for k in ("free", "per_data_set", "poor", "rtol", "global_rtol", "profiles", "search",
+                                  "bounds", "start") if k in cfg}
     return {"data": data, "params": _params_from(cfg) if ("preset" in cfg or "params" in cfg) else "sample2",
             **kwargs}

@@ -4,9 +4,10 @@ Stages (docs/fit.md), each run over every problem at once (a sample's data sets 
 sweep.fit.stack merges their engine runs, sweep.fit.levenberg iterates every task in lockstep):
 
 1. checks before any work (sweep.fit.data, .space, .problem, .checks);
-2. global stage: a coarse sweep of the free parameters over their bounds (sweep.fit.globalstage), engine at
-   ``global_rtol``;
-3. least squares from the best grid point (sweep.fit.local), engine at ``rtol``;
+2. global stage (``search="global"``, the default): a coarse sweep of the free parameters over their bounds
+   (sweep.fit.globalstage), engine at ``global_rtol``; with ``search="local"`` none: the least squares start from
+   the given start (``params`` and ``start``), and nothing protects them from a local minimum;
+3. least squares from the best grid point, or from the start (sweep.fit.local), engine at ``rtol``;
 4. covariance from the Jacobian, profile likelihoods, 95 % intervals and labels (sweep.fit.profiles,
    sweep.fit.uncertainty);
 5. a verdict per sample (sweep.fit.verdict): ``fit_status`` ok, or why the fit failed (failed forward solves at the
@@ -55,6 +56,9 @@ __all__ = ["fit", "run_fit"]
 log = logging.getLogger("sweep")
 
 RTOL_RANGE = (1e-10, 1e-4)
+SEARCHES = {"global": "a coarse grid over the bounds first, the least squares from its best point",
+            "local": "the least squares from the given start alone (no grid: no protection from local minima)"}
+"""The values of ``search`` (sweep.fit, the TOML key ``search``, ``sweep fit --search``) and what each runs."""
 ENGINE_ERROR_LIMIT = 0.01
 """Largest engine error at a best fit, in units of the data's noise, below which it is negligible (it shifts the
 misfit by ~2e-2 of one unit of chi^2 on 200 samples at most); above it the fit warns (a smaller ``rtol`` helps)."""
@@ -78,13 +82,21 @@ def _rtol(name: str, value: float) -> float:
     return v
 
 
+def _search(value: str) -> str:
+    if not (isinstance(value, str) and value in SEARCHES):
+        raise InputError(f"search must be one of {', '.join(repr(k) for k in SEARCHES)} ("
+                         + "; ".join(f"{k}: {v}" for k, v in SEARCHES.items()) + f"), got {value!r}")
+    return value
+
+
 def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2"),
             params: FrictionParams | str = "sample2", bounds: Mapping[str, Sequence[float]] | None = None,
             start: Mapping[str, float] | None = None, per_data_set: bool = False, poor: float = 0.25,
             rtol: float = 1e-6, global_rtol: float = 1e-4, profiles: bool = True,
-            progress: Callable[[str], None] | None = None) -> FitOutcome:
+            progress: Callable[[str], None] | None = None, search: str = "global") -> FitOutcome:
     """The stages of :func:`fit`, returning the raw :class:`FitOutcome`."""
     say = progress or log.info
+    search = _search(search)
     records = _records(data)
     if records:  # the third kind of data: its own space and forward model (sweep.fit.record_forward)
         from .record_forward import RECORD_FREE, RecordStack, make_record_space, record_k
@@ -108,19 +120,22 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
     rounds, seconds = {}, {}
     t0 = time.perf_counter()
     stack = (RecordStack if records else ProblemStack)(problems, global_rtol, estimates=False)
-    say(f"global stage: {len(problems)} problem(s), {len(grid_sets(space, stack.offset))} parameter sets each")
-    # a cold cache: the per-point path (the grid's sets without a finite relaxed slip) compiles in a second process
-    # while this one compiles the sampled lanes (~45 s and ~18 s on 2 cores, one after the other without it)
-    aside = "" if records else (f"from sweep.fit.forward import warm_up_per_point; "
-                                f"warm_up_per_point({global_rtol!r}, {rtol!r})")
-    with compiled_aside(aside) if aside else contextlib.nullcontext():
-        globals_ = search_all(stack)
-    rounds["global"], seconds["global"] = stack.rounds, time.perf_counter() - t0
-
-    say(f"least squares from the best grid points ({time.perf_counter() - t0:.1f} s so far)")
+    globals_ = None
+    if search == "global":
+        say(f"global stage: {len(problems)} problem(s), {len(grid_sets(space, stack.offset))} parameter sets each")
+        # a cold cache: the per-point path (the grid's sets without a finite relaxed slip) compiles in a second
+        # process while this one compiles the sampled lanes (~45 s and ~18 s on 2 cores, one after the other)
+        aside = "" if records else (f"from sweep.fit.forward import warm_up_per_point; "
+                                    f"warm_up_per_point({global_rtol!r}, {rtol!r})")
+        with compiled_aside(aside) if aside else contextlib.nullcontext():
+            globals_ = search_all(stack)
+        rounds["global"], seconds["global"] = stack.rounds, time.perf_counter() - t0
+        say(f"least squares from the best grid points ({time.perf_counter() - t0:.1f} s so far)")
+    else:
+        say(f"least squares of {len(problems)} problem(s) from the start (search = local: no global stage)")
     t1 = time.perf_counter()
     stack = stack.with_settings(rtol, estimates=False)
-    fits = refine_all(stack, [g.theta for g in globals_])
+    fits = refine_all(stack, [g.theta for g in globals_] if globals_ else [space.start] * len(problems))
     rounds["least_squares"], seconds["least_squares"] = stack.rounds, time.perf_counter() - t1
     unsolved = [f.residuals == MODEL_FAILED if f.failures else np.zeros(f.residuals.size, bool) for f in fits]
     engine_error = _check_engine_error(stack.with_settings(rtol, estimates=True), fits, progress,
@@ -166,7 +181,8 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
     line = summary([pr.name for pr in problems], verdicts, local.FIT.max_rounds)
     if line is not None:
         warnings.warn(line, PlausibilityWarning, stacklevel=user_stacklevel())
-    settings = {"free": list(space.names), "rtol": rtol, "global_rtol": global_rtol, "poor": poor,
+    settings = {"free": list(space.names), "search": search, "start": dict(zip(space.names, map(float, space.start))),
+                "rtol": rtol, "global_rtol": global_rtol, "poor": poor,
                 "per_data_set": bool(per_data_set), "params": _params(params).as_dict(),
                 **({"kind": "records", "fixed": {n: space.values[n] for n in RECORD_FREE}} if records else {})}
     return FitOutcome(problems, space, globals_, fits, s2, covs, crit, profs, ivs, labels, rounds, seconds, settings,
@@ -225,7 +241,8 @@ def fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2"),
         params: FrictionParams | str = "sample2", bounds: Mapping[str, Sequence[float]] | None = None,
         start: Mapping[str, float] | None = None, per_data_set: bool = False, poor: float = 0.25,
         rtol: float = 1e-6, global_rtol: float = 1e-4, profiles: bool = True,
-        progress: Callable[[str], None] | None = None, history: str = "sweep.fit") -> xr.Dataset:
+        progress: Callable[[str], None] | None = None, history: str = "sweep.fit", search: str = "global"
+        ) -> xr.Dataset:
     """Fit the friction parameters to measured stop data; returns a Dataset (docs/fit.md, "Output").
 
     Parameters
@@ -254,6 +271,13 @@ def fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2"),
         Compute the profile likelihoods, 95 % intervals and labels (default True).
     progress : callable(str)
         Receives a line per stage (default: the "sweep" logger at INFO).
+    search : "global" or "local"
+        "global" (default): a coarse grid of the free parameters over their bounds first, the least squares from
+        its best point (a start anywhere in the bounds will do). "local": the least squares from the start
+        (``params``, ``start``) alone, without the grid: for many records of one material from a known start, or a
+        refit; nothing then guards against a local minimum (the verdicts still say where a fit is poor: with the
+        noise given, poor_fit). The Dataset's ``fit_settings`` name the search; a local fit has no
+        ``misfit_landscape`` and no ``P_global``.
     """
     return build_fit_dataset(run_fit(data, free, params, bounds, start, per_data_set, poor, rtol, global_rtol,
-                                     profiles, progress), history=history)
+                                     profiles, progress, search), history=history)

@@ -24,7 +24,8 @@ class FitOutcome:
 
     problems: list[Problem]
     space: ParamSpace
-    global_results: list[GlobalResult]
+    global_results: list[GlobalResult] | None
+    """Per problem, the global stage's best point and landscape; None where none ran (search "local")."""
     fits: list[LocalFit]
     s2: list[float]
     covariances: list[np.ndarray]

@@ -66,6 +66,10 @@ def _profile_panel(ax, ds: xr.Dataset, name: str) -> None:
 
 
 def _landscape_panel(fig, ax, ds: xr.Dataset) -> None:
+    if "misfit_landscape" not in ds:  # a fit without a global stage (search "local", sweep.fit)
+        ax.set_title("no global stage (search local: least squares from the start)")
+        ax.set_axis_off()
+        return
     land = ds["misfit_landscape"].isel(sample=0)
     dims = land.dims
     if len(dims) == 1:

@@ -2,7 +2,8 @@
 
 Dimensions: ``sample`` (one per problem: a sample's data sets sharing one parameter set), ``parameter`` and
 ``parameter_`` (the free parameters), ``profile_point``, ``grid_<name>`` (the global stage's level-1 grid of each
-free parameter) and ``datum`` (every data value of every data set, in order).
+free parameter; none where the fit ran no global stage, ``search`` "local" in ``fit_settings``) and ``datum``
+(every data value of every data set, in order).
 """
 
 from __future__ import annotations
@@ -51,8 +52,9 @@ def _parameters(out: FitOutcome) -> dict[str, xr.Variable]:
         v[name] = _v("sample", [f.theta[j] for f in out.fits], u, f"best fit of {ln}")
         v[f"{name}_stderr"] = _v("sample", [np.sqrt(c[j, j]) for c in out.covariances], u,
                                  f"standard error of {name} from the covariance (s^2 (J^T J)^-1)")
-        v[f"{name}_global"] = _v("sample", [g.theta[j] for g in out.global_results], u,
-                                 f"{name} at the best point of the global stage")
+        if out.global_results is not None:  # (search "local": no global stage, the start is in fit_settings)
+            v[f"{name}_global"] = _v("sample", [g.theta[j] for g in out.global_results], u,
+                                     f"{name} at the best point of the global stage")
         v[f"{name}_at_bound"] = _v("sample", np.array([vd.bound[j] for vd in _verdicts(out)], np.int8), None,
                                    f"whether {name} rests on a bound", flag_values=np.arange(4, dtype=np.int8),
                                    flag_meanings=" ".join(BOUND_FLAGS[k] for k in range(4)),
@@ -142,6 +144,9 @@ def _per_sample(out: FitOutcome) -> dict[str, xr.Variable]:
 
 
 def _landscape(out: FitOutcome) -> tuple[dict[str, xr.Variable], dict[str, xr.Variable]]:
+    """(the grid's coordinates, the misfit landscape over them); neither without a global stage (search "local")."""
+    if out.global_results is None:
+        return {}, {}
     sp = out.space
     axes = grid_axes(sp)
     coords = {f"grid_{n}": _v(f"grid_{n}", a, UNITS[n], f"global-stage grid of {n}") for n, a in zip(sp.names, axes)}
@@ -289,6 +294,8 @@ def build_fit_dataset(out: FitOutcome, history: str = "sweep.fit") -> xr.Dataset
                                                                           out.seconds.items()}),
         "comment": ("quasi-static load-history model from steady sliding, aging law (docs/physics.md 7b)" if
                     _is_record_fit(out) else "quasi-static stop model, aging law (docs/physics.md 3a)")
+        + ("; least squares from the best point of a global grid" if out.global_results is not None else
+           "; least squares from the given start, no global stage (search local: no misfit landscape)")
         + "; intervals from profile likelihoods",
     }
     data_vars = {**_parameters(out), **_per_sample(out), **landscape, **_data(out), **_records(out)}
