@@ -12,6 +12,7 @@ Import it from a script in this folder as ``from _common import ...`` (a script'
 
 from __future__ import annotations
 
+import datetime
 import hashlib
 import json
 import math
@@ -168,9 +169,12 @@ def scipy_point(cls, k, a, b, rtol, atol, tail_tol_rel, tail_tol_abs):
 
 
 def write_result(result: dict, out: Path, t_start: float, plot=None, print_table=None) -> None:
-    """End a benchmark run: its wall time into ``result``, the picture (``plot(result, png_path)`` unless None),
+    """End a benchmark run: its wall time and (unless the script set them) the date and the load average at the
+    end into ``result``, the picture (``plot(result, png_path)`` unless None),
     the JSON at ``out``, the table (``print_table(result)``) and the line naming what was written."""
     result["benchmark_wall_s"] = time.perf_counter() - t_start
+    result.setdefault("date", datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"))
+    result.setdefault("loadavg_end", loadavg())
     out.parent.mkdir(parents=True, exist_ok=True)
     if plot is not None:
         result["png"] = plot(result, out.with_suffix(".png"))

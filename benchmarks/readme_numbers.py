@@ -426,8 +426,78 @@ def _fit() -> list[str]:
     ]
 
 
+def _driven() -> list[str]:
+    lanes, scaling, peers = _json("driven_lanes"), _json("driven_scaling"), _json("peers_driven")
+    moved = {key: f"{n['moved_firm']} of {n['moved']}" for key, n in lanes["numbers"].items()}
+    rows = [[key.replace("_1t", ", 1 thread").replace("_2t", ", 2 threads"), f"{f['points']:,}",
+             _int(f["base_points_per_s_per_core"]), _int(f["new_points_per_s_per_core"]),
+             _x(f["speedup_new_over_base"]), moved[key]] for key, f in lanes["figures"].items()]
+    scale = [[model, f"{f['points']:,}", f"{f['best_wall_s']['1']:.2f}",
+              f"{f['best_wall_s'][str(f['threads'])]:.2f}", _x(f["speedup_all_threads"], 2),
+              "yes" if f["regimes_equal"] else "NO"]
+             for model, f in scaling["figures"].items()]
+    peer_rows = []
+    for scene, sc in peers["scenes"].items():  # levels with the same best peer and ratio in one row
+        runs: list[list] = []
+        for level, m in sc["matched"].items():
+            row = (m.get("best_peer") or "none reaches it", _fmt(m.get("engine_1t_speedup_vs_best_peer")))
+            if runs and runs[-1][2:] == list(row):
+                runs[-1][1] = level
+            else:
+                runs.append([level, level, *row])
+        peer_rows += [[scene, _level(lo) if lo == hi else f"{_level(hi)} .. {_level(lo)}", best, ratio]
+                      for lo, hi, best, ratio in runs]
+    return [
+        "## Driven scene in lanes", "",
+        f"`python benchmarks/driven_lanes.py`: {lanes['settings']['grid']}, the code of {lanes['base_commit'][:7]} "
+        "(base) against this one in one run; points per second per core; *moved*: points whose regime differs from "
+        "the base's (steady, stick_slip or runaway of them / all, undecided and neutral included):", "",
+        *_table(["grid, model, threads", "points", "base", "new", "speed-up", "moved"], rows), "",
+        _record("driven_lanes"), "",
+        f"`python benchmarks/driven_scaling.py`: {scaling['settings']['grid']}, wall seconds of the driven chunk on "
+        "1 thread and on all threads; the regimes of the two agree point for point:", "",
+        *_table(["model", "points", "1 thread s", "all threads s", "speed-up", "regimes equal"], scale), "",
+        _record("driven_scaling"), "",
+        f"`{peers['benchmark']}`: the engine's time per point per core over the best peer's at each accuracy of the "
+        "growth rate per cycle that both reach (benchmarks/README.md):", "",
+        *_table(["scene", "growth-rate error", "best peer", "engine speed-up"], peer_rows), "",
+        _record("peers_driven"), "",
+    ]
+
+
+def _histories() -> list[str]:
+    h, read, fit = _json("history"), _json("records_read"), _json("fit_records")
+    shs, grid = h["shs_point"]["chunk_1_points"], h["grid"]
+    worst = read["targets"]["read_and_segment_s_worst"]
+    lines = [
+        "## Load histories and laboratory records", "",
+        f"`python benchmarks/history.py`: a slide-hold-slide series of 8 holds (1..1000 s) "
+        f"{shs['ms_per_point_cpu']:.2f} ms a point, {h['shs_point']['chunk_256_points']['ms_per_point_cpu']:.2f} ms a "
+        f"point in a chunk of 256; a {grid['points']:,}-point sweep of it over "
+        + " x ".join(f"{k} {v}" for k, v in grid["shape"].items() if v > 1) + f" {grid['wall_s']:.1f} s "
+        f"({grid['cpu_s'] / grid['wall_s']:.1f} cores busy).", "",
+        _record("history"), "",
+        f"`python benchmarks/records_read.py`: files of 1e5 rows read and their load history found in "
+        f"{worst:.1f} s at most (" + ", ".join(f"{name.replace('_', ' ')} {f['read_s_best']:.2f} + "
+                                            f"{f['segment_s_best']:.2f} s" for name, f in read["files"].items())
+        + ").", "",
+        _record("records_read"), "",
+        f"`python benchmarks/fit_records.py`: one {fit['samples_per_record']:,}-sample velocity-step record (a, b, Dc, "
+        f"mu0 free) {fit['one_record_warm_s']:.2f} s warm; {fit['records']} records in one call "
+        f"{fit['hundred_records_own_times_s']:.1f} s with their own sample times, {fit['hundred_records_s']:.1f} s "
+        f"sharing them; scipy's least_squares over solve_ivp from the same start {fit['scipy_least_squares_s']:.2f} s "
+        f"a record: sweep.fit is {_x(fit['speedup_vs_scipy'])} faster with its global stage"
+        + (f", {_x(fit['speedup_local_one_record'])} from the same start (`search=\"local\"`)"
+           if "speedup_local_one_record" in fit else "")
+        + (f", {_x(fit['speedup_local_per_record'])} per record of {fit['records']} fitted together from it"
+           if "speedup_local_per_record" in fit else "") + ".", "",
+        _record("fit_records"), "",
+    ]
+    return lines
+
+
 SECTIONS = [_peers, _work_precision, _throughput, _models, _auto_cost, _end_to_end, _cold_start, _out_of_core,
-            _scaling, _axes, _hopf, _error_coverage, _fit]
+            _scaling, _axes, _hopf, _driven, _error_coverage, _fit, _histories]
 
 
 def render_benchmarks() -> str:

@@ -41,6 +41,7 @@ KEYS = {
     "cold_start": {"benchmark", "quick", "machine", "scene", "command", "trees", "compile_by_function", "targets"},
     "compare_commits": {"benchmark", "self_test", "machine", "trees", "compile", "numbers", "speed", "verdict",
                         "commands"},
+    "driven_scaling": {"benchmark", "quick", "machine", "settings", "figures", "date"},
     "driven_lanes": {"benchmark", "quick", "machine", "trees", "figures", "numbers", "targets"},
     "end_to_end": {"benchmark", "quick", "machine", "scene", "runs", "best", "ratio_total_over_kernel", "target"},
     "error_coverage": {"benchmark", "quick", "machine", "rows"},
