@@ -280,4 +280,4 @@ def fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2"),
         ``misfit_landscape`` and no ``P_global``.
     """
     return build_fit_dataset(run_fit(data, free, params, bounds, start, per_data_set, poor, rtol, global_rtol,
-                                     profiles, progress, search), history=history)
+                                     profiles, progress, search=search), history=history)

@@ -23,6 +23,16 @@ barely moves the optimum they stop at (sweep.fit.local). :func:`central_jacobian
 a relative error ~rtol/FD_STEP ~ 1e-3 and a truncation error ~FD_STEP^2 ~ 1e-6, far below what the noise of a
 measured curve (>~1e-3) resolves.
 
+An offset parameter (ProblemStack.offset: a record's mu0, which shifts every weighted residual along a direction g
+that depends on no parameter) is handled exactly: its Jacobian column is g (no forward solve: its neighbour set is
+not posted), and after every forward solve it moves to its best value given the others, c = -sum r g / sum g^2
+(clipped to its bounds; r += c g, exactly the residuals there). The others' columns do not depend on it, so the
+forward-difference Jacobian of the trial set holds at the moved set too: 4 sets an iteration instead of 5 for a, b,
+Dc, mu0, 6 instead of 8 for the central Jacobian. With :attr:`Tolerances.resolved`, 100 records of their own times
+(benchmarks/fit_records.py's, from its start: a, b 20 % low, Dc 2x high, search "local") took 7.0 rounds each on
+average instead of 8.2 (at most 8 instead of 17), the least-squares stage 0.39 s instead of 0.50-0.54 s (A/B in one
+process); best values moved by < 5e-3 standard errors, interval ends by < 3e-4 of the half-widths.
+
 Each task's numbers depend only on its own residuals: the sums over residuals (misfit, J^T r, J^T J, Broyden's
 update) run per task over its own residuals, in order, in compiled loops (sweep.fit.stack pads shorter problems with
 zeros, which would change the rounding of numpy's pairwise sums), and the small linear systems are solved one per
@@ -49,11 +59,17 @@ FD_STEP = 1e-3
 @dataclass(frozen=True)
 class Tolerances:
     """Stopping rules: relative decrease of the misfit (``ftol``), relative step in scaled variables (``xtol``),
-    rounds at most (``max_rounds``)."""
+    rounds at most (``max_rounds``), and ``resolved``: a trial that fails to lower the misfit ends the task where the
+    decrease the linear model still predicts is below resolved^2 noise variances (s^2 = misfit/(n - m)), i.e. where
+    the optimum lies within ~``resolved`` standard errors by the task's own Jacobian: the misfit there differs from
+    the minimum by less than the forward solves' own error resolves (with the engine at 10 rtol, benchmarks/
+    fit_records.py's records rose by ~2e-7 on every step of 3e-6 noise variances predicted, and ftol 1e-10 took
+    ~6 more rejected rounds to stop)."""
 
     ftol: float
     xtol: float
     max_rounds: int
+    resolved: float = 1e-2
 
 
 FIT = Tolerances(ftol=1e-10, xtol=1e-9, max_rounds=100)
@@ -161,6 +177,39 @@ def _broyden_rows(J, dr, dz, n):  # pragma: no cover (compiled)
                 J[t, i, k] += c * (dz[t, k] / dd)
 
 
+@numba.njit(cache=True, nogil=True)
+def _dot_rows(x, y, n, out):  # pragma: no cover (compiled)
+    """out[t] = sum over i < n[t] of x[t, i] y[t, i], in order."""
+    for t in range(x.shape[0]):
+        acc = 0.0
+        for i in range(n[t]):
+            acc += x[t, i] * y[t, i]
+        out[t] = acc
+
+
+def _offset_column(stack: ProblemStack, problem: np.ndarray) -> np.ndarray | None:
+    """(T, n_max): d(weighted residual)/d(offset parameter) of each task's problem (ProblemStack.offset_direction),
+    None where the stack has no offset parameter."""
+    return None if stack.offset is None else stack.offset_direction()[problem]
+
+
+def _to_best_offset(stack: ProblemStack, g: np.ndarray, theta: np.ndarray, r: np.ndarray, n: np.ndarray) -> None:
+    """Move each task's offset parameter (column ``stack.offset`` of ``theta`` (T, p)) to its best value given the
+    others, within its bounds, and its residuals ``r`` (T, n_max) with it, in place: c = -sum r g / sum g^2 over its
+    own n residuals (the misfit is exactly quadratic in it). The caller passes only tasks that move it and whose
+    residuals the model solved."""
+    j, sp = stack.offset, stack.space
+    rg, gg = np.empty(theta.shape[0]), np.empty(theta.shape[0])
+    _dot_rows(np.ascontiguousarray(r), np.ascontiguousarray(g), n, rg)
+    _dot_rows(np.ascontiguousarray(g), np.ascontiguousarray(g), n, gg)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c = np.where(gg > 0, -rg / gg, 0.0)
+    new = np.clip(theta[:, j] + c, sp.lower[j], sp.upper[j])
+    c = new - theta[:, j]
+    theta[:, j] = new
+    r += c[:, None] * g
+
+
 def _sumsq(r: np.ndarray, n: np.ndarray) -> np.ndarray:
     """Per task, sum of r^2 over its own n residuals (in order: a task's sum never depends on the tasks beside it,
     as numpy's pairwise sums over padded rows would)."""
@@ -217,10 +266,15 @@ def central_jacobian(stack: ProblemStack, problem: np.ndarray, theta: np.ndarray
     engine round of the 2p neighbours, ``residuals`` (T, n_max) those at ``theta`` itself (known)."""
     problem = np.asarray(problem, dtype=np.intp)
     T, p = theta.shape
-    cols = np.broadcast_to(np.arange(p), (T, p))
+    solved = [k for k in range(p) if k != stack.offset]  # the offset parameter's column is known (module docstring)
+    cols = np.broadcast_to(np.array(solved, dtype=np.intp), (T, len(solved)))
     sets, widths = _neighbours(theta, cols, stack.space, True)
     r, _, _ = stack.residuals(problem, sets[:, 1:])
-    return _jacobian(np.concatenate((residuals[:, None, :], r), axis=1), widths, True)
+    jac = np.zeros((T, residuals.shape[1], p))
+    jac[:, :, solved] = _jacobian(np.concatenate((residuals[:, None, :], r), axis=1), widths, True)
+    if stack.offset is not None:
+        jac[:, :, stack.offset] = _offset_column(stack, problem)
+    return jac
 
 
 def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np.ndarray | None = None,
@@ -249,14 +303,32 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
     lo, hi = sp.lower[cols] / scale, sp.upper[cols] / scale
 
     broyden = jac0 is not None
+    g_off = _offset_column(stack, problem)  # the offset parameter (module docstring): its column, where it moves
+    k_off = np.where(cols == stack.offset, np.arange(m)[None, :], m).min(axis=1) if g_off is not None \
+        else np.full(T, m)
 
     def post(idx, th):
+        """Residuals (and the Jacobian) of the tasks ``idx`` at ``th`` (their offset parameter then moved to its
+        best value, ``th`` updated in place)."""
         if broyden:
             r, ok, bad = stack.residuals(problem[idx], th[:, None, :])
-            return r[:, 0], None, ok[:, 0], bad[:, 0]
-        sets, widths = _neighbours(th, cols[idx], sp, False)
-        r, ok, bad = stack.residuals(problem[idx], sets)
-        return r[:, 0], _jacobian(r, widths, False) * scale[idx][:, None, :], ok[:, 0], bad[:, 0]
+            r, J = r[:, 0], None
+        else:
+            sets, widths = _neighbours(th, cols[idx], sp, False)
+            at = np.flatnonzero(k_off[idx] < m)
+            sets[at, 1 + k_off[idx[at]]] = th[at]  # no solve: the same set as the trial (solved once)
+            widths[at, k_off[idx[at]]] = 1.0
+            r, ok, bad = stack.residuals(problem[idx], sets)
+            J = _jacobian(r, widths, False) * scale[idx][:, None, :]
+            r = r[:, 0]
+            if at.size:
+                J[at, :, k_off[idx[at]]] = g_off[idx[at]] * scale[idx[at], k_off[idx[at]]][:, None]
+        move = np.flatnonzero((k_off[idx] < m) & (bad[:, 0] == 0))
+        if move.size:
+            th_m, r_m = th[move], r[move]
+            _to_best_offset(stack, g_off[idx[move]], th_m, r_m, n[idx[move]])
+            th[move], r[move] = th_m, r_m
+        return r, J, ok[:, 0], bad[:, 0]
 
     nfev = np.ones(T, np.intp)
     if m == 0:  # nothing to move: the residuals at the start
@@ -304,7 +376,11 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         ca, rows = cols[a], np.arange(a.size)[:, None]
         moved = np.clip((z + dz) * scale[a], sp.lower[ca], sp.upper[ca])
         trial[rows, ca] = np.where(dz == 0.0, trial[rows, ca], moved)  # z * scale may miss theta by an ulp
+        shifted = trial[:, stack.offset].copy() if g_off is not None else None
         rt, Jt, st, ft = post(a, trial)
+        if shifted is not None:  # the offset parameter's move after the solve is part of the step (Broyden's dz)
+            at = np.flatnonzero(k_off[a] < m)
+            dz[at, k_off[a[at]]] += (trial[at, stack.offset] - shifted[at]) / scale[a[at], k_off[a[at]]]
         nfev[a] += 1
         rss_t = _sumsq(rt, n[a])
         fewer = ft < failures[a]  # solves more of the data: better whatever the misfit
@@ -316,6 +392,9 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         if broyden:  # the secant through the trial, accepted or not
             Ja = J[a]
             _broyden_rows(Ja, rt - r[a], np.ascontiguousarray(dz), n[a])
+            at = np.flatnonzero(k_off[a] < m)  # the offset parameter's column stays the exact one
+            if at.size:
+                Ja[at, :, k_off[a[at]]] = g_off[a[at]] * scale[a[at], k_off[a[at]]][:, None]
             J[a] = Ja
             theta[acc], r[acc], stable[acc] = trial[better], rt[better], st[better]
             g[a], H[a] = _normal_equations(Ja, r[a], n[a])
@@ -326,6 +405,9 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         nu[acc] = 2.0
         lam[rej] *= nu[rej]
         nu[rej] *= 2.0
+        resolved = pred[~better] <= tol.resolved ** 2 * rss[rej] / np.maximum(n[rej] - m, 1)
+        status[rej[resolved]] = 2
+        active[rej[resolved]] = False
         done = decrease <= tol.ftol * rss[acc]
         rss[acc] = rss_t[better]
         status[acc[done]] = 2

@@ -173,8 +173,10 @@ def _fit(rec, start):
 def test_sawtooth_fits_that_miss_the_events_are_not_ok(one_event):
     """The one-event sawtooth, noise estimated, three draws: from a start 30 % below the truth in a, b and Dc the
     fit ends at a model near the stability limit (k (b - a)/Dc ~ 1, measured) whose event falls ~0.075 where the
-    record's falls ~0.087, its estimated noise ~8x the drawn one: fit_status events_missed, one warning line naming
-    the record and both falls; from the truth the same draws fit ok (noise within 15 %)."""
+    record's falls ~0.087, its estimated noise 2.5-9x the drawn one (the least squares' minimum from that start: ~8x
+    each before the offset parameter mu0 was solved exactly in every round, sweep.fit.levenberg): fit_status
+    events_missed, one warning line naming the record and both falls; from the truth the same draws fit ok (noise
+    within 15 %)."""
     from sweep.fit.verdict import FIT_STATUS
 
     t, mu, disp, k = one_event
@@ -182,7 +184,7 @@ def test_sawtooth_fits_that_miss_the_events_are_not_ok(one_event):
     for i in range(3):
         rec = Record(t, mu + NOISE * rng.standard_normal(t.size), displacement=disp, k=k, name=f"draw{i}")
         status, noise, lines = _fit(rec, {"a": 0.7 * A, "b": 0.7 * B, "Dc": 0.7e-5})
-        assert FIT_STATUS[status] == "events_missed" and noise > 4 * NOISE
+        assert FIT_STATUS[status] == "events_missed" and noise > 2 * NOISE
         line, = [m for m in lines if "events_missed" in m]
         assert f"record 'draw{i}' has 1 slip event(s)" in line
         status, noise, lines = _fit(rec, {"a": A, "b": B, "Dc": 1e-5})
