@@ -28,10 +28,10 @@ that depends on no parameter) is handled exactly: its Jacobian column is g (no f
 not posted), and after every forward solve it moves to its best value given the others, c = -sum r g / sum g^2
 (clipped to its bounds; r += c g, exactly the residuals there). The others' columns do not depend on it, so the
 forward-difference Jacobian of the trial set holds at the moved set too: 4 sets an iteration instead of 5 for a, b,
-Dc, mu0, 6 instead of 8 for the central Jacobian. With :attr:`Tolerances.resolved`, 100 records of their own times
-(benchmarks/fit_records.py's, from its start: a, b 20 % low, Dc 2x high, search "local") took 7.0 rounds each on
-average instead of 8.2 (at most 8 instead of 17), the least-squares stage 0.39 s instead of 0.50-0.54 s (A/B in one
-process); best values moved by < 5e-3 standard errors, interval ends by < 3e-4 of the half-widths.
+Dc, mu0, 6 instead of 8 for the central Jacobian. With :attr:`Tolerances.resolved` too, 100 records of their own
+times (benchmarks/fit_records.py's, from its start: a, b 20 % low, Dc 2x high, search "local") took 6.3 rounds each
+on average instead of 8.2 (at most 7 instead of 17), the least-squares stage 0.35 s instead of 0.53-0.60 s (A/B in
+one process, 3 runs each); best values moved by < 7e-3 standard errors, interval ends by < 5e-4 of the half-widths.
 
 Each task's numbers depend only on its own residuals: the sums over residuals (misfit, J^T r, J^T J, Broyden's
 update) run per task over its own residuals, in order, in compiled loops (sweep.fit.stack pads shorter problems with
@@ -59,12 +59,12 @@ FD_STEP = 1e-3
 @dataclass(frozen=True)
 class Tolerances:
     """Stopping rules: relative decrease of the misfit (``ftol``), relative step in scaled variables (``xtol``),
-    rounds at most (``max_rounds``), and ``resolved``: a trial that fails to lower the misfit ends the task where the
-    decrease the linear model still predicts is below resolved^2 noise variances (s^2 = misfit/(n - m)), i.e. where
-    the optimum lies within ~``resolved`` standard errors by the task's own Jacobian: the misfit there differs from
-    the minimum by less than the forward solves' own error resolves (with the engine at 10 rtol, benchmarks/
-    fit_records.py's records rose by ~2e-7 on every step of 3e-6 noise variances predicted, and ftol 1e-10 took
-    ~6 more rejected rounds to stop)."""
+    rounds at most (``max_rounds``), and ``resolved``: a task stops where the decrease that the undamped
+    (Gauss-Newton) step of its free parameters predicts, bounds ignored, is below resolved^2 noise variances (s^2 =
+    misfit/(n - m)), i.e. where its optimum lies within ~``resolved`` standard errors by its own Jacobian: closer, the
+    misfit's changes are the forward solves' own error (with the engine at 10 rtol, benchmarks/fit_records.py's
+    records rose by ~2e-7 on every trial past a predicted 3e-7, and ftol 1e-10 alone took ~6 rejected rounds more).
+    An optimum beyond a bound predicts a large decrease: the steps go on until the bound holds that parameter."""
 
     ftol: float
     xtol: float
@@ -233,6 +233,16 @@ def _predicted(g: np.ndarray, H: np.ndarray, dz: np.ndarray) -> np.ndarray:
     return -(2.0 * np.sum(g * dz, axis=1) + np.sum(np.sum(H * dz[:, None, :], axis=2) * dz, axis=1))
 
 
+def _gauss_newton_decrease(g: np.ndarray, H: np.ndarray, frozen: np.ndarray) -> np.ndarray:
+    """Decrease of the misfit that the linear model predicts for the undamped (Gauss-Newton) step of the parameters
+    not ``frozen``, bounds ignored, g^T H^+ g (pseudo-inverse: H may be singular): the distance to the model's
+    optimum in noise variances, large where the optimum lies beyond a bound (no stop there: the step goes on to it)."""
+    free = ~frozen
+    gf = np.where(free, g, 0.0)
+    Hf = np.where(free[:, :, None] & free[:, None, :], H, 0.0)
+    return np.sum(gf * np.einsum("tij,tj->ti", np.linalg.pinv(Hf), gf), axis=1)
+
+
 def _within_bounds(z, dz, lo, hi, g, H) -> tuple[np.ndarray, np.ndarray]:
     """(step, predicted decrease) kept inside the box: the step projected onto the box where that still decreases
     the linear model, else the step shortened along its direction until it meets the first bound (a Levenberg-
@@ -364,7 +374,8 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
                                   lo[a[again]], hi[a[again]], eye)
             dz[again], pred[again] = dz2, pred2
             tiny = np.max(np.abs(dz) / (np.abs(z) + tol.xtol), axis=1) <= tol.xtol
-        flat = pred <= tol.ftol * rss[a]
+        resolved = _gauss_newton_decrease(ga, Ha, frozen) <= tol.resolved ** 2 * rss[a] / np.maximum(n[a] - m, 1)
+        flat = (pred <= tol.ftol * rss[a]) | resolved
         stop = tiny | flat
         status[a[stop]] = np.where(tiny[stop], 3, 2)
         active[a[stop]] = False
@@ -405,9 +416,6 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         nu[acc] = 2.0
         lam[rej] *= nu[rej]
         nu[rej] *= 2.0
-        resolved = pred[~better] <= tol.resolved ** 2 * rss[rej] / np.maximum(n[rej] - m, 1)
-        status[rej[resolved]] = 2
-        active[rej[resolved]] = False
         done = decrease <= tol.ftol * rss[acc]
         rss[acc] = rss_t[better]
         status[acc[done]] = 2
