@@ -9,11 +9,13 @@ RODAS3 (:mod:`sweep.integrate.solvers.rosenbrock_step`) with the analytic Jacobi
 recorded is
 the cycle history below. Near steady sliding (xi' ~ 1, where the Hopf line is located) the explicit stepper stays
 in use. The driven scene's inertial points (``point_kernel(..., slaved=True)``) run on the slow manifold of the
-inertial model (w slaved to first order, :func:`sweep.integrate.models.driven.make_slaved_rhs`, the explicit stepper)
-wherever the inertial term is small (:data:`sweep.accuracy.SLAVED_INERTIA`): the stick phases and the decay after a
-slip, which took ~2/3 of a stick-slip cycle's steps as RODAS3 steps. A slip velocity beyond RUNAWAY_XI_DOT ends
-the point as ``runaway`` (the quasi-static model breaks down:
-m2 = 0 below the Hopf line overflows in finite time), before any exponent can overflow.
+inertial model (w slaved to second order, :func:`sweep.integrate.models.driven.make_slaved_rhs`, the explicit
+stepper) wherever the inertial term is small and the full system has relaxed onto it
+(:data:`sweep.accuracy.SLAVED_INERTIA`, :data:`sweep.accuracy.SLAVED_ENTRY`): the stick phases and the ends of each
+slip, where the full system's steps were RODAS3 ones or dp5 ones held at its stability limit (there at
+:data:`sweep.accuracy.SLAVED_TOL` x the stepper's tolerance). A slip velocity beyond RUNAWAY_XI_DOT ends the point as
+``runaway`` (the quasi-static model breaks down: m2 = 0 below the Hopf line overflows in finite time), before any
+exponent can overflow.
 
 The run starts from steady sliding with the spring stretched by ``perturbation`` (z(0) = perturbation, u(0) = 0).
 Each cycle of the oscillation is cut at its maximum of z (z' = 1 - e^w turns negative, located by Newton on exact
@@ -57,7 +59,9 @@ from ..accuracy import (
     NEUTRAL_SPREAD,
     NEUTRAL_START,
     REBOUND,
+    SLAVED_ENTRY,
     SLAVED_INERTIA,
+    SLAVED_TOL,
     STATIONARY_TOL,
     STIFF_SWITCH,
     W_RUNAWAY,
@@ -290,11 +294,11 @@ def _slaved_parts(law: str):
 @njit(inline="always", fastmath=FAST, error_model="numpy")
 def _inertia_size(y, p):
     """The inertial term against the slow manifold's bounds (:data:`SLAVED_INERTIA`): max(-P/low, P/high,
-    g e^w/low) with P = gamma xi''/A = balance - w at the inertial state y = (z, u, w); the slaved form holds where
+    g e^w/slow) with P = gamma xi''/A = balance - w at the inertial state y = (z, u, w); the slaved form holds where
     this is <= 1."""
     balance = p.k * y[0] - y[1] * (p.a + p.b * y[1]) - y[1]
-    low, high = SLAVED_INERTIA
-    return max((y[2] - balance) / low, (balance - y[2]) / high, p.g * math.exp(min(y[2], EXP_MAX)) / low)
+    low, high, slow = SLAVED_INERTIA
+    return max((y[2] - balance) / low, (balance - y[2]) / high, p.g * math.exp(min(y[2], EXP_MAX)) / slow)
 
 
 def _make_simulate(law: str, with_inertia: bool, slaved: bool = False):
@@ -344,7 +348,7 @@ def _make_simulate(law: str, with_inertia: bool, slaved: bool = False):
             else:
                 done, lw_fsal = advance(stiff, y, h, p, K, ys, y_new, err_v, work)
             steps += 1
-            scale = rtol * _largest(size, y_new)
+            scale = (SLAVED_TOL * rtol if on_manifold else rtol) * _largest(size, y_new)
             err = _largest(0.0, err_v) / scale if done else math.nan
             if not err <= 1.0:  # rejected (NaN included: a stage beyond the exponent clamp, a singular matrix)
                 h *= rejected_factor(I_CONTROLLER, err, q)
@@ -405,11 +409,17 @@ def _make_simulate(law: str, with_inertia: bool, slaved: bool = False):
             for m in range(n):
                 y[m] = y_new[m]
             tau += h
-            if slaved:  # onto the slow manifold where inertia is small, back to the full system past twice that
+            if slaved:  # onto the slow manifold where inertia is small and the full system is on it (w within
+                # SLAVED_ENTRY of the manifold's: the fast mode has relaxed, and the expansion holds there), back to
+                # the full system past twice the bounds
                 inertia = _inertia_size(y, p)
-                if on_manifold != (inertia <= (2.0 if on_manifold else 1.0)):
+                if on_manifold:
+                    switch = inertia > 2.0
+                else:
+                    switch = inertia <= 1.0 and abs(rhs_s(y, p, dyt) - y[2]) <= SLAVED_ENTRY * rtol * size
+                if switch:
                     on_manifold = not on_manifold
-                    if on_manifold:  # w onto the manifold (moves by O(inertia^2))
+                    if on_manifold:  # w onto the manifold (moves by <= SLAVED_ENTRY x the stepper's tolerance)
                         y[2] = rhs_s(y, p, dy)
                     else:  # w is the manifold's: the full system starts without an initial layer
                         rhs(y, p, dy)

@@ -119,7 +119,7 @@ def test_inertial_stick_slip_with_stiff_stick_phases_matches_scipy_radau(slaved)
     """Deep stick-slip with inertia at gamma/A = 1e-2 (chi = mu1/2, m2 > 0): the stick phases are stiff (rate
     A/(gamma xi'), xi' down to ~e^-10), where the kernel switches to RODAS3. The limit cycle's amplitude and period
     agree with scipy's Radau (analytic Jacobian, rtol 1e-9) on the same equations in tau; also where the kernel
-    runs the stick phases on the slow manifold (``slaved``: w = ln xi' slaved to first order in the inertial term,
+    runs the stick phases on the slow manifold (``slaved``: w = ln xi' slaved to second order in the inertial term,
     sweep.accuracy.SLAVED_INERTIA).
 
     Reference tolerance: Radau at rtol 1e-9 (29k steps) gives the amplitude within 7e-13 relative of rtol 1e-10
