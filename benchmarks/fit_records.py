@@ -166,7 +166,7 @@ def main(argv=None) -> None:
     ap.add_argument("--out", default=str(HERE / "results" / "fit_records.json"))
     args = ap.parse_args(argv)
     n_rec, repeats = (5, 1) if args.quick else (100, args.repeats)
-    load0 = common.loadavg()
+    load0, t_start = common.loadavg(), time.perf_counter()
     rng = np.random.default_rng(0)
     t = np.sort(np.concatenate(([0.0], rng.uniform(0.0, 60.0, 999))))
     mu, disp = record_reference(*TRUE, K, list(V), list(DUR), t)
@@ -270,8 +270,8 @@ def main(argv=None) -> None:
                                     for n, f in zip(free, fisher)},
         "targets": {"one_record_s": 0.5, "hundred_records_s": 10.0, "speedup": 50.0},
     }
-    Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
-    print(json.dumps({k: v for k, v in result.items() if k not in ("machine", "versions")}, indent=1))
+    common.write_result(result, Path(args.out), t_start, print_table=lambda r: print(json.dumps(
+        {k: v for k, v in r.items() if k not in ("machine", "versions")}, indent=1)))
 
 
 if __name__ == "__main__":
