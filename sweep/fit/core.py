@@ -135,7 +135,12 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
         say(f"least squares of {len(problems)} problem(s) from the start (search = local: no global stage)")
     t1 = time.perf_counter()
     stack = stack.with_settings(rtol, estimates=False)
-    fits = refine_all(stack, [g.theta for g in globals_] if globals_ else [space.start] * len(problems))
+    theta0 = [g.theta for g in globals_] if globals_ else [space.start] * len(problems)
+    if records:  # a stick-slip record's starts in the basin of its slip events (sweep.fit.event_fit)
+        from .event_fit import event_start
+
+        theta0 = event_start(stack, theta0, space.start if globals_ else None)
+    fits = refine_all(stack, theta0)
     rounds["least_squares"], seconds["least_squares"] = stack.rounds, time.perf_counter() - t1
     unsolved = [f.residuals == MODEL_FAILED if f.failures else np.zeros(f.residuals.size, bool) for f in fits]
     engine_error = _check_engine_error(stack.with_settings(rtol, estimates=True), fits, progress,
