@@ -5,7 +5,10 @@
 
 The grid is the issue's: preset sample2; V 20 values log-spaced over 0.1..5 um/s; K/M 40 values log-spaced from
 0.3 x the smallest to 3 x the largest quasi-static (K/M)_c over those V (--quick: every 4th K/M and V). Models
-"quasistatic" and "auto", 1 thread and (quasi-static) all threads.
+"quasistatic" and "auto", 1 thread and (quasi-static) all threads. The deep inertial stick-slip grid (model
+"inertial", 1 thread): V 10 values log-spaced over 0.1..5 um/s, K/M 10 values log-spaced over 0.05..0.5 x the
+smallest (K/M)_c over those V (0.0034..0.5 x each V's own; gamma/A 2e-7..5e-4), every point stick-slip (--quick:
+every 2nd K/M and V).
 
 Each tree (``--base``, default /tmp/driven_base, a ``git worktree add`` of the commit before the lanes; and the tree
 this script is in) is measured in fresh subprocesses of this script (``--worker``) with PYTHONPATH = the tree (the
@@ -40,7 +43,7 @@ DEFAULT_OUT = HERE / "results" / "driven_lanes.json"
 DEFAULT_BASE = Path("/tmp/driven_base")
 FIELDS = ("regime", "status", "growth_rate", "period", "amplitude", "cycles", "steps")
 REGIMES = ("steady", "stick_slip", "neutral", "runaway", "undecided")
-TARGETS = {"quasistatic_1t": 10.0, "auto_1t": 20.0}
+TARGETS = {"quasistatic_1t": 10.0, "auto_1t": 20.0, "deep_inertial_1t": 20.0}
 
 
 def worker(args) -> None:
@@ -53,11 +56,15 @@ def worker(args) -> None:
 
     assert Path(sweep.__file__).resolve().is_relative_to(Path(args.tree).resolve()), sweep.__file__
     p = sweep.presets["sample2"]
-    V = np.logspace(-7, np.log10(5e-6), 20)
+    deep = args.grid == "deep"
+    V = np.logspace(-7, np.log10(5e-6), 10 if deep else 20)
     kc = physics.hopf_K_over_M(V, p.A, p.m1, p.m2, p.D0, p.V0)
-    KM = np.logspace(np.log10(0.3 * np.nanmin(kc)), np.log10(3.0 * np.nanmax(kc)), 40)
+    if deep:
+        KM = np.logspace(np.log10(0.05 * np.nanmin(kc)), np.log10(0.5 * np.nanmin(kc)), 10)
+    else:
+        KM = np.logspace(np.log10(0.3 * np.nanmin(kc)), np.log10(3.0 * np.nanmax(kc)), 40)
     if args.quick:
-        KM, V = KM[::4], V[::4]
+        KM, V = (KM[::2], V[::2]) if deep else (KM[::4], V[::4])
     scene = sweep.Scene(protocol="driven", params=p, K_over_M=KM, V=V, model=args.model)
     numba.set_num_threads(args.threads)
     plan = sweep.make_plan(scene)
@@ -75,10 +82,12 @@ def worker(args) -> None:
                       "numba_threads": numba.config.NUMBA_NUM_THREADS, "sweep": sweep.__file__}))
 
 
-def run_worker(tree: Path, model: str, threads: int, quick: bool, timed: int, save: Path, cache: Path) -> dict:
+def run_worker(tree: Path, model: str, threads: int, grid: str, quick: bool, timed: int, save: Path,
+               cache: Path) -> dict:
     env = {**os.environ, "PYTHONPATH": str(tree), "NUMBA_CACHE_DIR": str(cache)}
     cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", "--tree", str(tree), "--model", model,
-           "--threads", str(threads), "--timed-calls", str(timed), "--save", str(save)] + (["--quick"] * quick)
+           "--threads", str(threads), "--grid", grid, "--timed-calls", str(timed), "--save", str(save)]
+    cmd += ["--quick"] * quick
     proc = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=tempfile.gettempdir())
     if proc.returncode:
         raise RuntimeError(f"worker failed ({' '.join(cmd)}):\n{proc.stderr[-4000:]}")
@@ -116,6 +125,7 @@ def main(argv=None) -> None:
     ap.add_argument("--tree", help=argparse.SUPPRESS)
     ap.add_argument("--model", default="quasistatic", help=argparse.SUPPRESS)
     ap.add_argument("--threads", type=int, default=1, help=argparse.SUPPRESS)
+    ap.add_argument("--grid", default="issue", choices=("issue", "deep"), help=argparse.SUPPRESS)
     ap.add_argument("--save", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.worker:
@@ -128,24 +138,25 @@ def main(argv=None) -> None:
     trees = {"base": base, "new": ROOT}
     repeats, timed = (1, 1) if args.quick else (args.repeats, args.timed_calls)
     n_all = os.cpu_count() or 1
-    configs = [("quasistatic", 1), ("quasistatic", n_all), ("auto", 1)]
+    configs = [("quasistatic", 1, "issue"), ("quasistatic", n_all, "issue"), ("auto", 1, "issue"),
+               ("inertial", 1, "deep")]
     work = Path(tempfile.mkdtemp(prefix="driven_lanes_"))
     caches = {name: Path(tempfile.gettempdir()) / f"driven_lanes_cache_{name}_{abs(hash(str(t))) % 10**8}"
               for name, t in trees.items()}
     figures = {}
     numbers = {}
-    for model, threads in configs:
-        key = f"{model}_{threads}t"
+    for model, threads, grid in configs:
+        key = f"{model}_{threads}t" if grid == "issue" else f"{grid}_{model}_{threads}t"
         rows = {name: [] for name in trees}
         for _ in range(repeats):
             for name, tree in trees.items():
                 save = work / f"{key}_{name}.npz"
                 load0 = common.loadavg()
-                r = run_worker(tree, model, threads, args.quick, timed, save, caches[name])
+                r = run_worker(tree, model, threads, grid, args.quick, timed, save, caches[name])
                 rows[name].append({**r, "loadavg": [load0, common.loadavg()]})
         best = {name: min(min(r["walls"]) for r in rows[name]) for name in trees}
         n = rows["new"][0]["points"]
-        figures[key] = {"points": n, "threads": threads, "rows": rows,
+        figures[key] = {"points": n, "threads": threads, "model": model, "grid": grid, "rows": rows,
                         **{f"{name}_points_per_s_per_core": n / (best[name] * threads) for name in trees},
                         "speedup_new_over_base": best["base"] / best["new"]}
         outs = {name: dict(np.load(work / f"{key}_{name}.npz")) for name in trees}
@@ -163,7 +174,9 @@ def main(argv=None) -> None:
                                       text=True).stdout.strip(),
         "new_commit": common.git_commit(), "new_tree_dirty": common.sweep_tree_dirty(),
         "settings": {"repeats": repeats, "timed_calls": timed, "grid": "sample2, V 20 x K/M 40 (issue 35)"
-                     + (", every 4th" if args.quick else "")},
+                     + (", every 4th" if args.quick else ""),
+                     "deep_grid": "sample2, V 10 x K/M 10 (0.05..0.5 x the smallest (K/M)_c), model inertial"
+                     + (", every 2nd" if args.quick else "")},
         "figures": figures, "numbers": numbers,
         "targets": {k: {"target": v, "speedup": figures[k]["speedup_new_over_base"],
                         "met": figures[k]["speedup_new_over_base"] >= v} for k, v in TARGETS.items()},
