@@ -29,7 +29,7 @@ def add_fit_command(add) -> None:
     fit.add_argument("-o", "--output", type=Path, default=DEFAULT_OUT, help=f"netCDF output (default {DEFAULT_OUT})")
     fit.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
     fit.add_argument("--overwrite", action="store_true", help="replace existing output files")
-    fit.add_argument("--search", default=None,
+    fit.add_argument("--search", default=None, metavar="{global,local}",
                      help="global: a coarse grid over the bounds first (default); local: the least squares from the "
                           "start alone (known start, many records, refits: no guard against local minima); "
                           "overrides the file's search")
