@@ -61,11 +61,8 @@ def test_sawtooth_records_against_newtons_law(Dc, g):
 def test_a_sawtooth_record_fitted_from_the_truth():
     """Six noise draws of a one-event sawtooth record (Dc = 10 um, k = 250/m, 600 samples, noise 2e-4), a, b, Dc,
     mu0 free, k fixed, noise estimated, started at the truth: the 95 % profile intervals cover the truth in [0.85, 1]
-    of the 24 cases and the noise is recovered within 15 %. Not tested because it fails (measured): from a start
-    30 % off, half of the draws end in a stable model through the sawtooth (estimated noise ~20x the drawn one;
-    fit_status events_missed since the tests below); with 3 events, from 2 % off, none; and the fit drops the
-    parameter sets whose status is error_above_tol, which a multi-event sawtooth's truth can have (docs/physics.md
-    7b)."""
+    of the 24 cases and the noise is recovered within 15 %. From starts 30 % off: tests/fit/
+    test_records_sawtooth_fit.py (the event stage, sweep/fit/event_fit.py)."""
     t, mu, disp, k = sawtooth(1e-5, 9.81, 600, seed=3, load=LoadHistory(STEP.velocities, np.array([5.0, 20.0])))
     truth = {"a": A, "b": B, "Dc": 1e-5, "mu0": MU0}
     rng = np.random.default_rng(21)
