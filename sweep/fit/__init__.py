@@ -21,9 +21,9 @@ _WHERE = {"fit": "core", "Curve": "data", "RelaxedSlips": "data", "read_data": "
           "Record": "records", "read_record": "records"}
 
 
-_SUBMODULES = ("checks", "cli", "config", "core", "data", "events", "forward", "globalstage", "levenberg", "local",
-               "outcome", "plot", "problem", "profiles", "read", "record_forward", "records", "result", "segments",
-               "space", "stack", "uncertainty", "units", "verdict")
+_SUBMODULES = ("checks", "cli", "config", "core", "data", "event_fit", "events", "forward", "globalstage", "levenberg",
+               "local", "outcome", "plot", "problem", "profiles", "read", "record_forward", "records", "result",
+               "segments", "space", "stack", "uncertainty", "units", "verdict")
 """The parts of the package, importable as attributes (``sweep.fit.core``) without an explicit import first."""
 
 
