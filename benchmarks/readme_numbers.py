@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 README = ROOT / "README.md"
 BENCHMARKS_MD = ROOT / "docs" / "benchmarks.md"
-PAGES = [README, *(ROOT / "docs" / name for name in ("index.md", "user-guide.md", "cli.md", "physics.md"))]
+PAGES = [README, *(ROOT / "docs" / name for name in ("index.md", "user-guide.md", "cli.md", "physics.md", "fit.md"))]
 """The pages whose marked spans are filled (docs/benchmarks.md is rendered whole)."""
 SPAN = re.compile(r"<!-- n:(?P<key>[\w.]+) -->(?P<text>.*?)<!-- /n -->")
 
@@ -101,6 +101,14 @@ NUMBERS: dict[str, Callable[[], str]] = {
     "auto_largest_quasistatic_error": lambda: _sci(
         _auto()["model_error_vs_inertial_rtol_1e-6"]["auto"]["max_true_error_on_quasistatic_points"]),
     "cold_process_s": lambda: f"{_json('throughput')['cold_start']['process_wall_s_median']:.1f}",
+    "fit_record_one_s": lambda: f"{_json('fit_records')['one_record_warm_s']:.2f}",
+    "fit_record_local_s": lambda: f"{_json('fit_records')['one_record_local_s']:.3f}",
+    "fit_records_shared_s": lambda: f"{_json('fit_records')['hundred_records_s']:.1f}",
+    "fit_records_own_s": lambda: f"{_json('fit_records')['hundred_records_own_times_s']:.1f}",
+    "fit_records_own_local_s": lambda: f"{_json('fit_records')['hundred_records_own_times_local_s']:.1f}",
+    "fit_records_scipy_s": lambda: f"{_json('fit_records')['scipy_least_squares_s']:.2f}",
+    "fit_records_local_one_x": lambda: _x(_json('fit_records')['speedup_local_one_record']),
+    "fit_records_local_per_record_x": lambda: f"{_json('fit_records')['speedup_local_per_record']:.0f}x",
     "cold_import_s": lambda: f"{_json('throughput')['cold_start']['import_only_process_wall_s_median']:.1f}",
 }
 """Key of a marked span -> its text, from the measurement."""
