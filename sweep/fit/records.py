@@ -329,6 +329,18 @@ def _next_agrees(lines: list[str], i: int, delimiter: str | None) -> bool:
     return True
 
 
+def _meta_line(text: str, meta: dict[str, tuple[str, str]], keep: bool = True) -> None:
+    """A ``key = value unit`` line (a comment's, or one above the header: also ``key: value unit``) into ``meta``
+    (lower-case key: (value, unit)); ``keep``: a key already there is replaced."""
+    key, eq, rest = text.partition("=")
+    if not eq and not keep:
+        key, eq, rest = text.partition(":")
+    key = key.strip().lower()
+    if eq and key and (keep or key not in meta):
+        parts = rest.split(None, 1)
+        meta[key] = (parts[0] if parts else "", parts[1].strip() if len(parts) > 1 else "")
+
+
 def _header(lines: list[str], where: str) -> _Header:
     """The header of a record file: comment lines (``#``, ``%``: ``# key = value unit`` kept as metadata), then lines
     that are not numbers (a title, the names, a units row), then the data, whose first row decides how columns are
@@ -342,16 +354,15 @@ def _header(lines: list[str], where: str) -> _Header:
         if not s:
             continue
         if s[0] in "#%":
-            key, eq, rest = s[1:].partition("=")
-            if eq:
-                parts = rest.split(None, 1)
-                meta[key.strip().lower()] = (parts[0] if parts else "", parts[1].strip() if len(parts) > 1 else "")
+            _meta_line(s[1:], meta)
             continue
         d = _data_line(s)
         if d is not False and _next_agrees(lines, i, d):
             body_at, delimiter = i, d
             break
         pre.append(s)
+    for s in pre[:-1]:  # 'Normal stress = 12.5 MPa' above the header, as a test program writes its settings
+        _meta_line(s, meta, keep=False)
     if not pre:
         raise InputError(f"{where}: no header naming the columns (time, load-point displacement, mu, ...)")
     if body_at == len(lines):
@@ -399,9 +410,15 @@ def _rows(lines: list[str], h: _Header, where: str) -> tuple[np.ndarray, dict[in
             return data, {}
     except ValueError:
         pass
-    rows = []
+    rows, header = [], [_key(n) for n in h.names]
     for i, s in enumerate(body):
         fields = _split(s, d)
+        if not any(_is_number(f) or _STAMP.match(f) for f in fields):  # words only: a marker line or a header again
+            names = [_key(_UNIT_IN_NAME.sub(r"\1", f)) for f in fields]
+            if len(fields) == len(h.names) and names != header and not all(_unit_like(f) for f in fields):
+                raise InputError(f"{where}: data row {i + 1} is a header that differs from the first ({s!r}, first: "
+                                 f"{', '.join(h.names)}); split the file there")
+            continue  # 'Logger restarted', 'END', the same names or units again
         if len(fields) != len(h.names):
             last = " (the last line, cut short: remove it)" if i == len(body) - 1 else ""
             raise InputError(f"{where}: data row {i + 1} has {len(fields)} values, the header {len(h.names)} "
@@ -503,7 +520,8 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
             raise InputError(f"units: {role!r} is not a record column; use one of {list(ROLES)}")
     if "time" not in found:
         raise InputError(f"{where}: no time column among {names}; name it with columns={{'time': '<name>'}}")
-    if "mu" not in found and not {"shear", "normal"} <= found.keys():
+    normal = None if "mu" in found or "normal" in found or "shear" not in found else _header_normal(h.meta, where)
+    if "mu" not in found and not ({"shear", "normal"} <= found.keys() or normal):
         raise InputError(f"{where}: no friction column (mu, or shear and normal stress) among {names}; name it with "
                          f"columns={{'mu': '<name>'}}")
     if steps is None and "displacement" not in found and "velocity" not in found:
@@ -534,13 +552,18 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
     if "mu" in found:
         mu = col("mu")
     else:
-        kinds = {r: "force" if _unit_key(dict(units or {}).get(r) or h.units[found[r][0]] or found[r][1] or "")
-                 in FORCE else "stress" for r in ("shear", "normal")}
-        if kinds["shear"] != kinds["normal"]:
-            raise InputError(f"{where}: column {names[found['shear'][0]]!r} (shear) is a {kinds['shear']} and "
-                             f"{names[found['normal'][0]]!r} (normal) a {kinds['normal']}: friction is their ratio; "
-                             f"give both as stresses or both as forces")
-        mu = col("shear") / col("normal")
+        kind = lambda unit: "force" if _unit_key(unit or "") in FORCE else "stress"  # noqa: E731
+        shear = kind(dict(units or {}).get("shear") or h.units[found["shear"][0]] or found["shear"][1])
+        if normal is not None:
+            other, value = f"the header's {normal[0]!r}", normal[1]
+            kind_n = kind(normal[2])
+        else:
+            other, value = f"{names[found['normal'][0]]!r} (normal)", None
+            kind_n = kind(dict(units or {}).get("normal") or h.units[found["normal"][0]] or found["normal"][1])
+        if shear != kind_n:
+            raise InputError(f"{where}: column {names[found['shear'][0]]!r} (shear) is a {shear} and {other} a "
+                             f"{kind_n}: friction is their ratio; give both as stresses or both as forces")
+        mu = col("shear") / (col("normal") if value is None else value)
     if np.all(mu < 0):  # a shear load counted negative (a sign convention): friction is its magnitude
         mu = -mu
     if k is None and "k" in h.meta:
@@ -554,12 +577,38 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
     return rec if t_start is None and t_end is None else rec.window(t_start, t_end)
 
 
+def _header_normal(meta: Mapping[str, tuple[str, str]], where: str) -> tuple[str, float, str] | None:
+    """(key, value [Pa or N], unit) of a constant normal stress or load given in the header (``Normal stress = 12.5
+    MPa``, ``# sigma_n = 10 MPa``; the unit after the value or in brackets after the key), None where none is."""
+    for key, (value, unit) in meta.items():
+        m = _UNIT_IN_NAME.match(key)
+        name, unit = (m.group(1), unit or m.group(2)) if m else (key, unit)
+        if _role_of(_key(name), "normal")[0] or ("normal" in _key(name) and "disp" not in _key(name)):
+            unit = unit.split()[0] if unit else ""
+            try:
+                number = float(value.replace(",", ".") if value.count(",") == 1 else value)
+            except ValueError:
+                raise InputError(f"{where}: the header's {key!r} = {value!r} is not a number; the normal stress must "
+                                 f"be one (e.g. '{name} = 10 MPa')") from None
+            table = RECORD_UNITS["normal"]
+            if _unit_key(unit) not in table:
+                raise InputError(f"{where}: the header's {key!r} = {value} has unit {unit!r}; write it as '{name} = "
+                                 f"{value} <unit>', a unit from {sorted(table)}")
+            if not (np.isfinite(number) and number > 0):
+                raise InputError(f"{where}: the header's {key!r} = {value} must be > 0 (the normal stress)")
+            return key, number * table[_unit_key(unit)], unit
+    return None
+
+
 def is_record_file(path: str | os.PathLike) -> bool:
-    """Whether a text file's header names a time and a friction column (mu, or shear and normal stress): a record,
+    """Whether a text file's header names a time and a friction column (mu, or shear and normal stress, the normal
+    stress a column or a constant in the header): a record,
     not a relaxation curve or relaxed slips (sweep.fit.read.read_data hands it to :func:`read_record`). Reads the
     first :data:`HEADER_LINES` lines only."""
     try:
-        found = _find(_header(_lines(Path(path), HEADER_LINES), "").names, None, "")
+        h = _header(_lines(Path(path), HEADER_LINES), "")
+        found = _find(h.names, None, "")
+        normal = "normal" in found or ("shear" in found and _header_normal(h.meta, "") is not None)
     except (InputError, OSError, ValueError):
         return False
-    return "time" in found and ("mu" in found or {"shear", "normal"} <= found.keys())
+    return "time" in found and ("mu" in found or ("shear" in found and normal))
