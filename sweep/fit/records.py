@@ -348,13 +348,14 @@ def _header(lines: list[str], where: str) -> _Header:
     where the last is a units row (as many fields, each a unit or a unit-less mark such as a row counter's '.', at
     least one a unit a record column takes)."""
     meta: dict[str, tuple[str, str]] = {}
-    pre, delimiter, body_at = [], None, len(lines)
+    pre, comments, delimiter, body_at = [], [], None, len(lines)
     for i, line in enumerate(lines):
         s = line.strip()
         if not s:
             continue
         if s[0] in "#%":
             _meta_line(s[1:], meta)
+            comments.append(s.lstrip("#% "))
             continue
         d = _data_line(s)
         if d is not False and _next_agrees(lines, i, d):
@@ -363,11 +364,13 @@ def _header(lines: list[str], where: str) -> _Header:
         pre.append(s)
     for s in pre[:-1]:  # 'Normal stress = 12.5 MPa' above the header, as a test program writes its settings
         _meta_line(s, meta, keep=False)
+    if body_at == len(lines) and pre:
+        raise InputError(f"{where}: a header but no data rows")
+    width = len(_split(lines[body_at].strip(), delimiter)) if body_at < len(lines) else 0
+    if not pre and comments and width and len(_split(comments[-1], delimiter)) == width:
+        pre = comments[-1:]  # the names as a comment line ('# Time (s)  LP_Disp (um)  mu', a gnuplot-ready export)
     if not pre:
         raise InputError(f"{where}: no header naming the columns (time, load-point displacement, mu, ...)")
-    if body_at == len(lines):
-        raise InputError(f"{where}: a header but no data rows")
-    width = len(_split(lines[body_at].strip(), delimiter))
 
     def fields(line: str) -> list[str]:
         """The header's fields: as the rows are separated, else by blanks (above tab-separated rows), else by runs of
@@ -481,7 +484,7 @@ def _find(names: list[str], columns: Mapping[str, str] | None, where: str) -> di
 
 def _si(where: str, role: str, name: str, unit: str | None) -> float:
     table = RECORD_UNITS[role]
-    if unit is None:
+    if unit is None or (role == "mu" and _key(unit) in _ALIASES["mu"]):  # 'Friction (μ)': the symbol as its unit
         if role == "mu":
             return 1.0
         raise InputError(f"{where}: column {name!r} ({role}) has no unit; write it as '{name} [unit]' or give "

@@ -122,3 +122,17 @@ def test_sweep_fit_cli_reads_settings_from_the_header_block(tmp_path):
         assert int(ds["fit_status"][0]) == 0
         z = _z(ds)
         assert all(abs(v) < 4 for v in z.values()), z
+
+
+@pytest.mark.parametrize("head", [
+    ["# Time (s)\tLP_Disp (um)\tmu"],  # the names as a comment line (a plotting program's export)
+    ["% recorded by DAQ 3", "# Time (s)\tLP_Disp (um)\tFriction (μ)"],  # and friction's symbol as its unit
+    ["Time (s)\tLP_Disp (um)\tFriction [µ]"],
+])
+def test_names_in_a_comment_line_and_the_mu_symbol_as_a_unit(tmp_path, labs, head):
+    lab = labs["steps"]
+    rows = [f"{a:.4f}\t{d * 1e6:.3f}\t{m:.6f}" for a, d, m in zip(lab.t, lab.disp, lab.mu)]
+    rec = read_record(_write(tmp_path / "c.txt", head + rows))
+    np.testing.assert_allclose(rec.t, lab.t, atol=1e-5)
+    np.testing.assert_allclose(rec.mu, lab.mu, atol=1e-6)
+    np.testing.assert_allclose(rec.displacement, lab.disp, atol=1e-9)
