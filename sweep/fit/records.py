@@ -258,6 +258,10 @@ _STAMP = re.compile(r"^(\d{4}-\d{2}-\d{2}[ T])?\d{1,2}:\d{2}(:\d{2}([.,]\d+)?)?$
 """A date and clock time (ISO 8601, a blank or T between them) or a clock time: a DAQ's time stamp."""
 
 
+_CELL_ERROR = re.compile(r"#(N/A|DIV/0!|VALUE!|REF!|NUM!|NAME\?|NULL!)")
+"""A spreadsheet's error value (#N/A, #DIV/0!, ...): a row that starts with one is a data row, not a comment."""
+
+
 def _number(text: str) -> float:
     """A value of a data row: a number (a decimal comma too), NaN for '' or 'nan'; ValueError otherwise."""
     if text.lower() in ("", "nan"):
@@ -396,9 +400,10 @@ def _header(lines: list[str], where: str) -> _Header:
 
 def _rows(lines: list[str], h: _Header, where: str) -> tuple[np.ndarray, dict[int, str]]:
     """The data rows (n, columns): numpy's reader, or column by column where it fails (to name a bad row, to read
-    time stamps as seconds); and the columns that are not numbers ({index: the first such value}: NaN in the data,
-    refused only where the record uses them)."""
-    body = [s for s in (line.strip() for line in lines[h.body:]) if s and s[0] not in "#%"]
+    time stamps as seconds, to skip lines of words only: a marker, the header again); and the columns that are not
+    numbers ({index: (the first such value, its data row)}: NaN in the data, refused only where the record uses
+    them)."""
+    body = [s for s in (line.strip() for line in lines[h.body:]) if s and (s[0] not in "#%" or _CELL_ERROR.match(s))]
     d = h.delimiter
     if d is not None and body and body[0].endswith(d):  # a trailing delimiter on every row
         body = [s.rstrip(d + " ") for s in body]
@@ -413,11 +418,11 @@ def _rows(lines: list[str], h: _Header, where: str) -> tuple[np.ndarray, dict[in
             return data, {}
     except ValueError:
         pass
-    rows, header = [], [_key(n) for n in h.names]
+    rows, at, header = [], [], [_key(n) for n in h.names]
     for i, s in enumerate(body):
         fields = _split(s, d)
-        if not any(_is_number(f) or _STAMP.match(f) for f in fields):  # words only: a marker line or a header again
-            names = [_key(_UNIT_IN_NAME.sub(r"\1", f)) for f in fields]
+        if not any(_is_number(f) or _STAMP.match(f) or _CELL_ERROR.match(f) for f in fields):  # words only:
+            names = [_key(_UNIT_IN_NAME.sub(r"\1", f)) for f in fields]  # a marker line, a header again
             if len(fields) == len(h.names) and names != header and not all(_unit_like(f) for f in fields):
                 raise InputError(f"{where}: data row {i + 1} is a header that differs from the first ({s!r}, first: "
                                  f"{', '.join(h.names)}); split the file there")
@@ -427,6 +432,7 @@ def _rows(lines: list[str], h: _Header, where: str) -> tuple[np.ndarray, dict[in
             raise InputError(f"{where}: data row {i + 1} has {len(fields)} values, the header {len(h.names)} "
                              f"({', '.join(h.names)}){last}")
         rows.append(fields)
+        at.append(i + 1)
     data, text = np.full((len(rows), len(h.names)), np.nan), {}
     for j, column in enumerate(zip(*rows)):
         try:
@@ -438,7 +444,8 @@ def _rows(lines: list[str], h: _Header, where: str) -> tuple[np.ndarray, dict[in
             try:
                 data[:, j] = _seconds(list(column))
             except ValueError:
-                text[j] = next(f for f in column if not _STAMP.match(f) and not _is_number(f))
+                r = next(r for r, f in enumerate(column) if not _STAMP.match(f) and not _is_number(f))
+                text[j] = (column[r], at[r])
     return data, text
 
 
@@ -534,7 +541,9 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
     def col(role):
         j, unit = found[role]
         if j in text:
-            raise InputError(f"{where}: column {names[j]!r} ({role}) is not numbers (e.g. {text[j]!r})")
+            raise InputError(f"{where}: column {names[j]!r} ({role}) is not numbers (e.g. {text[j][0]!r}, data row "
+                             f"{text[j][1]}); remove such rows, or name the right column with columns={{{role!r}: "
+                             f"'<name>'}}")
         unit = dict(units or {}).get(role, h.units[j] if h.units[j] is not None else unit)
         if role == "time" and unit is None and _STAMP.match(_split(lines[h.body].strip(), h.delimiter)[j]):
             unit = "s"  # time stamps, read as seconds

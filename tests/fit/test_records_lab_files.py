@@ -136,3 +136,16 @@ def test_names_in_a_comment_line_and_the_mu_symbol_as_a_unit(tmp_path, labs, hea
     np.testing.assert_allclose(rec.t, lab.t, atol=1e-5)
     np.testing.assert_allclose(rec.mu, lab.mu, atol=1e-6)
     np.testing.assert_allclose(rec.displacement, lab.disp, atol=1e-9)
+
+
+@pytest.mark.parametrize("row, needle", [
+    ("#N/A,3.0,0.6", "column 'time' (time) is not numbers (e.g. '#N/A', data row 31)"),  # not a comment line
+    ("3.0,#DIV/0!,0.6", "column 'lp_disp' (displacement) is not numbers (e.g. '#DIV/0!', data row 31)"),
+    ("#N/A,#N/A,#N/A", "column 'time' (time) is not numbers (e.g. '#N/A', data row 31)"),
+    ("3.0,3.0,overload", "column 'mu' (mu) is not numbers (e.g. 'overload', data row 31)"),
+])
+def test_a_spreadsheet_error_or_a_word_in_a_used_column_is_refused_naming_its_row(tmp_path, row, needle):
+    with pytest.raises(InputError) as info:
+        read_record(_write(tmp_path / "e.csv", ["time (s),lp_disp (um),mu", *ROWS[:30], row, *ROWS[31:]]))
+    msg = str(info.value)
+    assert needle in msg and "remove such rows" in msg and "\n" not in msg, msg

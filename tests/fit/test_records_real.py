@@ -206,7 +206,7 @@ def test_spreadsheet_export_quotes_time_stamps_and_a_text_column(tmp_path, vstep
     np.testing.assert_allclose(rec.t - rec.t[0], t - t[0], atol=1e-6)
     np.testing.assert_allclose(rec.displacement, disp, atol=1e-11)
     np.testing.assert_allclose(rec.mu, mu, atol=1e-6)
-    with pytest.raises(InputError, match=r"column 'Status' \(mu\) is not numbers \(e.g. 'HOLD\?'\)"):
+    with pytest.raises(InputError, match=r"column 'Status' \(mu\) is not numbers \(e.g. 'HOLD\?', data row 1\)"):
         read_record(tmp_path / "export.csv", columns={"time": "Timestamp", "mu": "Status"})
 
 
