@@ -5,13 +5,13 @@ event in time flat-then-cliff (the samples across a fall change only as the fall
 model whose event is a few samples off is lowered most by shrinking the event, towards a stable model through the
 sawtooth. Measured on a one-event sawtooth (600 samples, noise 2e-4, a, b, Dc, mu0 free, six draws from starts 30 %
 off, tests/fit/test_records_sawtooth_fit.py): the plain fit ended ok with covering intervals on 1 of 6 (4
-events_missed, 1 not_converged); with this stage on 5 of 6 (one events_missed: a local minimum with the record's
-event, serially correlated residuals, sweep.fit.events), 2.7-5.1 s a fit instead of 0.5-5.7 s. From the same
-draws' starts: 10 starts (the box around the given start alone) gave 4 of 6; plain least squares from 9 starts (a
-box of factor 1.3, no aligned stage, search local) 4 of 6, and two fits ok at a wrong local minimum (noise 1.18x and
-2.42x; the serial-correlation check came after). Not reached: a three-event
-sawtooth (the plain misfit's basin is ~0.3 % wide in Dc: 0 of 6, all events_missed), and a record sampled at two
-rates with a gap (0 of 4, not_converged).
+events_missed, 1 not_converged); with this stage on 6 of 6, 2.5-3.1 s a fit instead of 0.5-5.7 s (2 shared cores). From
+the same draws' starts: 10 starts (boxes in a and Dc only) gave 5 of 6 (one events_missed: a local minimum with the
+record's event, serially correlated residuals, sweep.fit.events), the start's box alone 4 of 6; plain least squares
+from 9 starts (a box of factor 1.3, no aligned stage, search local) 4 of 6, and two fits ok at a wrong local minimum
+(noise 1.18x and 2.42x; before the serial-correlation check). Not reached: a three-event sawtooth (the plain misfit's
+basin is ~0.3 % wide in Dc: 0 of 6, all events_missed), and a record sampled at two rates with a gap (of 4 draws 3
+not_converged and 1 events_missed, at noise 1.05-1.7x).
 
 What: for the problems whose records show slip events (sweep.fit.events.slip_events), before the least squares
 (sweep.fit.core), :func:`event_start` runs, from several starts each, a least squares of event-aligned residuals
@@ -29,7 +29,7 @@ residuals (the likelihood of the data). The aligned residuals of a record, in it
   an event the model lacks counts as one at the record's end (time) with no fall term (both continuous as an event
   leaves through the end).
 
-Starts: the global stage's best point and the given start, each also multiplied by SPREAD^(+-1) in every positive
+Starts: the global stage's best point and the given start, each also multiplied by SPREAD^(+-1) in every free
 parameter but the offset (the corners of a box; 2 (2^3 + 1) = 18 starts for a, b, Dc, mu0 free), all of them as
 tasks of one vectorised least squares (sweep.fit.levenberg). Records without events take none of this (their fits
 are identical, measured on 20 velocity-step records; the cost is one event count per record, ~0.2 ms per 1,000
@@ -45,15 +45,18 @@ import numpy as np
 
 from .events import event_scale, event_times, slip_events
 from .levenberg import HOLD, Tolerances, solve
-from .space import ParamSpace
 from .stack import ProblemStack
 
-__all__ = ["ALIGNED", "SPREAD", "AlignedStack", "event_problems", "event_start"]
+__all__ = ["ALIGNED", "SPREAD", "STAGE_RTOL", "AlignedStack", "event_problems", "event_start"]
 
 ALIGNED = Tolerances(ftol=1e-6, xtol=1e-5, max_rounds=60)
 """Stopping rules of the aligned least squares: it only needs to land in the plain misfit's basin."""
 SPREAD = 1.5
 """Factor of the box of starts around the given start (module docstring)."""
+STAGE_RTOL = 1e-4
+"""Engine rtol of the stage's forward solves (at least; the global stage's default): it only finds the basin, and the
+fit's least squares follow at the fit's rtol. Measured on the one-event sawtooth from 30 % off (six draws, one after
+the other): 2.5-3.1 s a fit against 4.3-9.4 s with the stage at the fit's rtol (1e-6), the same fits (6 of 6 ok)."""
 
 
 class _Events:
@@ -147,9 +150,10 @@ def event_problems(stack: ProblemStack) -> np.ndarray:
                      if any(slip_events(d.mu, event_scale(d.t, d.mu)) for d in pr.data)], dtype=np.intp)
 
 
-def _box(space: ParamSpace, theta: np.ndarray, spread: float) -> list[np.ndarray]:
-    """``theta`` times spread^(+-1) in every positive free parameter but the offset (the corners of a box)."""
-    cols = [j for j in range(space.p) if space.log[j]]
+def _box(theta: np.ndarray, spread: float, offset: int | None) -> list[np.ndarray]:
+    """``theta`` times spread^(+-1) in every parameter but the ``offset`` one (the corners of a box; clipped to the
+    bounds by the caller)."""
+    cols = [j for j in range(theta.size) if j != offset]
     out = []
     for signs in itertools.product((-1.0, 1.0), repeat=len(cols)):
         th = theta.copy()
@@ -169,13 +173,15 @@ def event_start(stack: ProblemStack, theta0: Sequence[np.ndarray], start: np.nda
     if not qs.size:
         return theta
     sp = stack.space
-    starts = [[theta[q]] + _box(sp, theta[q], spread) + ([] if start is None else
-              [np.asarray(start, float)] + _box(sp, np.asarray(start, float), spread)) for q in qs]
+    given = [] if start is None else [np.asarray(start, dtype=float)]
+    starts = [[s for c in [theta[q]] + given for s in [c] + _box(c, spread, stack.offset)] for q in qs]
     C = len(starts[0])
     tasks = np.repeat(qs, C)
     th = np.clip(np.array([s for per in starts for s in per]), sp.lower, sp.upper)
-    th = solve(AlignedStack(stack, qs), tasks, th, tol=ALIGNED).theta
-    plain = solve(stack, tasks, th, tol=HOLD)
+    loose = stack.with_settings(max(stack.rtol, STAGE_RTOL), estimates=False)  # the basin only: a looser engine
+    th = solve(AlignedStack(loose, qs), tasks, th, tol=ALIGNED).theta
+    plain = solve(loose, tasks, th, tol=HOLD)
+    stack.rounds += loose.rounds  # counted with the fit's least squares (sweep.fit.core)
     # the least plain misfit, a set the model solved throughout first (a failed solve never wins: sweep.fit.stack)
     rss = np.where(plain.failures == 0, plain.rss, np.inf).reshape(qs.size, C)
     best = np.argmin(rss, axis=1)
