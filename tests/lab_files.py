@@ -8,7 +8,8 @@ time jittered by up to a fifth of its spacing. Friction noise, a linear drift in
 displacement written to a resolution (quantisation). Layouts (:data:`LAYOUTS`): xlook/biax/PSU-style files with a
 units row, csv with decimal commas, a block of ``key = value`` lines above the header, a spreadsheet export with a
 byte-order mark, a second header block and blank lines inside the data, a trailing comment line, the friction column
-named with a unicode mu, shear stress with the normal stress given only in the header or as its own column.
+named with a unicode mu, shear stress with the normal stress given only in the header or as its own column, a
+servo's log of the commanded velocity in UTF-16 with the time in ms.
 """
 
 from __future__ import annotations
@@ -162,6 +163,15 @@ def trailing_comment(lab: Lab, path: Path) -> Path:
     return _write(path, ["time [s],lp_disp [um],friction [-]"] + rows + ["# end of record", "END"])
 
 
+def velocity_ms(lab: Lab, path: Path) -> Path:
+    """A servo's log: time in ms, the commanded load-point velocity in um/s (no displacement), friction as 'COF',
+    the names as a comment line, UTF-16 with its byte-order mark (a spreadsheet's "Unicode text")."""
+    v = np.array(lab.velocities)[np.searchsorted(np.cumsum(lab.durations), lab.t, side="right").clip(0, len(
+        lab.velocities) - 1)]
+    rows = [f"{a * 1e3:.1f}\t{u * 1e6:.2f}\t{m:.6f}" for a, u, m in zip(lab.t, v, lab.mu)]
+    return _write(path, ["# servo log v2", "# Time (ms)\tV_LP (um/s)\tCOF"] + rows, encoding="utf-16")
+
+
 LAYOUTS = {f.__name__: f for f in (xlook, psu_tab, mu_ascii, decimal_commas, key_value_block, normal_column,
-                                   spreadsheet_bom, second_header, trailing_comment)}
+                                   spreadsheet_bom, second_header, trailing_comment, velocity_ms)}
 """Each layout's writer: (Lab, path) -> the path written."""

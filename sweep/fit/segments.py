@@ -10,7 +10,8 @@ neighbouring cuts until none moves (a first split over several changes lands bet
 is its least-squares slope; a piece whose slope is within 3 standard errors of 0, or below HOLD_FRACTION of the
 fastest, is a hold (velocity 0). A hold too short for a piece of its own (a 1 s hold at 10 Hz under 0.3 um of noise)
 shows as a sliding piece whose line after it is behind: the best step in a piece's displacement, kept by the same
-penalty, is a pause of (lag)/(velocity) (:func:`_pauses`). A velocity column is integrated (trapezoids) to a
+penalty, is a pause of (lag)/(velocity) (:func:`_pauses`). A commanded velocity column (runs of one value) gives
+the steps directly, each change midway between its two samples; a measured one is integrated (trapezoids) to a
 displacement first. Only the load point is looked at: a sawtooth or noise in friction cannot move a step.
 """
 
@@ -238,17 +239,22 @@ def _line_kernel(t, y):  # pragma: no cover (compiled)
 
 
 def record_steps(record: Record) -> tuple[tuple[float, float], ...]:
-    """The record's steps: as given, or found from its load-point displacement (or velocity, integrated). A
+    """The record's steps: as given, or found from its load-point displacement (or velocity: its runs of one value,
+    else integrated). A
     displacement that counts down (every piece's velocity <= 0: a gauge's sign) is taken as its magnitude; InputError
     where the load point moves both ways, or where the record starts in a hold (the model starts from steady sliding:
     the message says where the first slide begins, to cut the record with :meth:`Record.window`)."""
     if record.steps is not None:
         return record.steps
     x = record.displacement
+    steps = None
     if x is None:
         v = record.velocity
-        x = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(record.t))))
-    steps = detect_steps(record.t, x)
+        steps = _velocity_runs(record.t, v)
+        if steps is None:
+            x = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(record.t))))
+    if steps is None:
+        steps = detect_steps(record.t, x)
     v = np.array([s[1] for s in steps])
     where = f"record {record.name!r}"
     if np.all(v <= 0) and np.any(v < 0):
@@ -269,6 +275,28 @@ def record_steps(record: Record) -> tuple[tuple[float, float], ...]:
                          f"(from {steps[1][0]:g} s) has reached steady friction (read_record(..., t_start=...), "
                          f"Record.window(t_start), [[data]] t_start = ...), or give the steps")
     return steps
+
+
+RUNS = 0.05
+"""A velocity column that changes value at fewer than this fraction of its samples is a commanded one (runs of one
+value): its steps are read off it, not found by segmenting its integral."""
+
+
+def _velocity_runs(t: np.ndarray, v: np.ndarray) -> tuple[tuple[float, float], ...] | None:
+    """The steps of a commanded velocity column (piecewise constant, :data:`RUNS`): each change midway between the
+    two samples around it (the integral's lines cross there too), a velocity below HOLD_FRACTION of the fastest a
+    hold; None for a measured (noisy) velocity. Segmenting the integral of such a column found a spurious 55 ms pause
+    where a 1 Hz hold ends (the sample before the change off the slide's line, the integral's noise floor ~1e-9 m)."""
+    change = np.flatnonzero(v[1:] != v[:-1]) + 1
+    if change.size >= RUNS * v.size:
+        return None
+    fastest = float(np.max(np.abs(v)))
+    held = lambda u: 0.0 if abs(u) <= HOLD_FRACTION * fastest else float(u)  # noqa: E731
+    steps = [(float(t[0]), held(v[0]))]
+    for i in change:
+        if held(v[i]) != steps[-1][1]:
+            steps.append((0.5 * float(t[i - 1] + t[i]), held(v[i])))
+    return tuple(steps)
 
 
 def load_history(record: Record):

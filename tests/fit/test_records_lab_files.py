@@ -35,7 +35,13 @@ def test_every_layout_reads_to_the_values_written_and_the_true_history(tmp_path,
     assert rec.n == lab.t.size
     np.testing.assert_allclose(rec.t, lab.t, atol=1e-5)
     np.testing.assert_allclose(rec.mu, lab.mu, atol=2e-6)  # written to 1e-6 (shear stress: 1e-6 MPa / 12.5 MPa)
-    np.testing.assert_allclose(rec.displacement, lab.disp, atol=1e-9)  # written to 1 nm
+    if layout == "velocity_ms":  # the commanded velocity: the segment's own at every sample
+        v = np.array(lab.velocities)[np.searchsorted(np.cumsum(lab.durations), lab.t, side="right").clip(
+            0, len(lab.velocities) - 1)]
+        assert rec.displacement is None
+        np.testing.assert_allclose(rec.velocity, v, rtol=1e-12, atol=0)
+    else:
+        np.testing.assert_allclose(rec.displacement, lab.disp, atol=1e-9)  # written to 1 nm
     if layout == "key_value_block":  # 'k = 0.002 1/um' among key = value lines above the header
         assert rec.k == pytest.approx(K)
     steps, true = np.array(record_steps(rec)), np.array(lab.steps)
