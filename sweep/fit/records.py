@@ -432,7 +432,7 @@ def _rows(lines: list[str], h: _Header, where: str) -> tuple[np.ndarray, dict[in
             raise InputError(f"{where}: data row {i + 1} has {len(fields)} values, the header {len(h.names)} "
                              f"({', '.join(h.names)}){last}")
         rows.append(fields)
-        at.append(i + 1)
+        at.append(len(rows))
     data, text = np.full((len(rows), len(h.names)), np.nan), {}
     for j, column in enumerate(zip(*rows)):
         try:
@@ -524,6 +524,10 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
     lines = _lines(path)
     h = _header(lines, where)
     names, (data, text) = h.names, _rows(lines, h, where)
+    same = np.all((data[1:] == data[:-1]) | (np.isnan(data[1:]) & np.isnan(data[:-1])), axis=1)
+    rowno = np.flatnonzero(np.concatenate(([True], ~same))) + 1  # data row numbers of the rows kept
+    if same.any():  # a row written twice (a logger switching its rate): the same information, dropped
+        data = data[rowno - 1]
     found = _find(names, columns, where)
     for role in dict(units or {}):
         if role not in ROLES:
@@ -551,7 +555,7 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:
             raise InputError(f"{where}: column {names[j]!r} ({role}) has {bad.size} NaN or empty value(s), first at "
-                             f"data row {bad[0] + 1}; remove those rows")
+                             f"data row {rowno[bad[0]]}; remove those rows")
         return values
 
     t = col("time")
@@ -559,8 +563,16 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
     if back.size:
         i = int(back[0]) + 1
         what = "repeats a time" if t[i] == t[i - 1] else "is not strictly increasing"
-        raise InputError(f"{where}: column {names[found['time'][0]]!r} (time) {what}: data row {i + 1} ({t[i]:.9g} s)"
-                         f" follows {t[i - 1]:.9g} s ({back.size} such row(s)); sort the rows or remove the repeats")
+        step = np.diff(t)
+        fix = "sort the rows or remove the repeats"
+        if np.all(step[back] == 0) and back.size > 0.01 * t.size and np.any(np.diff(back) > 1):  # repeats all
+            # through (not a clock stuck once): the time written to fewer digits than it samples
+            fix = (f"the time is written to {np.min(step[step > 0]):.3g} s (its smallest step) while sampled "
+                   f"finer: export it with more digits") if np.any(step > 0) else fix
+        elif t[i] <= t[0] < t[i - 1]:
+            fix = "the clock starts again there (a restarted logger?): split the file at that row"
+        raise InputError(f"{where}: column {names[found['time'][0]]!r} (time) {what}: data row {rowno[i]} "
+                         f"({t[i]:.9g} s) follows {t[i - 1]:.9g} s ({back.size} such row(s)); {fix}")
     if "mu" in found:
         mu = col("mu")
     else:

@@ -155,3 +155,28 @@ def test_a_spreadsheet_error_or_a_word_in_a_used_column_is_refused_naming_its_ro
         read_record(_write(tmp_path / "e.csv", ["time (s),lp_disp (um),mu", *ROWS[:30], row, *ROWS[31:]]))
     msg = str(info.value)
     assert needle in msg and "remove such rows" in msg and "\n" not in msg, msg
+
+
+def test_a_row_written_twice_is_read_once(tmp_path, labs):
+    """A logger that writes the row at a rate change twice: the copy is dropped, the record equals the one written."""
+    lab = labs["steps"]
+    rows = [f"{a:.4f},{d * 1e6:.3f},{m:.6f}" for a, d, m in zip(lab.t, lab.disp, lab.mu)]
+    change = int(np.searchsorted(lab.t, 30.0))
+    rec = read_record(_write(tmp_path / "d.csv", ["time (s),lp_disp (um),mu", *rows[:change + 1], *rows[change:]]))
+    np.testing.assert_allclose(rec.t, lab.t, atol=1e-5)
+    np.testing.assert_allclose(rec.mu, lab.mu, atol=1e-6)
+
+
+@pytest.mark.parametrize("times, needle", [
+    (np.round(np.arange(200) * 0.01, 1), "the time is written to 0.1 s (its smallest step) while sampled finer"),
+    (np.concatenate((np.arange(100.0), np.arange(100.0))), "data row 101 (0 s) follows 99 s (1 such row(s)); the clock "
+                                                           "starts again there (a restarted logger?)"),
+    (np.concatenate((np.arange(100.0), [98.5], np.arange(100.0, 199.0))), "data row 101 (98.5 s) follows 99 s (1 such "
+                                                                           "row(s)); sort the rows"),
+])
+def test_time_that_repeats_or_restarts_says_why_in_one_line(tmp_path, times, needle):
+    rows = [f"{a:g},{0.1 * i:.3f},0.6" for i, a in enumerate(times)]
+    with pytest.raises(InputError) as info:
+        read_record(_write(tmp_path / "t.csv", ["time (s),lp_disp (um),mu", *rows]))
+    msg = str(info.value)
+    assert needle in msg and "\n" not in msg, msg
