@@ -115,7 +115,8 @@ def test_one_event_sawtooth_fitted_from_starts_30_percent_off():
 
 def test_one_event_sawtooth_with_k_free():
     """The one-event sawtooth with k free too (the record without k), one draw from 30 % off in a, b, Dc and k: ok,
-    the noise within 15 %, all five intervals covering the truth (measured: 6 of 6 draws from other 30 % starts, 7.6-10.7 s each)."""
+    the noise within 15 %, all five intervals covering the truth (measured: 6 of 6 draws from other 30 % starts,
+    7.6-10.7 s each)."""
     t, mu, disp, k = sawtooth(1e-5, 9.81, 600, seed=3, load=SHORT_LOAD)
     truth = {"a": A, "b": B, "Dc": 1e-5, "mu0": MU0, "k": k}
     rng = np.random.default_rng(21)
