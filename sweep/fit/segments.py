@@ -134,34 +134,77 @@ def detect_steps(t: np.ndarray, displacement: np.ndarray, noise: float | None = 
                 break
     edges = [0, *_refine(t, y, [p[0] for p in pieces[1:]]), t.size]  # the merges moved the neighbours' best cuts
     pieces = [[i, j] for i, j in zip(edges[:-1], edges[1:])]
-    last = len(pieces) - 1  # each velocity from its piece less up to TRIM samples at a change (a change between
-    # samples bends the line through them: 0.6 % on the first velocity of a 1 -> 10 um/s step, shifting mu0 by 3e-5);
-    # a short piece (a 1 s hold at 10 Hz) keeps at least half its samples
-    cut = [min(TRIM, (j - i) // 4) for i, j in pieces]
-    fits = [_line(t[i + cut[q] * (q > 0):j - cut[q] * (q < last)], y[i + cut[q] * (q > 0):j - cut[q] * (q < last)], s)
-            for q, (i, j) in enumerate(pieces)]
+    while True:
+        fits = _trimmed_lines(t, y, pieces, s)
+        q = _same_slide(pieces, fits)
+        if q is None:
+            break
+        pieces[q[0]:q[1] + 1] = [[pieces[q[0]][0], pieces[q[1]][1]]]
     fastest = max(abs(f[0]) for f in fits)
+    moving = [abs(v) >= 3 * e and abs(v) >= HOLD_FRACTION * fastest for v, _, e in fits]
+    # a hold too short for a piece of its own: the slide after it behind (positive velocities only)
+    pauses = [_pauses(t[i:j], y[i:j], fits[q][0], s) if moving[q] and fits[q][0] > 0 else []
+              for q, (i, j) in enumerate(pieces)]
+    head, tail = list(fits), list(fits)  # the lines that meet the previous and the next piece: a piece's line
+    for q, found in enumerate(pauses):  # through its pauses is offset by their lag (0.4 s on the next hold's start)
+        if found:  # the samples before the first pause and after the last, trimmed at the changes as the lines are
+            i, j = pieces[q]
+            trim = min(TRIM, (j - i) // 4)
+            i, j = i + trim * (q > 0), j - trim * (q < len(pieces) - 1)
+            before, after = t[i:j] < found[0][0], t[i:j] >= found[-1][0]
+            if before.sum() >= 2:
+                head[q] = _line(t[i:j][before], y[i:j][before], s)
+            if after.sum() >= 2:
+                tail[q] = _line(t[i:j][after], y[i:j][after], s)
     steps = []
-    for q, ((i, j), (v, c, e)) in enumerate(zip(pieces, fits)):
+    for q, ((i, j), (v, _, _)) in enumerate(zip(pieces, fits)):
         start = float(t[0])
         if q > 0:  # where the two pieces' lines cross, if between their samples; else between the samples
-            vp, cp, _ = fits[q - 1]
-            cross = (c - cp) / (vp - v) if vp != v else np.nan
+            (vp, cp, _), (vh, ch, _) = tail[q - 1], head[q]
+            cross = (ch - cp) / (vp - vh) if vp != vh else np.nan
             start = float(cross) if t[pieces[q - 1][0]] < cross < t[j - 1] else 0.5 * float(t[i - 1] + t[i])
-        hold = abs(v) < 3 * e or abs(v) < HOLD_FRACTION * fastest
-        steps.append((start, 0.0 if hold else float(v)))
-    for q in reversed(range(len(pieces))):  # a hold too short for a piece of its own: the slide after it behind
-        if steps[q][1] > 0:
-            i, j = pieces[q]
-            found = _pauses(t[i:j], y[i:j], steps[q][1], s)
-            if found:  # the piece's velocity without the pauses' lag in its line
-                v = found[1][1]
-                steps[q:q + 1] = [(steps[q][0], v)] + [(a, v if b else 0.0) for a, b in found]
+        steps.append((start, float(v) if moving[q] else 0.0))
+    for q in reversed(range(len(pieces))):
+        if pauses[q]:  # the piece's velocity without the pauses' lag in its line
+            v = pauses[q][1][1]
+            steps[q:q + 1] = [(steps[q][0], v)] + [(a, v if b else 0.0) for a, b in pauses[q]]
     merged = [steps[0]]
     for st in steps[1:]:  # two holds in a row are one hold
         if not (st[1] == 0.0 and merged[-1][1] == 0.0):
             merged.append(st)
     return tuple(merged)
+
+
+def _trimmed_lines(t: np.ndarray, y: np.ndarray, pieces: list[list[int]], s: float
+                   ) -> list[tuple[float, float, float]]:
+    """Each piece's line (:func:`_line`) less up to TRIM samples at a change (a change between samples bends the line
+    through them: 0.6 % on the first velocity of a 1 -> 10 um/s step, shifting mu0 by 3e-5); a short piece (a 1 s
+    hold at 10 Hz) keeps at least half its samples."""
+    last = len(pieces) - 1
+    cut = [min(TRIM, (j - i) // 4) for i, j in pieces]
+    return [_line(t[i + cut[q] * (q > 0):j - cut[q] * (q < last)], y[i + cut[q] * (q > 0):j - cut[q] * (q < last)], s)
+            for q, (i, j) in enumerate(pieces)]
+
+
+def _same_slide(pieces: list[list[int]], fits: list[tuple[float, float, float]]) -> tuple[int, int] | None:
+    """(first, last) of pieces to join into one: two neighbours whose trimmed velocities agree (SAME_VELOCITY plus 3
+    standard errors; the merge before compares untrimmed lines, which a sample across the change bends: a 10 um/s
+    slide after 2 s at 100 um/s sampled at 10 Hz came out as two pieces 0.5 % apart), or a piece of fewer than
+    2 MIN_SAMPLES samples between two slides of one velocity (a hold of 3 samples at 1 Hz between slides at 10 Hz came
+    out as a slide at 17 % of theirs): one slide, whose pause :func:`_pauses` then finds. None where none is."""
+    def same(p, q):
+        (v1, _, e1), (v2, _, e2) = fits[p], fits[q]
+        return abs(v1 - v2) <= SAME_VELOCITY * max(abs(v1), abs(v2)) + 3 * np.hypot(e1, e2)
+
+    for q in range(len(pieces) - 1):
+        if same(q, q + 1):
+            return q, q + 1
+    for q in range(1, len(pieces) - 1):
+        slides = min(fits[q - 1][0], fits[q + 1][0]) > 3 * max(fits[q - 1][2], fits[q + 1][2])
+        if pieces[q][1] - pieces[q][0] < 2 * MIN_SAMPLES and slides and same(q - 1, q + 1) and \
+                fits[q][0] < min(fits[q - 1][0], fits[q + 1][0]):
+            return q - 1, q + 1
+    return None
 
 
 def _pauses(t: np.ndarray, y: np.ndarray, v: float, s: float) -> list[tuple[float, float]]:

@@ -14,7 +14,7 @@ from lab_files import HISTORIES, LAYOUTS, TRUTH, K, make
 import sweep
 from sweep.errors import InputError
 from sweep.fit.records import is_record_file, read_record
-from sweep.fit.segments import record_steps
+from sweep.fit.segments import detect_steps, record_steps
 
 START = sweep.FrictionParams.from_lab(0.7 * TRUTH["a"], 1.3 * TRUTH["b"], 1.3 * TRUTH["Dc"], TRUTH["mu0"])
 """a 30 % low, b and Dc 30 % high."""
@@ -180,3 +180,17 @@ def test_time_that_repeats_or_restarts_says_why_in_one_line(tmp_path, times, nee
         read_record(_write(tmp_path / "t.csv", ["time (s),lp_disp (um),mu", *rows]))
     msg = str(info.value)
     assert needle in msg and "\n" not in msg, msg
+
+
+@pytest.mark.parametrize("history, seed", [("steps", 3), ("shs", 1), ("shs", 2), ("shs", 3)])
+def test_a_logger_that_does_not_sample_faster_at_changes(history, seed):
+    """10 Hz sliding and 1 Hz in a hold, no faster sampling at a change: the 10 um/s slide after 2 s at 100 um/s is
+    one piece (it came out as two, 0.5 % apart: steps, seed 3), the 3 s hold (3 samples) a hold between two slides
+    of one velocity (it came out as a slide at 17 % of theirs: shs, seeds 1-3); every change within a sample
+    spacing, every velocity within 1 %."""
+    lab = make(history, seed=seed, fast=10.0, fast_for=0.0)
+    steps, true = np.array(detect_steps(lab.t, lab.disp)), np.array(lab.steps)
+    assert steps.shape == true.shape, steps
+    for (start, _), (t0, _) in zip(steps[1:], true[1:]):
+        assert abs(start - t0) <= lab.spacing_at(t0), (start, t0)
+    np.testing.assert_allclose(steps[:, 1], true[:, 1], rtol=0.01, atol=0)
