@@ -6,10 +6,10 @@ Histories: velocity steps up and down (1 -> 10 -> 100 -> 10 um/s) and slide-hold
 1 um/s). Sampling as a data logger's: 100 Hz for a while after each change, 10 Hz in a slide, 1 Hz in a hold, each
 time jittered by up to a fifth of its spacing. Friction noise, a linear drift in time, displacement noise and the
 displacement written to a resolution (quantisation). Layouts (:data:`LAYOUTS`): xlook/biax/PSU-style files with a
-units row, csv with decimal commas, a block of ``key = value`` lines above the header, a spreadsheet export with a
-byte-order mark, a second header block and blank lines inside the data, a trailing comment line, the friction column
-named with a unicode mu, shear stress with the normal stress given only in the header or as its own column, a
-servo's log of the commanded velocity in UTF-16 with the time in ms.
+units row, csv with decimal commas (semicolons, or commas with every field quoted), a block of ``key = value`` lines
+above the header, a spreadsheet export with a byte-order mark, a second header block and blank lines inside the data,
+a trailing comment line, the friction column named with a unicode mu, shear stress with the normal stress given only
+in the header or as its own column, a servo's log of the commanded velocity in UTF-16 with the time in ms.
 """
 
 from __future__ import annotations
@@ -125,6 +125,14 @@ def decimal_commas(lab: Lab, path: Path) -> Path:
     return _write(path, ["Time (s);LP Displacement (µm);µ"] + rows, encoding="latin-1")
 
 
+def quoted_decimal_commas(lab: Lab, path: Path) -> Path:
+    """A spreadsheet's comma-separated export in a decimal-comma locale: every field quoted, the quotes holding the
+    decimal comma ("0,600123")."""
+    rows = [",".join(f'"{x}"' for x in (f"{a:.4f}", f"{d * 1e6:.3f}", f"{m:.6f}")).replace(".", ",")
+            for a, d, m in zip(lab.t, lab.disp, lab.mu)]
+    return _write(path, ['"Time (s)","LP Disp (um)","Friction"'] + rows)
+
+
 def key_value_block(lab: Lab, path: Path) -> Path:
     """A block of ``key = value`` lines (no comment mark) above the header, the stiffness among them; shear stress
     in MPa with the normal stress given only there."""
@@ -172,6 +180,6 @@ def velocity_ms(lab: Lab, path: Path) -> Path:
     return _write(path, ["# servo log v2", "# Time (ms)\tV_LP (um/s)\tCOF"] + rows, encoding="utf-16")
 
 
-LAYOUTS = {f.__name__: f for f in (xlook, psu_tab, mu_ascii, decimal_commas, key_value_block, normal_column,
-                                   spreadsheet_bom, second_header, trailing_comment, velocity_ms)}
+LAYOUTS = {f.__name__: f for f in (xlook, psu_tab, mu_ascii, decimal_commas, quoted_decimal_commas, key_value_block,
+                                   normal_column, spreadsheet_bom, second_header, trailing_comment, velocity_ms)}
 """Each layout's writer: (Lab, path) -> the path written."""

@@ -27,6 +27,7 @@ NaN or empty values, time that repeats or goes back, a row cut short, a step out
 
 from __future__ import annotations
 
+import csv
 import os
 import re
 import warnings
@@ -247,8 +248,10 @@ def _lines(path: Path, limit: int | None = None) -> list[str]:
 def _split(line: str, delimiter: str | None) -> list[str]:
     if delimiter is None:  # blanks: a name followed by its unit in brackets stays one field
         fields = re.findall(r"[^\s\[(]+(?:\s*[\[(][^\])]*[\])])?|[\[(][^\])]*[\])]", line)
+    elif '"' in line:  # a spreadsheet's quotes, which may hold the delimiter ("0,6" in a comma-separated file)
+        fields = [f.strip() for f in next(csv.reader([line], delimiter=delimiter, skipinitialspace=True))]
     else:
-        fields = [f.strip().strip('"').strip() for f in line.split(delimiter)]  # a spreadsheet's quotes
+        fields = [f.strip() for f in line.split(delimiter)]
     while fields and fields[-1] == "":  # a trailing delimiter
         fields.pop()
     return fields
