@@ -43,7 +43,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .events import event_scale, event_times, slip_events
+from .events import event_scale, event_times, record_slip_events, slip_events
 from .levenberg import HOLD, Tolerances, solve
 from .stack import ProblemStack
 
@@ -147,7 +147,7 @@ class AlignedStack:
 def event_problems(stack: ProblemStack) -> np.ndarray:
     """Indices of the problems of a record stack with slip events in some record (sweep.fit.events.slip_events)."""
     return np.array([q for q, pr in enumerate(stack.problems)
-                     if any(slip_events(d.mu, event_scale(d.t, d.mu)) for d in pr.data)], dtype=np.intp)
+                     if any(record_slip_events(d) for d in pr.data)], dtype=np.intp)
 
 
 def _box(theta: np.ndarray, spread: float, offset: int | None) -> list[np.ndarray]:

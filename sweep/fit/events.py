@@ -29,8 +29,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["DROP", "RANGE_FLOOR", "SERIAL", "SHARP", "SHORT", "WIDE", "count_events", "event_scale", "event_times",
-           "noise_scale", "record_events", "same_events", "serial_correlation", "slip_events"]
+__all__ = ["DROP", "RANGE_FLOOR", "SERIAL", "SHARP", "SHORT", "WIDE", "away_from_changes", "count_events",
+           "event_scale", "event_times", "load_changes", "noise_scale", "record_events", "record_slip_events",
+           "same_events", "serial_correlation", "slip_events"]
 
 DROP = 10.0
 """A fall of more than DROP noise scales within SHORT intervals can be a slip: two noise draws differ by more than
@@ -50,6 +51,10 @@ SERIAL = 3.0
 above which a best fit with the record's events still misses them (module docstring): 3 standard deviations, a false
 alarm on ~1e-3 of the fits to white noise; measured on a one-event sawtooth (600 samples, noise 2e-4, five draws):
 0.07 at most at the truth, 0.14-0.37 at the local minima a fit from 30 % off found (threshold 0.12)."""
+COARSER = (2, 4, 8, 16, 32, 64)
+"""Strides at which a record without slip events at its own sampling is looked at again (:func:`record_events`)."""
+MIN_COARSE = 100
+"""Fewest samples a coarser look at a record keeps."""
 RANGE_FLOOR = 2e-3
 """Least scale, as a fraction of the record's range: in a record without noise (or nearly), a fall of less than
 DROP RANGE_FLOOR = 2 % of its range is no event (the undershoot of a velocity step down ends in a smooth minimum whose
@@ -140,6 +145,51 @@ def _misplaced(t: np.ndarray, mu: np.ndarray, model: np.ndarray, events: list[tu
     return any(np.max(np.abs(model[i:j + 2] - mu[i:j + 2])) > DROP * scale for (i, _), j in zip(events, low))
 
 
+def load_changes(record) -> np.ndarray:
+    """The times [s, the record's clock] at which the record's load-point velocity changes (sweep.fit.segments)."""
+    from .segments import record_steps
+
+    return np.array([s[0] for s in record_steps(record)][1:], dtype=float)
+
+
+def away_from_changes(t: np.ndarray, events: list[tuple[int, float]], changes: np.ndarray
+                      ) -> list[tuple[int, float]]:
+    """The events of :func:`slip_events` (of a series at times ``t`` [s]) that are not the load history's own: a fall
+    whose neighbourhood (BEFORE samples before it to SHORT + WIDE after) holds a change of the load-point velocity
+    (``changes`` [s]) is the direct effect of a step down, the relaxation at a hold's start or the evolution after a
+    step up, sampled coarser than its time scale, not a slip. The same rule for a record and its model."""
+    if not changes.size:
+        return events
+    n = t.size
+    return [(i, f) for i, f in events
+            if not np.any((changes >= t[max(i - BEFORE, 0)]) & (changes <= t[min(i + SHORT + WIDE, n - 1)]))]
+
+
+def record_slip_events(record) -> list[tuple[int, float]]:
+    """A record's slip events at its own sampling (:func:`slip_events` at :func:`event_scale`) away from the changes
+    of its load history (:func:`away_from_changes`)."""
+    return away_from_changes(record.t, slip_events(record.mu, event_scale(record.t, record.mu)), load_changes(record))
+
+
+def _finest_events(t: np.ndarray, mu: np.ndarray, model: np.ndarray, changes: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, list[tuple[int, float]]]:
+    """(t, mu, model, scale, the record's events) at the finest sampling of the record that shows slip events: every
+    sample, else every 2nd, 4th, ... (COARSER), while at least MIN_COARSE samples remain; the model at the same
+    samples. A record sampled finer than its slips (a slip spread over more than SHORT samples: a laboratory logger
+    at a few hundred Hz, a slip lasting ~ half the machine's natural period) shows no event at its own rate; at a
+    coarser one its slips fall within SHORT samples again, and a model through it is counted at that rate too. Falls
+    at the load history's changes are not slips (:func:`away_from_changes`), at any rate."""
+    for stride in (1, *COARSER):
+        if stride > 1 and t.size // stride < MIN_COARSE:
+            break
+        ts, ms = t[::stride], mu[::stride]
+        scale = event_scale(ts, ms)
+        rec = away_from_changes(ts, slip_events(ms, scale), changes)
+        if rec:
+            return ts, ms, model[::stride], scale, rec
+    return t, mu, model, event_scale(t, mu), []
+
+
 def record_events(records, residuals: np.ndarray, weights: np.ndarray) -> list[tuple[str, list[float], list[float]]]:
     """Per record of a problem whose best fit misses its slip events (``records`` in residual order,
     sweep.fit.records.Record): (name, the falls of the record's events, those of the model's at the best fit), the
@@ -151,10 +201,11 @@ def record_events(records, residuals: np.ndarray, weights: np.ndarray) -> list[t
     out, col = [], 0
     for d in records:
         sl = slice(col, col + d.t.size)
-        scale = event_scale(d.t, d.mu)
         model = d.mu + residuals[sl] / weights[sl]
-        rec, mod = slip_events(d.mu, scale), slip_events(model, scale)
-        if rec and (not same_events(rec, mod, scale) or _misplaced(d.t, d.mu, model, rec, scale)
+        changes = load_changes(d)
+        t, mu, model, scale, rec = _finest_events(d.t, d.mu, model, changes)
+        mod = away_from_changes(t, slip_events(model, scale), changes)
+        if rec and (not same_events(rec, mod, scale) or _misplaced(t, mu, model, rec, scale)
                     or serial_correlation(residuals[sl]) > SERIAL / np.sqrt(d.t.size)):
             out.append((d.name, [f for _, f in rec], [f for _, f in mod]))
         col += d.t.size

@@ -14,6 +14,7 @@ import pytest
 from reference_history import inertial_reference_at
 
 import sweep
+from sweep.fit.events import event_scale, record_events, slip_events
 from sweep.fit.records import Record
 from sweep.protocols.history.forward import LoadHistory, friction_at
 from sweep.status import Status
@@ -201,3 +202,39 @@ def test_a_velocity_step_record_stays_ok():
     rec = Record(t, mu + NOISE * rng.standard_normal(t.size), displacement=disp, k=2e3)
     status, noise, _ = _fit(rec, {"a": 1.3 * A, "b": 0.7 * B, "Dc": 1.3e-5})
     assert status == 0 and abs(noise / NOISE - 1) < 0.15
+
+
+def test_a_sawtooth_sampled_finer_than_its_slips_is_judged_at_a_coarser_rate():
+    """A one-event sawtooth logged at 240 Hz (6,000 samples over 25 s; the slip lasts ~ half the natural period
+    2 pi/sqrt(k g) = 0.13 s, ~15 samples) shows no slip event at its own rate, so a smooth model through it (the
+    stable model of a fit from a start 30 % off, which said ok at 3-16x the noise) would pass unseen: record_events
+    looks at every 2nd, 4th, ... sample (events.COARSER) and finds the record's slip at the first rate that shows
+    one, the model counted there too. The reference's own friction is not missed; a smooth cubic through the record
+    is."""
+    t, mu, disp, k = sawtooth(1e-5, 9.81, 6000, seed=3, load=LoadHistory(STEP.velocities, np.array([5.0, 20.0])))
+    y = mu + NOISE * np.random.default_rng(5).standard_normal(t.size)
+    assert slip_events(y, event_scale(t, y)) == []
+    rec, w = Record(t, y, displacement=disp, k=k, name="dense"), np.ones(t.size)
+    assert record_events([rec], mu - y, w) == []
+    smooth = np.polyval(np.polyfit(t, y, 3), t)
+    missed = record_events([rec], smooth - y, w)
+    assert [m[0] for m in missed] == ["dense"] and len(missed[0][1]) == 1 and missed[0][2] == []
+
+
+@pytest.mark.parametrize("seed", [1, 3])
+def test_falls_at_the_load_history_changes_are_not_slip_events(seed):
+    """A slide-hold-slide record of a stiff machine (k = 4 k_c: no stick-slip possible; tests/lab_files.py: a
+    logger's rates, noise 1e-4, drift detrended) falls by ~15 noise scales within two samples where a hold starts:
+    counted as slip events, its fits from 30 % off said events_missed on these two draws (2 of 6). A fall whose
+    neighbourhood holds a change of the load-point velocity is the load history's own (events.away_from_changes):
+    they are ok, a, b, Dc, mu0 within 2 % of the truth (not always within 4 standard errors: draw 1's b is 0.2 %,
+    4.2 standard errors, off; the hold starts found from the 1 Hz displacement are a sample spacing off at most)."""
+    from lab_files import TRUTH, K, make
+
+    lab = make("shs", seed=seed, noise=1e-4)
+    rec = Record(lab.t, lab.mu, displacement=lab.disp, k=K, detrend="time")
+    start = sweep.FrictionParams.from_lab(0.7 * TRUTH["a"], 1.3 * TRUTH["b"], 1.3 * TRUTH["Dc"], TRUTH["mu0"])
+    ds = sweep.fit(rec, free=tuple(TRUTH), params=start, search="local")
+    assert int(ds["fit_status"][0]) == 0
+    for n, v in TRUTH.items():
+        assert float(ds[n][0]) == pytest.approx(v, rel=0.02), n
