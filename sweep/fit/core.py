@@ -99,11 +99,14 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
     search = _search(search)
     records = _records(data)
     if records:  # the third kind of data: its own space and forward model (sweep.fit.record_forward)
-        from .record_forward import RECORD_FREE, RecordStack, make_record_space, record_k
+        from .record_forward import RECORD_FREE, RecordStack, inertia_warning, make_record_space, record_k
 
         if tuple(free) == ("A", "m1", "m2"):  # the default of stop data: a record fit's is a, b, Dc
             free = ("a", "b", "Dc")
         space = make_record_space(free, _params(params), record_k(records), bounds, start)
+        line = inertia_warning(records, space)
+        if line is not None:
+            warnings.warn(line, PlausibilityWarning, stacklevel=user_stacklevel())
     else:
         space = make_space(free, _params(params), bounds, start)
     problems = make_problems(data, space, per_data_set)

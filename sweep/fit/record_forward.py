@@ -27,7 +27,7 @@ from .segments import load_history
 from .space import ParamSpace, bounded_space
 from .stack import ProblemStack
 
-__all__ = ["RECORD_FREE", "RecordStack", "make_record_space"]
+__all__ = ["RECORD_FREE", "RecordStack", "inertia_warning", "make_record_space"]
 
 RECORD_FREE = ("a", "b", "Dc", "mu0", "k")
 """Parameters a record fit may free, in the order they are reported (k = K/(M g) [1/m])."""
@@ -152,6 +152,29 @@ class RecordStack(ProblemStack):
             self.on_round(self.rounds, U)
         ok = np.ones(U, bool)
         return (mu, ok, err) if errors else (mu, ok)
+
+
+def inertia_warning(records, space: ParamSpace) -> str | None:
+    """One line where some record's fastest slide runs with inertia at the start values (gamma/A = v^2/(g Dc a) >
+    friction_at's INERTIA_LIMIT) and g is the default 9.81 m/s^2 of FrictionParams (a block under its own weight: a
+    laboratory machine's moving mass M is far below N/g, so its g = N/M is far larger and its inertia negligible);
+    None otherwise. docs/fit.md, "Laboratory records"."""
+    from ..protocols.history.forward import INERTIA_LIMIT
+
+    if space.g != FrictionParams.from_lab(0.01, 0.01, 1e-5).g:
+        return None
+    full = space.full(space.start[None, :])
+    a, Dc = float(full["a"][0]), float(full["Dc"][0])
+    fast = [(d.name, float(np.max(load_history(d).velocities))) for d in records]
+    over = [(name, v, v**2 / (space.g * Dc * a)) for name, v in fast if v**2 / (space.g * Dc * a) > INERTIA_LIMIT]
+    if not over:
+        return None
+    name, v, ratio = max(over, key=lambda x: x[2])
+    more = f" (and {len(over) - 1} more)" if len(over) > 1 else ""
+    return (f"record {name!r}{more} slides at {v:.3g} m/s: with g = N/M = {space.g} m/s^2, the default (a block "
+            f"under its own weight), gamma/A = {ratio:.3g} > {INERTIA_LIMIT:g} and the fit models its inertia; a "
+            "laboratory machine's moving mass is far below N/g: give its g = N/M in params "
+            "(FrictionParams.from_lab(..., g=...)), or the inertia biases a and b (docs/fit.md)")
 
 
 def record_k(data) -> float | None:
