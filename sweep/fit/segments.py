@@ -289,6 +289,15 @@ def record_steps(record: Record) -> tuple[tuple[float, float], ...]:
     the message says where the first slide begins, to cut the record with :meth:`Record.window`)."""
     if record.steps is not None:
         return record.steps
+    found = record.__dict__.get("_found_steps")  # a record's data do not change: its steps are found once
+    if found is None:
+        found = _found_steps(record)
+        object.__setattr__(record, "_found_steps", found)  # (Record is frozen; not one of its fields)
+    return found
+
+
+def _found_steps(record: Record) -> tuple[tuple[float, float], ...]:
+    """:func:`record_steps` of a record without given steps (its checks included)."""
     x = record.displacement
     steps = None
     if x is None:
