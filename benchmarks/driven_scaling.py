@@ -10,7 +10,9 @@ Each measurement runs in a fresh subprocess of this script (``--worker``): it bu
 (:func:`sweep.protocols.driven.chunk.driven_chunk`, the code a run's chunks call) once on a 1 % subsample untimed
 (kernels loaded or compiled), then times one call on every point. One thread and all threads alternate ``--repeats``
 times; each figure is the best wall time; the load average is recorded with each. The regimes of the two thread
-counts must agree point for point (a point's numbers do not depend on its lane or thread). Writes JSON.
+counts must agree point for point (a point's numbers do not depend on its lane or thread). Beside them, in every
+repeat, the machine's own gain from a second thread (auto_cost.machine_ceiling: a loop that shares nothing, alone and
+twice at once), the ceiling of any 2-thread gain in that run. Writes JSON.
 """
 
 from __future__ import annotations
@@ -94,10 +96,13 @@ def main(argv=None) -> None:
     n_all = common.usable_cpus()
     repeats = 1 if args.quick else args.repeats
     work = Path(tempfile.mkdtemp(prefix="driven_scaling_"))
-    figures = {}
+    from auto_cost import machine_ceiling
+
+    figures, ceilings = {}, []
     for model in args.models.split(","):
         rows = {1: [], n_all: []}
         for _ in range(repeats):
+            ceilings.append(machine_ceiling())
             for threads in rows:
                 load0 = common.loadavg()
                 r = run_worker(model, threads, args.quick, work / f"{model}_{threads}.npy")
@@ -117,7 +122,9 @@ def main(argv=None) -> None:
               "sweep_tree_dirty": common.sweep_tree_dirty(),
               "settings": {"repeats": repeats, "grid": f"sample2, K/M {SHAPE[0]} x V {SHAPE[1]} over the issue's "
                            "ranges" + (" (quick: 25 x 40)" if args.quick else "")},
-              "figures": figures}
+              "figures": figures, "machine_ceiling_rows": ceilings,
+              "machine_two_threads_over_one": 2 * min(c["alone_s"] for c in ceilings)
+              / min(c["together_s"] for c in ceilings)}
     common.write_result(result, args.out, t_start)
 
 

@@ -463,7 +463,10 @@ def _driven() -> list[str]:
         *_table(["grid, model, threads", "points", "base", "new", "speed-up", "moved"], rows), "",
         _record("driven_lanes"), "",
         f"`python benchmarks/driven_scaling.py`: {scaling['settings']['grid']}, wall seconds of the driven chunk on "
-        "1 thread and on all threads; the regimes of the two agree point for point:", "",
+        "1 thread and on all threads; the regimes of the two agree point for point"
+        + (f"; the machine's own gain from a second thread in the same run (a loop that shares nothing): "
+           f"{_x(scaling['machine_two_threads_over_one'], 2)}" if "machine_two_threads_over_one" in scaling else "")
+        + ":", "",
         *_table(["model", "points", "1 thread s", "all threads s", "speed-up", "regimes equal"], scale), "",
         _record("driven_scaling"), "",
         f"`{peers['benchmark']}`: the engine's time per point per core over the best peer's at each accuracy of the "
