@@ -119,7 +119,7 @@ class RecordStack(ProblemStack):
         """mu (U, n_max) in residual order of U blocks (a layout and a parameter set each), NaN where friction_at
         did not give a value (status not in VALUED); all stable (a record may hold stick-slip); with ``errors`` their
         estimates."""
-        from ..protocols.history.forward import RTOL_RANGE, friction_at_many
+        from ..protocols.history.forward import RTOL_RANGE, friction_at
 
         U = layout.size
         mu, err = np.full((U, self.n_max), np.nan), np.full((U, self.n_max), np.nan)
@@ -128,7 +128,6 @@ class RecordStack(ProblemStack):
         # checked at rtol with estimates (sweep.fit.core), the difference counted in engine_error
         rtol = self.rtol if self.estimates else min(self.rtol * TIGHTER, RTOL_RANGE[1])
         k_free = "k" in self.space.names
-        jobs, where = [], []  # every record of every layout: one friction_at_many call (one kernel call a round)
         for u in np.unique(layout):
             rows, q = np.flatnonzero(layout == u), self.representative[u]
             p = params[rows]
@@ -138,18 +137,16 @@ class RecordStack(ProblemStack):
                 lab = {"A": p[:, 0], "m1": p[:, 1] - p[:, 0], "m2": np.zeros(rows.size), "D0": p[:, 2],
                        "m0": p[:, 3], "V0": np.full(rows.size, self.V0), "K_over_M": k * self.g,
                        "g": np.full(rows.size, self.g)}  # g = N/M: the machine's inertia (docs/physics.md 7b)
-                jobs.append((lab, load, t))
-                where.append((rows, q, col, t, x))
+                out = friction_at(lab, load, t, rtol=rtol)
+                ok = np.isin(out.status, VALUED)[:, None]
+                m = np.where(ok, out.mu, np.nan)
+                if x is not None:  # the record's linear trend: its best slope per set, projected out
+                    w2 = self.weights[q, col:col + t.size] ** 2
+                    resid = self.observed[q, col:col + t.size] - m
+                    m = m + np.sum(w2 * x * resid, axis=1, keepdims=True) / np.sum(w2 * x * x) * x
+                mu[rows, col:col + t.size] = m
+                err[rows, col:col + t.size] = np.where(ok, out.error, np.nan)
                 col += t.size
-        for out, (rows, q, col, t, x) in zip(friction_at_many(jobs, rtol=rtol), where):
-            ok = np.isin(out.status, VALUED)[:, None]
-            m = np.where(ok, out.mu, np.nan)
-            if x is not None:  # the record's linear trend: its best slope per set, projected out
-                w2 = self.weights[q, col:col + t.size] ** 2
-                resid = self.observed[q, col:col + t.size] - m
-                m = m + np.sum(w2 * x * resid, axis=1, keepdims=True) / np.sum(w2 * x * x) * x
-            mu[rows, col:col + t.size] = m
-            err[rows, col:col + t.size] = np.where(ok, out.error, np.nan)
         self.rounds += 1
         if self.on_round is not None:
             self.on_round(self.rounds, U)

@@ -168,17 +168,4 @@ def history_dense_batch(k, a, b, law, s_kick, ratios, durations, scale, times, t
                                                   s_out[i])
 
 
-@njit(nogil=True, cache=True, fastmath=FAST, error_model="numpy")
-def history_dense_rows(k, a, b, law, s_kick, ratios, durations, scale, times, n_times, tol, max_steps, s_start,
-                       s_end, s_peak, steady, s_out, status, steps):
-    """:func:`history_dense_batch` with sample times of each set's own: set i's are times[i, :n_times[i]] (sorted,
-    [s] from its history's start) and its samples go to s_out[i, :n_times[i]] (the rest of the row untouched): sets
-    of several records, each of its own times, in one call."""
-    for i in range(k.size):
-        n = n_times[i]
-        status[i], steps[i] = history_dense_point(k[i], a[i], b[i], law, s_kick[i], ratios[i], durations[i], scale[i],
-                                                  times[i, :n], tol, max_steps, s_start[i], s_end[i], s_peak[i],
-                                                  steady[i], s_out[i, :n])
-
-
 pin_module(__name__)

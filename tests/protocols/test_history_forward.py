@@ -174,27 +174,3 @@ def test_bad_params_are_refused(change, field):
 def test_bad_times_and_options_are_refused(t, kw, field):
     with pytest.raises(InputError, match=field):
         friction_at(params_of(LAB, 1e3), SHS, t, **kw)
-
-
-def test_friction_at_many_is_friction_at_per_record_against_the_reference():
-    """friction_at_many (a fit's records in one kernel call a round, each set its own sample times): jobs of two
-    and five segments, of their own times and set counts, one of them a soft spring whose quasi-static run breaks
-    down (computed by friction_at with inertia), give friction_at's numbers bit for bit, set by set, and the
-    quasi-static ones lie within rtol (|mu| + a) of the independent reference."""
-    from sweep.protocols.history.forward import friction_at_many
-
-    step = LoadHistory(np.array([1e-6, 1e-5]), np.array([20.0, 40.0]))
-    jobs = []
-    for j, (load, k_lab, sets) in enumerate([(step, 2e3, 3), (SHS, 5e3, 2), (step, 4e3, 1), (step, 200.0, 2)]):
-        p = params_of(LAB, k_lab)
-        jobs.append(({n: np.full(sets, v) * (1.0 + 0.1 * np.arange(sets) if n == "D0" else 1.0)
-                      for n, v in p.items()}, load, sample_times(load, 300 + 50 * j, seed=j)))
-    many = friction_at_many(jobs, rtol=1e-6)
-    for (params, load, t), got in zip(jobs, many):
-        one = friction_at(params, load, t, rtol=1e-6)
-        np.testing.assert_array_equal(got.mu, one.mu)
-        np.testing.assert_array_equal(got.status, one.status)
-        np.testing.assert_array_equal(got.model, one.model)
-    assert many[3].model.tolist() == [1, 1] and many[0].model.tolist() == [0, 0, 0]
-    mu_ref = reference(LAB, 2e3, step, jobs[0][2])
-    assert np.all(np.abs(many[0].mu[0] - mu_ref) <= 1e-6 * (np.abs(mu_ref) + LAB.A))

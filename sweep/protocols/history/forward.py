@@ -24,7 +24,7 @@ from ... import physics
 from ...errors import InputError
 from ...status import Status
 
-__all__ = ["INERTIA_LIMIT", "PARAMS", "FrictionSamples", "LoadHistory", "friction_at", "friction_at_many"]
+__all__ = ["INERTIA_LIMIT", "PARAMS", "FrictionSamples", "LoadHistory", "friction_at"]
 
 PARAMS = ("A", "m1", "m2", "D0", "m0", "V0", "K_over_M")
 """The parameters friction_at needs (``g`` optional, 9.81 m s-2)."""
@@ -160,7 +160,20 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
         raise InputError(f"stretch must be finite [m], got {stretch!r}")
     p = _params(params)
     times = _times(t, load.total)
-    k, a, b, A, mu_ref, s_kick, ratios, durations, scale, G, inertial = _reduced(p, load, stretch)
+
+    V = load.velocities[0]
+    chi = physics.reduced_stiffness(p["K_over_M"], p["D0"], p["g"])
+    mu1 = physics.mu1(V, p["m1"], p["m2"], p["V0"])
+    A = p["A"]
+    k, a, b = np.asarray(chi / A, float), np.asarray(mu1 / A, float), p["m2"] / A
+    s_kick = k * (stretch / p["D0"])
+    scale = V / p["D0"]
+    ratios = np.tile(load.velocities / V, (A.size, 1))
+    durations = np.tile(load.durations, (A.size, 1))
+    mu_ref = np.asarray(physics.mu_d(V, p["m0"], p["m1"], p["m2"], p["V0"]), float).reshape(-1)
+
+    G = V**2 / (p["g"] * p["D0"]) / A  # gamma/A at V
+    inertial = G * np.max(ratios[0]) ** 2 > INERTIA_LIMIT
     quasistatic = np.flatnonzero(~inertial if state_law == "aging" else np.ones(A.size, bool))
     out = {"mu_t": np.full((A.size, times.size), np.nan), "mu_t_error": np.full((A.size, times.size), np.nan),
            "status": np.zeros(A.size, np.int8), "steps": np.zeros(A.size, np.int64)}
@@ -184,72 +197,10 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
     return FrictionSamples(mu=out["mu_t"], error=out["mu_t_error"], status=status, steps=out["steps"], model=model)
 
 
-def _reduced(p: dict[str, np.ndarray], load: LoadHistory, stretch: float) -> tuple:
-    """(k, a, b, A, mu_ref, s_kick, ratios, durations, scale, G, inertial) per set of the validated ``p``: the
-    reduction of the module docstring with V = velocities[0], ratios and physical durations (sets, segments), G =
-    gamma/A at V and ``inertial`` where gamma/A at the fastest segment exceeds INERTIA_LIMIT."""
-    V = load.velocities[0]
-    chi = physics.reduced_stiffness(p["K_over_M"], p["D0"], p["g"])
-    mu1 = physics.mu1(V, p["m1"], p["m2"], p["V0"])
-    A = p["A"]
-    k, a, b = np.asarray(chi / A, float), np.asarray(mu1 / A, float), p["m2"] / A
-    s_kick = k * (stretch / p["D0"])
-    scale = V / p["D0"]
-    ratios = np.tile(load.velocities / V, (A.size, 1))
-    durations = np.tile(load.durations, (A.size, 1))
-    mu_ref = np.asarray(physics.mu_d(V, p["m0"], p["m1"], p["m2"], p["V0"]), float).reshape(-1)
-    G = V**2 / (p["g"] * p["D0"]) / A  # gamma/A at V
-    inertial = G * np.max(ratios[0]) ** 2 > INERTIA_LIMIT
-    return k, a, b, A, mu_ref, s_kick, ratios, durations, scale, G, inertial
-
-
-def friction_at_many(jobs: list[tuple[Mapping[str, ArrayLike], LoadHistory, ArrayLike]], *, rtol: float = 1e-6,
-                     max_steps: int = 1_000_000) -> list[FrictionSamples]:
-    """:func:`friction_at` (aging law, no stretch) of each (params, load, t) of ``jobs``, in job order: the jobs
-    whose sets all run quasi-statically share one compiled call per number of segments (each set its own times: a
-    fit's records, each of its own sample times, in one call per round instead of one per record); a job with a set
-    that needs inertia (gamma/A, or a quasi-static run that breaks down) is computed by friction_at alone. The
-    numbers are friction_at's: a set's run depends on its own parameters, history and times only."""
-    out: list[FrictionSamples | None] = [None] * len(jobs)
-    prepared = []
-    for j, (params, load, t) in enumerate(jobs):
-        p = _params(params)
-        red = _reduced(p, load, 0.0)
-        if np.any(red[-1]):
-            out[j] = friction_at(params, load, t, rtol=rtol, max_steps=max_steps)
-        else:
-            prepared.append((j, red, _times(t, load.total)))
-    for m in sorted({red[6].shape[1] for _, red, _ in prepared}):
-        group = [(j, red, times) for j, red, times in prepared if red[6].shape[1] == m]
-        n_times = np.concatenate([np.full(red[3].size, times.size) for _, red, times in group])
-        times2d = np.full((n_times.size, int(n_times.max())), np.nan)
-        row = 0
-        for _, red, times in group:
-            times2d[row:row + red[3].size, :times.size] = times
-            row += red[3].size
-        cat = [np.concatenate([red[i] for _, red, _ in group]) for i in range(9)]  # k .. scale
-        k, a, b, A, mu_ref, s_kick, ratios, durations, scale = cat
-        res = _quasistatic(k, a, b, A, mu_ref, "aging", s_kick, ratios, durations, scale, None, times2d, rtol,
-                           max_steps, n_times)
-        row = 0
-        for j, red, times in group:
-            rows = slice(row, row + red[3].size)
-            status = res["status"][rows]
-            if np.any(status == Status.QUASISTATIC_BREAKDOWN):  # a runaway: inertia for those sets (friction_at)
-                out[j] = friction_at(jobs[j][0], jobs[j][1], jobs[j][2], rtol=rtol, max_steps=max_steps)
-            else:
-                out[j] = FrictionSamples(mu=res["mu_t"][rows, :times.size], error=res["mu_t_error"][rows, :times.size],
-                                         status=status, steps=res["steps"][rows],
-                                         model=np.zeros(red[3].size, np.int8))
-            row += red[3].size
-    return out
-
-
-def _quasistatic(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, G, times, rtol, max_steps,
-                 n_times=None):
+def _quasistatic(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, G, times, rtol, max_steps):
     from .sampled import two_runs
 
-    return two_runs(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, times, rtol, max_steps, n_times)
+    return two_runs(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, times, rtol, max_steps)
 
 
 def _inertial(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, G, times, rtol, max_steps):

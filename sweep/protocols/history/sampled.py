@@ -15,27 +15,23 @@ __all__ = ["read_samples", "run_sampled", "two_runs"]
 
 
 def two_runs(k, a, b, A, mu_ref, state_law: str, s_kick, ratios, durations, scale, times, rtol: float,
-             max_steps: int, n_times=None) -> dict[str, np.ndarray]:
+             max_steps: int) -> dict[str, np.ndarray]:
     """The dense-output driver run at rtol/TIGHTER and rtol/TIGHTER^2 for every set (k, a, b, A, mu_ref = mu_d(V),
     s_kick, scale = V/D0 [1/s] per set; ratios and physical durations [s] (sets, segments); sorted ``times`` [s]):
     ``mu_t`` = mu_ref + A s of the tighter run and ``mu_t_error`` (sets, times); ``status`` (ok, max_steps,
-    step_underflow, or error_above_tol where an error exceeds rtol (|mu| + A)) and ``steps`` per set. With
-    ``n_times``, ``times`` is (sets, max times), set i's times its first n_times[i] (the rest of its row NaN)."""
-    from ...integrate.history_dense import history_dense_batch, history_dense_rows
+    step_underflow, or error_above_tol where an error exceeds rtol (|mu| + A)) and ``steps`` per set."""
+    from ...integrate.history_dense import history_dense_batch
     from ...integrate.models.history import LAW_CODES
 
     n, m, times = k.size, ratios.shape[1], np.ascontiguousarray(times, dtype=float)
     runs = []
     for e in (1, 2):
-        s_out = np.full((n, times.shape[-1]), np.nan)
+        s_out = np.empty((n, times.size))
         status, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
         records = [np.empty((n, m)) for _ in range(3)]  # not read here
-        common = (k, a, b, LAW_CODES[state_law], s_kick, ratios, durations, scale, times)
-        rest = (rtol / TIGHTER**e, int(max_steps), *records, np.zeros((n, m), np.int8), s_out, status, steps)
-        if n_times is None:
-            history_dense_batch(*common, *rest)
-        else:  # each set its own times: the rows of ``times``, n_times[i] of them
-            history_dense_rows(*common, np.ascontiguousarray(n_times, dtype=np.int64), *rest)
+        history_dense_batch(k, a, b, LAW_CODES[state_law], s_kick, ratios, durations, scale, times,
+                            rtol / TIGHTER**e, int(max_steps), *records, np.zeros((n, m), np.int8), s_out, status,
+                            steps)
         runs.append((s_out, status, steps))
     (s_loose, st_loose, n_loose), (s_tight, st_tight, n_tight) = runs
     return read_samples(s_loose, s_tight, st_loose, st_tight, A, mu_ref, rtol, n_loose + n_tight)
