@@ -46,23 +46,40 @@ REGIMES = ("steady", "stick_slip", "neutral", "runaway", "undecided")
 TARGETS = {"quasistatic_1t": 10.0, "auto_1t": 20.0, "deep_inertial_1t": 20.0}
 
 
+def issue_grid(n_v: int = 20, n_k: int = 40, deep: bool = False):
+    """(preset sample2, K/M [s-2], V [m/s]) of the issue's driven grid: V n_v values log-spaced over 0.1..5 um/s,
+    K/M n_k values log-spaced from 0.3 x the smallest to 3 x the largest quasi-static (K/M)_c over those V; ``deep``:
+    from 0.05 to 0.5 x the smallest (all stick-slip)."""
+    import sweep
+    from sweep import physics
+
+    p = sweep.presets["sample2"]
+    V = np.logspace(-7, np.log10(5e-6), n_v)
+    kc = physics.hopf_K_over_M(V, p.A, p.m1, p.m2, p.D0, p.V0)
+    lo, hi = (0.05 * np.nanmin(kc), 0.5 * np.nanmin(kc)) if deep else (0.3 * np.nanmin(kc), 3.0 * np.nanmax(kc))
+    return p, np.logspace(np.log10(lo), np.log10(hi), n_k), V
+
+
+def add_worker_arguments(ap: argparse.ArgumentParser, default_out: Path) -> None:
+    """The options a driven benchmark and its ``--worker`` subprocesses share."""
+    ap.add_argument("--out", type=Path, default=default_out)
+    ap.add_argument("--no-png", action="store_true", help="accepted for uniformity (this script draws nothing)")
+    ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--model", default="quasistatic", help=argparse.SUPPRESS)
+    ap.add_argument("--threads", type=int, default=1, help=argparse.SUPPRESS)
+    ap.add_argument("--save", help=argparse.SUPPRESS)
+
+
 def worker(args) -> None:
     """One measurement in this process (PYTHONPATH = the tree): JSON on stdout, outputs into args.save."""
     import numba
 
     import sweep
-    from sweep import physics
     from sweep.protocols.driven.chunk import driven_chunk
 
     assert Path(sweep.__file__).resolve().is_relative_to(Path(args.tree).resolve()), sweep.__file__
-    p = sweep.presets["sample2"]
     deep = args.grid == "deep"
-    V = np.logspace(-7, np.log10(5e-6), 10 if deep else 20)
-    kc = physics.hopf_K_over_M(V, p.A, p.m1, p.m2, p.D0, p.V0)
-    if deep:
-        KM = np.logspace(np.log10(0.05 * np.nanmin(kc)), np.log10(0.5 * np.nanmin(kc)), 10)
-    else:
-        KM = np.logspace(np.log10(0.3 * np.nanmin(kc)), np.log10(3.0 * np.nanmax(kc)), 40)
+    p, KM, V = issue_grid(10, 10, deep=True) if deep else issue_grid()
     if args.quick:
         KM, V = (KM[::2], V[::2]) if deep else (KM[::4], V[::4])
     scene = sweep.Scene(protocol="driven", params=p, K_over_M=KM, V=V, model=args.model)
@@ -119,14 +136,9 @@ def main(argv=None) -> None:
     ap.add_argument("--quick", action="store_true", help="every 4th K/M and V, 1 repeat, 1 timed call")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--timed-calls", type=int, default=3)
-    ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
-    ap.add_argument("--no-png", action="store_true", help="accepted for uniformity (this script draws nothing)")
-    ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    add_worker_arguments(ap, DEFAULT_OUT)
     ap.add_argument("--tree", help=argparse.SUPPRESS)
-    ap.add_argument("--model", default="quasistatic", help=argparse.SUPPRESS)
-    ap.add_argument("--threads", type=int, default=1, help=argparse.SUPPRESS)
     ap.add_argument("--grid", default="issue", choices=("issue", "deep"), help=argparse.SUPPRESS)
-    ap.add_argument("--save", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.worker:
         return worker(args)

@@ -26,6 +26,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from driven_lanes import add_worker_arguments
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_OUT = HERE / "results" / "driven_scaling.json"
@@ -34,15 +35,11 @@ SHAPE = (250, 400)  # K/M x V
 
 
 def grid(quick: bool):
-    import sweep
-    from sweep import physics
+    """(preset, K/M, V) of the 1e5-point grid (driven_lanes.issue_grid at SHAPE; --quick 25 x 40)."""
+    from driven_lanes import issue_grid
 
-    p = sweep.presets["sample2"]
     n_k, n_v = (25, 40) if quick else SHAPE
-    V = np.logspace(-7, np.log10(5e-6), n_v)
-    kc = physics.hopf_K_over_M(V, p.A, p.m1, p.m2, p.D0, p.V0)
-    KM = np.logspace(np.log10(0.3 * np.nanmin(kc)), np.log10(3.0 * np.nanmax(kc)), n_k)
-    return p, KM, V
+    return issue_grid(n_v, n_k)
 
 
 def worker(args) -> None:
@@ -80,12 +77,7 @@ def main(argv=None) -> None:
     ap.add_argument("--models", default="quasistatic")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--quick", action="store_true", help="a 1,000-point grid, one repeat")
-    ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
-    ap.add_argument("--no-png", action="store_true", help="accepted for uniformity (this script draws nothing)")
-    ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
-    ap.add_argument("--model", default="quasistatic", help=argparse.SUPPRESS)
-    ap.add_argument("--threads", type=int, default=1, help=argparse.SUPPRESS)
-    ap.add_argument("--save", help=argparse.SUPPRESS)
+    add_worker_arguments(ap, DEFAULT_OUT)
     args = ap.parse_args(argv)
     if args.worker:
         return worker(args)
