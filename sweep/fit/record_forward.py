@@ -161,7 +161,7 @@ def inertia_warning(records, space: ParamSpace) -> str | None:
     None otherwise. docs/fit.md, "Laboratory records"."""
     from ..protocols.history.forward import INERTIA_LIMIT
 
-    if space.g != FrictionParams.from_lab(0.01, 0.01, 1e-5).g:
+    if space.g != FrictionParams.g:  # (the dataclass default)
         return None
     full = space.full(space.start[None, :])
     a, Dc = float(full["a"][0]), float(full["Dc"][0])
