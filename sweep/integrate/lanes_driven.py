@@ -192,8 +192,9 @@ class DrivenJob(NamedTuple):
     max_steps: int
 
 
-class _Lanes(NamedTuple):
-    """Per-lane cycle bookkeeping (scalar: touched at extrema only)."""
+class Bookkeeping(NamedTuple):
+    """Per-lane cycle bookkeeping (scalar: touched at extrema only), shared with the inertial lanes
+    (sweep/integrate/lanes_driven_inertial.py)."""
 
     amp: np.ndarray
     per: np.ndarray
@@ -208,15 +209,184 @@ class _Lanes(NamedTuple):
     after_rebound: np.ndarray
 
 
+@njit(inline="always")
+def new_bookkeeping(lanes):
+    """A :class:`Bookkeeping` for ``lanes`` lanes."""
+    return Bookkeeping(np.full((lanes, HISTORY), np.nan), np.full((lanes, HISTORY), np.nan),
+                       np.full((lanes, HISTORY), np.nan), np.full(lanes, math.inf), np.full(lanes, np.nan),
+                       np.full(lanes, np.nan), np.full(lanes, np.nan), np.full(lanes, np.nan), np.full(lanes, np.nan),
+                       np.zeros(lanes, np.int64), np.zeros(lanes, np.bool_))
+
+
+@njit(inline="always")
+def reset_bookkeeping(bk, lane, a_start):
+    """Lane ``lane``'s bookkeeping at the start of a point (a_start: the linear amplitude through the start)."""
+    for i in range(HISTORY):
+        bk.amp[lane, i], bk.per[lane, i], bk.grow[lane, i] = math.nan, math.nan, math.nan
+    bk.z_min[lane], bk.t_max_prev[lane], bk.amp_first[lane] = math.inf, math.nan, math.nan
+    bk.a_start[lane] = a_start
+    bk.norm_tenth[lane], bk.t_tenth[lane], bk.cycles[lane] = math.nan, math.nan, 0
+    bk.after_rebound[lane] = False
+
+
+@njit(inline="always")
+def move_bookkeeping(bk, lane, to):
+    """Lane ``lane``'s bookkeeping into lane ``to``."""
+    for m in range(HISTORY):
+        bk.amp[to, m], bk.per[to, m], bk.grow[to, m] = bk.amp[lane, m], bk.per[lane, m], bk.grow[lane, m]
+    bk.z_min[to], bk.t_max_prev[to], bk.amp_first[to] = bk.z_min[lane], bk.t_max_prev[lane], bk.amp_first[lane]
+    bk.a_start[to], bk.norm_tenth[to], bk.t_tenth[to] = bk.a_start[lane], bk.norm_tenth[lane], bk.t_tenth[lane]
+    bk.cycles[to], bk.after_rebound[to] = bk.cycles[lane], bk.after_rebound[lane]
+
+
+@njit(inline="always")
+def finish(out, i, regime, status, grow, per, amplitude, cycles, steps, w_peak):
+    """Point i's outputs."""
+    out.regime[i], out.status[i], out.growth_rate[i], out.period[i] = regime, status, grow, per
+    out.amplitude[i], out.cycles[i], out.steps[i], out.peak_w[i] = amplitude, cycles, steps, w_peak
+
+
+@njit(inline="always", fastmath=FAST, error_model="numpy")
+def book_state(bk, lane, i, out, lw1, norm, tau, h, pert, steps, w_peak):
+    """The one-point driver's tests of an accepted state (ln xi' lw1, max-norm ``norm``, at tau + h): runaway past
+    W_RUNAWAY, steady below DECAYED x perturbation (point i finished: True), the first state below 0.1 x
+    perturbation noted."""
+    grow, per, cycles = bk.grow[lane], bk.per[lane], bk.cycles[lane]
+    if lw1 > W_RUNAWAY:
+        finish(out, i, Regime.RUNAWAY, BREAKDOWN, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
+        return True
+    if norm < DECAYED * pert:
+        if not math.isfinite(grow[-1]):
+            grow[-1] = math.log(norm / bk.norm_tenth[lane]) / (tau + h - bk.t_tenth[lane])
+        finish(out, i, Regime.STEADY, OK, grow[-1], per[-1], 0.0, cycles, steps, w_peak)
+        return True
+    if norm < 0.1 * pert and not math.isfinite(bk.t_tenth[lane]):
+        bk.norm_tenth[lane], bk.t_tenth[lane] = norm, tau + h
+    return False
+
+
+@njit(inline="always", fastmath=FAST, error_model="numpy")
+def book_maximum(bk, lane, i, out, z_top, t_peak, pert, max_cycles, steps, w_peak):
+    """A maximum of z (z_top at t_peak): a cycle ends unless it is a rebound (the one-point driver's rules and
+    decision); True where point i is finished."""
+    amp, per, grow = bk.amp[lane], bk.per[lane], bk.grow[lane]
+    rebound = 0.5 * (z_top - bk.z_min[lane]) < REBOUND * amp[-1]
+    if not rebound and bk.z_min[lane] < math.inf and math.isfinite(bk.t_max_prev[lane]):
+        cycles = bk.cycles[lane] + 1
+        bk.cycles[lane] = cycles
+        for m in range(HISTORY - 1):
+            amp[m], per[m], grow[m] = amp[m + 1], per[m + 1], grow[m + 1]
+        amp[-1], per[-1] = 0.5 * (z_top - bk.z_min[lane]), t_peak - bk.t_max_prev[lane]
+        grow[-1] = math.log(amp[-1] / amp[-2]) / per[-1] if amp[-2] > 0.0 else math.nan
+        if cycles == 1:
+            bk.amp_first[lane] = amp[-1]
+        regime = _decide(amp, grow, pert, bk.amp_first[lane], bk.a_start[lane], cycles)
+        if regime != Regime.UNDECIDED:
+            amplitude = 0.0 if regime == Regime.STEADY else amp[-1]
+            finish(out, i, regime, OK, grow[-1], per[-1], amplitude, cycles, steps, w_peak)
+            return True
+        if cycles >= max_cycles:
+            finish(out, i, Regime.UNDECIDED, OK, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
+            return True
+    if not rebound:
+        bk.t_max_prev[lane] = t_peak
+    bk.after_rebound[lane] = rebound
+    return False
+
+
+@njit(inline="always")
+def book_minimum(bk, lane, z_new):
+    """A minimum of z (the lower one where the maximum between was a rebound)."""
+    bk.z_min[lane] = min(bk.z_min[lane], z_new) if bk.after_rebound[lane] else z_new
+
+
+def make_run_lanes(attempts, look, load, idle, n_fields: int, attn: int, n: int, variant: tuple):
+    """run_lanes(pts, job, runs, out): the lane loop (module docstring) over ``attempts`` (one per :data:`WIDTHS`),
+    the scalar ``look`` of a lane whose attention flag is up, ``load(st, bk, lane, pts, i, pert)`` of point i and
+    ``idle(st, bk, lane, pert)`` of an idle dummy, ``n_fields`` lane fields (the attention flag at ``attn``) and
+    ``n`` state components (the scratch of the scalar extremum search)."""
+    attempt_full, attempt_half, attempt_quarter = attempts
+    HALF, QUARTER = WIDTHS[1], WIDTHS[2]
+    W = LANES
+
+    @njit(inline="always", fastmath=FAST, error_model="numpy")
+    def gather(st, bk, lane_point, width):
+        """Move the busy lanes among 0..width-1 into the first ones; the others become idle dummies."""
+        to = 0
+        for lane in range(width):
+            if lane_point[lane] < 0:
+                continue
+            if lane != to:
+                for f in range(n_fields):
+                    st[f * W + to] = st[f * W + lane]
+                move_bookkeeping(bk, lane, to)
+                lane_point[to], lane_point[lane] = lane_point[lane], -1
+            to += 1
+
+    @njit(cache=True, nogil=True, fastmath=FAST, error_model="numpy")
+    def run_lanes(pts, job, runs, out):
+        """The points job.point[runs] to their regimes, into ``out`` (a DrivenOutputs over all points)."""
+        st = np.zeros(n_fields * W)
+        bk = new_bookkeeping(W)
+        lane_point = np.full(W, -1, np.int64)
+        pert, rtol = job.perturbation, job.rtol
+        max_steps = float(job.max_steps)
+        y0, ys, yt, err_v, dyt = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        K = np.empty((_DP5_STAGES, n))
+        work = scratch(n)
+        queued, busy = 0, 0
+        for lane in range(W):
+            if queued < runs.size:
+                i = job.point[runs[queued]]
+                load(st, bk, lane, pts, i, pert)
+                lane_point[lane] = i
+                queued += 1
+                busy += 1
+            else:
+                idle(st, bk, lane, pert)
+        width = W
+        while busy > 0:
+            if queued == runs.size and width > QUARTER and busy <= width // 2:
+                gather(st, bk, lane_point, width)
+                width //= 2
+                for lane in range(busy, width):  # idle dummies in the freed lanes (never looked at)
+                    idle(st, bk, lane, pert)
+            if width == W:
+                attempt_full(st, rtol, pert, max_steps)
+            elif width == HALF:
+                attempt_half(st, rtol, pert, max_steps)
+            else:
+                attempt_quarter(st, rtol, pert, max_steps)
+            for lane in range(width):
+                if st[attn * W + lane] == 0.0:
+                    continue
+                i = lane_point[lane]
+                if i < 0:  # an idle dummy: restart it, never look
+                    idle(st, bk, lane, pert)
+                    continue
+                if not look(st, bk, lane, i, job, out, y0, K, ys, yt, err_v, work, dyt):
+                    continue
+                if queued < runs.size:
+                    i = job.point[runs[queued]]
+                    load(st, bk, lane, pts, i, pert)
+                    lane_point[lane] = i
+                    queued += 1
+                else:
+                    idle(st, bk, lane, pert)
+                    lane_point[lane] = -1
+                    busy -= 1
+
+    pin(gather, *variant)
+    return pin(run_lanes, *variant)
+
+
 @functools.cache
 def _make_kernels():
-    attempt_full, attempt_half, attempt_quarter = (_attempt(w) for w in WIDTHS)
-    HALF, QUARTER = WIDTHS[1], WIDTHS[2]
     _, _, extremum = scalar_parts("aging", False)
     W = LANES
 
     @njit(inline="always", fastmath=FAST, error_model="numpy")
-    def load(st, bk, lane, k, a, b, pert):
+    def load_values(st, bk, lane, k, a, b, pert):
         st[_K * W + lane], st[_A * W + lane], st[_B * W + lane] = k, a, b
         st[_Z * W + lane], st[_U * W + lane] = pert, 0.0
         dz, du, _ = rate(pert, 0.0, k, a, b)
@@ -226,17 +396,15 @@ def _make_kernels():
         st[_LOGPREV * W + lane] = _log2_approx(1e-4)  # the driver's first err_prev
         st[_REJ * W + lane], st[_NSTEP * W + lane], st[_TENTH * W + lane] = 0.0, 0.0, 0.0
         st[_WPEAK * W + lane] = -math.inf
-        for i in range(HISTORY):
-            bk.amp[lane, i], bk.per[lane, i], bk.grow[lane, i] = math.nan, math.nan, math.nan
-        bk.z_min[lane], bk.t_max_prev[lane], bk.amp_first[lane] = math.inf, math.nan, math.nan
-        bk.a_start[lane] = _linear_amplitude(DrivenParams(k, a, b, 0.0), pert)
-        bk.norm_tenth[lane], bk.t_tenth[lane], bk.cycles[lane] = math.nan, math.nan, 0
-        bk.after_rebound[lane] = False
+        reset_bookkeeping(bk, lane, _linear_amplitude(DrivenParams(k, a, b, 0.0), pert))
 
     @njit(inline="always", fastmath=FAST, error_model="numpy")
-    def finish(out, i, regime, status, grow, per, amplitude, cycles, steps, w_peak):
-        out.regime[i], out.status[i], out.growth_rate[i], out.period[i] = regime, status, grow, per
-        out.amplitude[i], out.cycles[i], out.steps[i], out.peak_w[i] = amplitude, cycles, steps, w_peak
+    def load(st, bk, lane, pts, i, pert):
+        load_values(st, bk, lane, pts.k[i], pts.a[i], pts.b[i], pert)
+
+    @njit(inline="always", fastmath=FAST, error_model="numpy")
+    def idle(st, bk, lane, pert):
+        load_values(st, bk, lane, 1.0, 0.5, 0.0, pert)  # an idle dummy (steady sliding, stable)
 
     @njit(fastmath=FAST, error_model="numpy")
     def look(st, bk, lane, i, job, out, y0, K, ys, yt, err_v, work, dyt):
@@ -245,58 +413,29 @@ def _make_kernels():
         pert = job.perturbation
         tau, h = st[_TAU * W + lane], st[_H * W + lane]
         steps = int(st[_NSTEP * W + lane])
-        amp, per, grow = bk.amp[lane], bk.per[lane], bk.grow[lane]
-        cycles = bk.cycles[lane]
+        grow, per = bk.grow[lane], bk.per[lane]
         w_peak = st[_WPEAK * W + lane]
         if st[_ACC * W + lane] == 0.0:  # rejected: below the step floor, or the budget spent
             if st[_H * W + lane] < H_FLOOR * (1.0 + tau):
-                finish(out, i, Regime.UNDECIDED, STEP_UNDERFLOW, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
+                finish(out, i, Regime.UNDECIDED, STEP_UNDERFLOW, grow[-1], per[-1], math.nan, bk.cycles[lane], steps,
+                       w_peak)
                 return True
         else:
             ze, ue, dz1, lw1 = st[_ZE * W + lane], st[_UE * W + lane], st[_DZE * W + lane], st[_LWE * W + lane]
             w_peak = max(w_peak, lw1)
-            if lw1 > W_RUNAWAY:
-                finish(out, i, Regime.RUNAWAY, BREAKDOWN, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
+            if book_state(bk, lane, i, out, lw1, max(abs(ze), abs(ue)), tau, h, pert, steps, w_peak):
                 return True
-            norm = max(abs(ze), abs(ue))
-            if norm < DECAYED * pert:
-                if not math.isfinite(grow[-1]):
-                    grow[-1] = math.log(norm / bk.norm_tenth[lane]) / (tau + h - bk.t_tenth[lane])
-                finish(out, i, Regime.STEADY, OK, grow[-1], per[-1], 0.0, cycles, steps, w_peak)
-                return True
-            if norm < 0.1 * pert and not math.isfinite(bk.t_tenth[lane]):
-                bk.norm_tenth[lane], bk.t_tenth[lane] = norm, tau + h
+            if math.isfinite(bk.t_tenth[lane]):
                 st[_TENTH * W + lane] = 1.0
             dz = st[_DZ * W + lane]
             p = DrivenParams(st[_K * W + lane], st[_A * W + lane], st[_B * W + lane], 0.0)
             y0[0], y0[1] = st[_Z * W + lane], st[_U * W + lane]
             if dz > 0.0 and dz1 <= 0.0:  # a maximum of z: a cycle ends
                 dt, z_top = extremum(False, y0, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
-                t_peak = tau + dt
-                rebound = 0.5 * (z_top - bk.z_min[lane]) < REBOUND * amp[-1]  # the driver's rule
-                if not rebound and bk.z_min[lane] < math.inf and math.isfinite(bk.t_max_prev[lane]):
-                    cycles += 1
-                    bk.cycles[lane] = cycles
-                    for m in range(HISTORY - 1):
-                        amp[m], per[m], grow[m] = amp[m + 1], per[m + 1], grow[m + 1]
-                    amp[-1], per[-1] = 0.5 * (z_top - bk.z_min[lane]), t_peak - bk.t_max_prev[lane]
-                    grow[-1] = math.log(amp[-1] / amp[-2]) / per[-1] if amp[-2] > 0.0 else math.nan
-                    if cycles == 1:
-                        bk.amp_first[lane] = amp[-1]
-                    regime = _decide(amp, grow, pert, bk.amp_first[lane], bk.a_start[lane], cycles)
-                    if regime != Regime.UNDECIDED:
-                        amplitude = 0.0 if regime == Regime.STEADY else amp[-1]
-                        finish(out, i, regime, OK, grow[-1], per[-1], amplitude, cycles, steps, w_peak)
-                        return True
-                    if cycles >= job.max_cycles:
-                        finish(out, i, Regime.UNDECIDED, OK, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
-                        return True
-                if not rebound:
-                    bk.t_max_prev[lane] = t_peak
-                bk.after_rebound[lane] = rebound
+                if book_maximum(bk, lane, i, out, z_top, tau + dt, pert, job.max_cycles, steps, w_peak):
+                    return True
             elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
-                z_new = extremum(False, y0, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
-                bk.z_min[lane] = min(bk.z_min[lane], z_new) if bk.after_rebound[lane] else z_new
+                book_minimum(bk, lane, extremum(False, y0, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1])
             # the accepted step, committed
             st[_Z * W + lane], st[_U * W + lane] = ze, ue
             st[_DZ * W + lane], st[_DU * W + lane] = dz1, st[_DUE * W + lane]
@@ -307,87 +446,14 @@ def _make_kernels():
             st[_H * W + lane] = st[_HN * W + lane]
             st[_REJ * W + lane] = 0.0
         if steps >= job.max_steps:
-            finish(out, i, Regime.UNDECIDED, MAX_STEPS, grow[-1], per[-1], math.nan, cycles, steps, w_peak)
+            finish(out, i, Regime.UNDECIDED, MAX_STEPS, grow[-1], per[-1], math.nan, bk.cycles[lane], steps, w_peak)
             return True
         return False
 
-    @njit(inline="always", fastmath=FAST, error_model="numpy")
-    def gather(st, bk, lane_point, width):
-        """Move the busy lanes among 0..width-1 into the first ones; the others become idle dummies."""
-        to = 0
-        for lane in range(width):
-            if lane_point[lane] < 0:
-                continue
-            if lane != to:
-                for f in range(_N_FIELDS):
-                    st[f * W + to] = st[f * W + lane]
-                for m in range(HISTORY):
-                    bk.amp[to, m], bk.per[to, m], bk.grow[to, m] = bk.amp[lane, m], bk.per[lane, m], bk.grow[lane, m]
-                bk.z_min[to], bk.t_max_prev[to], bk.amp_first[to] = bk.z_min[lane], bk.t_max_prev[lane], \
-                    bk.amp_first[lane]
-                bk.a_start[to], bk.norm_tenth[to], bk.t_tenth[to] = bk.a_start[lane], bk.norm_tenth[lane], \
-                    bk.t_tenth[lane]
-                bk.cycles[to], bk.after_rebound[to] = bk.cycles[lane], bk.after_rebound[lane]
-                lane_point[to], lane_point[lane] = lane_point[lane], -1
-            to += 1
-
-    @njit(cache=True, nogil=True, fastmath=FAST, error_model="numpy")
-    def run_lanes(pts, job, runs, out):
-        """The points job.point[runs] to their regimes, into ``out`` (a DrivenOutputs over all points)."""
-        st = np.zeros(_N_FIELDS * W)
-        bk = _Lanes(np.full((W, HISTORY), np.nan), np.full((W, HISTORY), np.nan), np.full((W, HISTORY), np.nan),
-                    np.full(W, math.inf), np.full(W, np.nan), np.full(W, np.nan), np.full(W, np.nan),
-                    np.full(W, np.nan), np.full(W, np.nan), np.zeros(W, np.int64), np.zeros(W, np.bool_))
-        lane_point = np.full(W, -1, np.int64)
-        y0, ys, yt, err_v, dyt = np.empty(2), np.empty(2), np.empty(2), np.empty(2), np.empty(2)
-        K = np.empty((_DP5_STAGES, 2))
-        work = scratch(2)
-        pert, rtol = job.perturbation, job.rtol
-        max_steps = float(job.max_steps)
-        queued, busy = 0, 0
-        for lane in range(W):
-            if queued < runs.size:
-                i = job.point[runs[queued]]
-                load(st, bk, lane, pts.k[i], pts.a[i], pts.b[i], pert)
-                lane_point[lane] = i
-                queued += 1
-                busy += 1
-            else:
-                load(st, bk, lane, 1.0, 0.5, 0.0, pert)  # an idle dummy (steady sliding, stable)
-        width = W
-        while busy > 0:
-            if queued == runs.size and width > QUARTER and busy <= width // 2:
-                gather(st, bk, lane_point, width)
-                width //= 2
-                for lane in range(busy, width):  # idle dummies in the freed lanes (never looked at)
-                    load(st, bk, lane, 1.0, 0.5, 0.0, pert)
-            if width == W:
-                attempt_full(st, rtol, pert, max_steps)
-            elif width == HALF:
-                attempt_half(st, rtol, pert, max_steps)
-            else:
-                attempt_quarter(st, rtol, pert, max_steps)
-            for lane in range(width):
-                if st[_ATTN * W + lane] == 0.0:
-                    continue
-                i = lane_point[lane]
-                if i < 0:  # an idle dummy: restart it, never look
-                    load(st, bk, lane, 1.0, 0.5, 0.0, pert)
-                    continue
-                if not look(st, bk, lane, i, job, out, y0, K, ys, yt, err_v, work, dyt):
-                    continue
-                if queued < runs.size:
-                    i = job.point[runs[queued]]
-                    load(st, bk, lane, pts.k[i], pts.a[i], pts.b[i], pert)
-                    lane_point[lane] = i
-                    queued += 1
-                else:
-                    load(st, bk, lane, 1.0, 0.5, 0.0, pert)
-                    lane_point[lane] = -1
-                    busy -= 1
-
-    for kernel in (load, finish, look, gather, run_lanes):
-        pin(kernel, "aging", "quasistatic", W)
+    variant = ("aging", "quasistatic", W)
+    for kernel in (load_values, load, idle, look):
+        pin(kernel, *variant)
+    run_lanes = make_run_lanes(tuple(_attempt(w) for w in WIDTHS), look, load, idle, _N_FIELDS, _ATTN, 2, variant)
     return run_lanes, lanes_in_threads(run_lanes, W)
 
 
