@@ -25,7 +25,7 @@ def add_fit_command(add) -> None:
                           "(netCDF + PNG)")
     fit.add_argument("config", help="fit TOML: preset/[params], free, [bounds], [start], [[data]] file = ... (a "
                                     "record's [[data]] also: columns, units, steps, k, noise, detrend, t_start, "
-                                    "t_end)")
+                                    "t_end, g)")
     fit.add_argument("-o", "--output", type=Path, default=DEFAULT_OUT, help=f"netCDF output (default {DEFAULT_OUT})")
     fit.add_argument("--png", type=Path, help="picture output (default: the output with .png)")
     fit.add_argument("--overwrite", action="store_true", help="replace existing output files")
@@ -33,6 +33,10 @@ def add_fit_command(add) -> None:
                      help="global: a coarse grid over the bounds first (default); local: the least squares from the "
                           "start alone (known start, many records, refits: no guard against local minima); "
                           "overrides the file's search")
+    fit.add_argument("--g", type=float, default=None, metavar="N/M",
+                     help="laboratory records: the machine's g = N/M [m/s^2] (normal load over moving mass) of the "
+                          "records that give none; overrides the file's g (default: none: quasi-static, inertia only "
+                          "where a slip runs away, docs/fit.md)")
     fit.set_defaults(func=_cmd_fit)
 
 
@@ -47,6 +51,8 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     kwargs = load_fit_config(args.config)
     if args.search is not None:
         kwargs["search"] = args.search
+    if args.g is not None:
+        kwargs["g"] = args.g
     png = args.png or args.output.with_suffix(".png")
     check_targets({"data": args.output, "picture": png}, overwrite=args.overwrite, inputs={"fit file": args.config})
     t0 = time.perf_counter()

@@ -6,6 +6,7 @@
     poor = 0.25                   # relative half-width of a 95 % interval above which "poorly constrained"
     rtol = 1e-6                   # engine accuracy of the least squares and profiles (global stage: global_rtol)
     search = "global"             # or "local": the least squares from the start, no global grid (sweep.fit)
+    g = 1e4                       # records: the machine's g = N/M [m/s^2] (default: none, docs/fit.md)
     [bounds]
     A = [0.001, 0.05]
     [start]
@@ -15,7 +16,7 @@
     sample = "s2"                 # optional: data sets with the same sample share parameters
     [[data]]
     file = "p4966.txt"            # a laboratory record (sweep.fit.records.read_record) and its options:
-    columns = {time = "Zeit"}     # columns, units, steps, k, noise, detrend, t_start, t_end
+    columns = {time = "Zeit"}     # columns, units, steps, k, noise, detrend, t_start, t_end, g
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from .read import RECORD_OPTIONS, read_data
 __all__ = ["FIT_KEYS", "load_fit_config"]
 
 FIT_KEYS = {"preset", "params", "free", "per_data_set", "poor", "rtol", "global_rtol", "profiles", "search", "bounds",
-            "start", "data"}
+            "start", "data", "g"}
 
 
 def load_fit_config(path: str | Path) -> dict[str, Any]:
@@ -57,6 +58,6 @@ def load_fit_config(path: str | Path) -> dict[str, Any]:
         data.append(read_data(path.parent / entry["file"], sample=entry.get("sample"), name=entry.get("name"),
                               record={k: entry[k] for k in RECORD_OPTIONS if k in entry}))
     kwargs = {k: cfg[k] for k in ("free", "per_data_set", "poor", "rtol", "global_rtol", "profiles", "search",
-                                  "bounds", "start") if k in cfg}
+                                  "bounds", "start", "g") if k in cfg}
     return {"data": data, "params": _params_from(cfg) if ("preset" in cfg or "params" in cfg) else "sample2",
             **kwargs}

@@ -93,20 +93,30 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
             params: FrictionParams | str = "sample2", bounds: Mapping[str, Sequence[float]] | None = None,
             start: Mapping[str, float] | None = None, per_data_set: bool = False, poor: float = 0.25,
             rtol: float = 1e-6, global_rtol: float = 1e-4, profiles: bool = True,
-            progress: Callable[[str], None] | None = None, search: str = "global") -> FitOutcome:
+            progress: Callable[[str], None] | None = None, search: str = "global", g: float | None = None
+            ) -> FitOutcome:
     """The stages of :func:`fit`, returning the raw :class:`FitOutcome`."""
     say = progress or log.info
     search = _search(search)
     records = _records(data)
     if records:  # the third kind of data: its own space and forward model (sweep.fit.record_forward)
-        from .record_forward import RECORD_FREE, RecordStack, inertia_warning, make_record_space, record_k
+        from .record_forward import (
+            RECORD_FREE,
+            RecordStack,
+            inertia_report,
+            make_record_space,
+            record_k,
+            with_machine_g,
+        )
 
         if tuple(free) == ("A", "m1", "m2"):  # the default of stop data: a record fit's is a, b, Dc
             free = ("a", "b", "Dc")
+        data = with_machine_g(data, g, _params(params))
+        records = _records(data)
         space = make_record_space(free, _params(params), record_k(records), bounds, start)
-        line = inertia_warning(records, space)
-        if line is not None:
-            warnings.warn(line, PlausibilityWarning, stacklevel=user_stacklevel())
+    elif g is not None:
+        raise InputError(f"g (a machine's N/M [m/s^2]) applies to laboratory records only, got g = {g!r} for "
+                         f"relaxation curves or relaxed slips (give their g in params)")
     else:
         space = make_space(free, _params(params), bounds, start)
     problems = make_problems(data, space, per_data_set)
@@ -146,8 +156,13 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
     fits = refine_all(stack, theta0)
     rounds["least_squares"], seconds["least_squares"] = stack.rounds, time.perf_counter() - t1
     unsolved = [f.residuals == MODEL_FAILED if f.failures else np.zeros(f.residuals.size, bool) for f in fits]
-    engine_error = _check_engine_error(stack.with_settings(rtol, estimates=True), fits, progress,
-                                       [u.any() for u in unsolved])
+    check = stack.with_settings(rtol, estimates=True)
+    engine_error = _check_engine_error(check, fits, progress, [u.any() for u in unsolved])
+    inertia = {}
+    if records:  # what each record's inertia was (sweep.fit.record_forward), said in fit_settings
+        inertia, line = inertia_report(problems, check.inertial, space)
+        if line is not None:
+            warnings.warn(line, PlausibilityWarning, stacklevel=user_stacklevel())
 
     # the noise variance over the data the model solved (all of them but where a fit failed its solves)
     # a detrended record's trend slope is fitted too (sweep.fit.record_forward): one parameter more per such record
@@ -192,7 +207,8 @@ def run_fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2")
     settings = {"free": list(space.names), "search": search, "start": dict(zip(space.names, map(float, space.start))),
                 "rtol": rtol, "global_rtol": global_rtol, "poor": poor,
                 "per_data_set": bool(per_data_set), "params": _params(params).as_dict(),
-                **({"kind": "records", "fixed": {n: space.values[n] for n in RECORD_FREE}} if records else {})}
+                **({"kind": "records", "fixed": {n: space.values[n] for n in RECORD_FREE}, **inertia} if records
+                   else {})}
     return FitOutcome(problems, space, globals_, fits, s2, covs, crit, profs, ivs, labels, rounds, seconds, settings,
                       engine_error, verdicts)
 
@@ -249,8 +265,8 @@ def fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2"),
         params: FrictionParams | str = "sample2", bounds: Mapping[str, Sequence[float]] | None = None,
         start: Mapping[str, float] | None = None, per_data_set: bool = False, poor: float = 0.25,
         rtol: float = 1e-6, global_rtol: float = 1e-4, profiles: bool = True,
-        progress: Callable[[str], None] | None = None, history: str = "sweep.fit", search: str = "global"
-        ) -> xr.Dataset:
+        progress: Callable[[str], None] | None = None, history: str = "sweep.fit", search: str = "global",
+        g: float | None = None) -> xr.Dataset:
     """Fit the friction parameters to measured stop data; returns a Dataset (docs/fit.md, "Output").
 
     Parameters
@@ -286,6 +302,12 @@ def fit(data: Data | Sequence[Data], free: Sequence[str] = ("A", "m1", "m2"),
         refit; nothing then guards against a local minimum (the verdicts still say where a fit is poor: with the
         noise given, poor_fit). The Dataset's ``fit_settings`` name the search; a local fit has no
         ``misfit_landscape`` and no ``P_global``.
+    g : float
+        Laboratory records only: the machine's inertia g = N/M [m s-2] (normal load over moving mass; k = K/(M g) =
+        K/N) of the records that do not give their own (``Record.g``). Default: ``params``' g where it is not
+        FrictionParams' 9.81, else none: such records are modelled quasi-statically, with inertia (at params' g)
+        only where the quasi-static run breaks down (stick-slip), and a warning where that decides the best fit
+        (docs/fit.md, "The machine's inertia"); ``fit_settings`` say what each record got.
     """
     return build_fit_dataset(run_fit(data, free, params, bounds, start, per_data_set, poor, rtol, global_rtol,
-                                     profiles, progress, search=search), history=history)
+                                     profiles, progress, search=search, g=g), history=history)

@@ -49,7 +49,7 @@ from .units import to_si
 __all__ = ["read_data"]
 
 
-RECORD_OPTIONS = ("columns", "units", "steps", "k", "noise", "detrend", "t_start", "t_end")
+RECORD_OPTIONS = ("columns", "units", "steps", "k", "noise", "detrend", "t_start", "t_end", "g")
 """Options of a laboratory record's file (sweep.fit.records.read_record), also keys of ``sweep fit``'s [[data]]."""
 
 

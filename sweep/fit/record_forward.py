@@ -3,9 +3,15 @@
 
 The seam: sweep.fit.core builds a RecordStack instead of a ProblemStack where the data are records; the global
 stage, least squares, profiles, noise estimate and verdicts run unchanged on it (they see residuals only). The model
-of a record is mu(t) of :func:`sweep.protocols.history.forward.friction_at` (quasi-static, aging law, steady sliding
-at the first segment's velocity at the record's first time) with A = a, m1 = b - a, m2 = 0, D0 = Dc, m0 = mu0,
-K/M = k g (docs/physics.md 7b). k: the fit's where free, else the record's own (``Record.k``), else the start's.
+of a record is mu(t) of :func:`sweep.protocols.history.forward.friction_at` (aging law, steady sliding at the first
+segment's velocity at the record's first time) with A = a, m1 = b - a, m2 = 0, D0 = Dc, m0 = mu0, K/M = k g
+(docs/physics.md 7b). k: the fit's where free, else the record's own (``Record.k``), else the start's. g = N/M, the
+machine's inertia: a record's own (``Record.g``; :func:`with_machine_g` gives the records without one the fit's
+``g``, or ``params``' g where it is not FrictionParams' default), the model then friction_at's "auto" (inertia where
+gamma/A > INERTIA_LIMIT or the quasi-static run breaks down); a record without g is quasi-static (a laboratory
+machine's inertia is negligible while it slides) but where a parameter set's quasi-static run breaks down (a spring
+softer than critical: stick-slip), whose slips run with inertia at ``params``' g (FrictionParams' default 9.81 m/s^2,
+a block under its own weight), friction_at's "breakdown"; :func:`inertia_report` says which.
 A record with ``detrend`` adds c x to its model (x its time or displacement from the start) with the slope c that
 minimises its weighted residuals at each parameter set (a linear nuisance parameter projected out: the profiles of
 the other parameters are then profiled over c too; it counts as a parameter in the degrees of freedom and the
@@ -27,11 +33,13 @@ from .segments import load_history
 from .space import ParamSpace, bounded_space
 from .stack import ProblemStack
 
-__all__ = ["RECORD_FREE", "RecordStack", "inertia_warning", "make_record_space"]
+__all__ = ["RECORD_FREE", "RecordStack", "inertia_report", "make_record_space", "with_machine_g"]
 
 RECORD_FREE = ("a", "b", "Dc", "mu0", "k")
 """Parameters a record fit may free, in the order they are reported (k = K/(M g) [1/m])."""
 
+MAX_STEPS = 1_000_000
+"""friction_at's step budget of a run (its default)."""
 VALUED = (int(Status.OK), int(Status.ERROR_ABOVE_TOL))
 """friction_at statuses whose values a record fit uses: error_above_tol too (in stick-slip the estimate exceeds the
 error ~9x, and a sawtooth's own truth got it; its error enters engine_error like any other)."""
@@ -82,13 +90,14 @@ class RecordStack(ProblemStack):
         self.observed, self.weights = np.zeros((Q, self.n_max)), np.zeros((Q, self.n_max))
         for q, pr in enumerate(self.problems):
             self.observed[q, :pr.n_residuals], self.weights[q, :pr.n_residuals] = pr.observed, pr.weights
-        self.loads = [[(load_history(d), d.t - d.t[0], d.k) for d in pr.data] for pr in self.problems]
+        self.loads = [[_load_and_times(d) for d in pr.data] for pr in self.problems]
         # problems whose records have the same histories, times and k share a layout, hence their model values (the
         # global grid is solved once for all of them); a detrended record's model depends on its data: its own
         keys: dict[tuple, int] = {}
         self.layout = np.array([keys.setdefault(
             (q,) if any(d.detrend for d in pr.data) else
-            tuple((ld.velocities.tobytes(), ld.durations.tobytes(), t.tobytes(), k) for ld, t, k in self.loads[q]),
+            tuple((ld.velocities.tobytes(), ld.durations.tobytes(), t.tobytes(), k, g)
+                  for ld, t, k, g in self.loads[q]),
             len(keys)) for q, pr in enumerate(self.problems)], dtype=np.intp)
         self.representative = np.array([int(np.flatnonzero(self.layout == u)[0]) for u in range(len(keys))],
                                        dtype=np.intp)
@@ -118,8 +127,8 @@ class RecordStack(ProblemStack):
     def _model(self, layout: np.ndarray, params: np.ndarray, errors: bool = False):
         """mu (U, n_max) in residual order of U blocks (a layout and a parameter set each), NaN where friction_at
         did not give a value (status not in VALUED); all stable (a record may hold stick-slip); with ``errors`` their
-        estimates."""
-        from ..protocols.history.forward import RTOL_RANGE, friction_at
+        estimates, and ``self.inertial`` (U, records) says which record of each block ran with inertia."""
+        from ..protocols.history.forward import RTOL_RANGE, sample_friction
 
         U = layout.size
         mu, err = np.full((U, self.n_max), np.nan), np.full((U, self.n_max), np.nan)
@@ -128,17 +137,25 @@ class RecordStack(ProblemStack):
         # checked at rtol with estimates (sweep.fit.core), the difference counted in engine_error
         rtol = self.rtol if self.estimates else min(self.rtol * TIGHTER, RTOL_RANGE[1])
         k_free = "k" in self.space.names
+        if errors:
+            self.inertial = np.zeros((U, max(len(ld) for ld in self.loads)), bool)
         for u in np.unique(layout):
             rows, q = np.flatnonzero(layout == u), self.representative[u]
             p = params[rows]
             col = 0
-            for (load, t, k_rec), x in zip(self.loads[q], self.trends[q]):
+            for i, ((load, t, k_rec, g_rec), x) in enumerate(zip(self.loads[q], self.trends[q])):
                 k = p[:, 4] if k_free or k_rec is None else np.full(rows.size, k_rec)
+                g = self.g if g_rec is None else g_rec  # without the machine's g: quasi-static but where slips need it
                 lab = {"A": p[:, 0], "m1": p[:, 1] - p[:, 0], "m2": np.zeros(rows.size), "D0": p[:, 2],
-                       "m0": p[:, 3], "V0": np.full(rows.size, self.V0), "K_over_M": k * self.g,
-                       "g": np.full(rows.size, self.g)}  # g = N/M: the machine's inertia (docs/physics.md 7b)
-                out = friction_at(lab, load, t, rtol=rtol)
-                ok = np.isin(out.status, VALUED)[:, None]
+                       "m0": p[:, 3], "V0": np.full(rows.size, self.V0), "K_over_M": k * g,
+                       "g": np.full(rows.size, g)}  # g = N/M: the machine's inertia (docs/physics.md 7b)
+                # friction_at without its checks (the sets lie within their bounds, the times were checked once):
+                # the rounds' tighter run alone, the check's pair with estimates
+                out = sample_friction(lab, load, t, "aging", rtol, MAX_STEPS, 0.0,
+                                      "breakdown" if g_rec is None else "auto", self.estimates)
+                if errors:
+                    self.inertial[rows, i] = out.model == 1
+                ok = ((out.status == VALUED[0]) | (out.status == VALUED[1]))[:, None]
                 m = np.where(ok, out.mu, np.nan)
                 if x is not None:  # the record's linear trend: its best slope per set, projected out
                     w2 = self.weights[q, col:col + t.size] ** 2
@@ -154,27 +171,54 @@ class RecordStack(ProblemStack):
         return (mu, ok, err) if errors else (mu, ok)
 
 
-def inertia_warning(records, space: ParamSpace) -> str | None:
-    """One line where some record's fastest slide runs with inertia at the start values (gamma/A = v^2/(g Dc a) >
-    friction_at's INERTIA_LIMIT) and g is the default 9.81 m/s^2 of FrictionParams (a block under its own weight: a
-    laboratory machine's moving mass M is far below N/g, so its g = N/M is far larger and its inertia negligible);
-    None otherwise. docs/fit.md, "Laboratory records"."""
+def _load_and_times(d) -> tuple:
+    """(load history, times from its start [s] checked as friction_at checks them, k, g) of a record."""
+    from ..protocols.history.forward import _times
+
+    load = load_history(d)
+    return load, _times(d.t - d.t[0], load.total), d.k, d.g
+
+
+def with_machine_g(data, g: float | None, params: FrictionParams) -> list:
+    """``data`` (a sequence, or one data set) with each record's machine inertia g = N/M [m s-2]: its own
+    (``Record.g``), else ``g`` (the fit's, checked in sweep.fit.records.G_RANGE), else ``params.g`` where that is not
+    FrictionParams' default 9.81 (a call that gives the machine's g in its params); None otherwise (the module
+    docstring's default: quasi-static but where a slip runs away)."""
+    from dataclasses import replace
+
+    from .records import Record, check_g
+
+    fallback = check_g("g", g) if g is not None else (params.g if params.g != FrictionParams.g else None)
+    items = list(data) if isinstance(data, (list, tuple)) else [data]
+    return [replace(d, g=fallback) if isinstance(d, Record) and d.g is None and fallback is not None else d
+            for d in items]
+
+
+def inertia_report(problems: Sequence[Problem], inertial: np.ndarray, space: ParamSpace) -> tuple[dict, str | None]:
+    """What a record fit chose for each record's inertia (problem and record order): ``fit_settings`` entries
+    (``record_g``: the g = N/M [m s-2] given, None where none was; ``record_inertial``: whether the best fit ran the
+    record with inertia, ``inertial`` of :class:`RecordStack` at the best fits; ``inertia``: the rule) and a warning
+    line where a record without a given g slips at the best fit: its slips ran at ``params``' g, which sets their
+    falls (friction_at of a stick-slip record: its lowest friction ~0.0095 lower per decade of g at a = 0.01, b =
+    0.015, Dc = 10 um, g 9.81 .. 1e5), None otherwise."""
     from ..protocols.history.forward import INERTIA_LIMIT
 
-    if space.g != FrictionParams.g:  # (the dataclass default)
-        return None
-    full = space.full(space.start[None, :])
-    a, Dc = float(full["a"][0]), float(full["Dc"][0])
-    fast = [(d.name, float(np.max(load_history(d).velocities))) for d in records]
-    over = [(name, v, v**2 / (space.g * Dc * a)) for name, v in fast if v**2 / (space.g * Dc * a) > INERTIA_LIMIT]
-    if not over:
-        return None
-    name, v, ratio = max(over, key=lambda x: x[2])
-    more = f" (and {len(over) - 1} more)" if len(over) > 1 else ""
-    return (f"record {name!r}{more} slides at {v:.3g} m/s: with g = N/M = {space.g} m/s^2, the default (a block "
-            f"under its own weight), gamma/A = {ratio:.3g} > {INERTIA_LIMIT:g} and the fit models its inertia; a "
-            "laboratory machine's moving mass is far below N/g: give its g = N/M in params "
-            "(FrictionParams.from_lab(..., g=...)), or the inertia biases a and b (docs/fit.md)")
+    given = [d.g for pr in problems for d in pr.data]
+    ran = [bool(inertial[q, i]) for q, pr in enumerate(problems) for i in range(len(pr.data))]
+    settings = {"inertia": f"a record with g = N/M given: friction_at's auto (inertia where gamma/A = v^2/(g Dc a) > "
+                           f"{INERTIA_LIMIT:g} or the quasi-static run breaks down); without: quasi-static, inertia "
+                           f"only where the quasi-static run breaks down (stick-slip), at g = {space.g:g} m/s^2",
+                "record_g": given, "record_inertial": ran}
+    names = [d.name for pr in problems for d in pr.data]
+    slipped = [n for n, g, r in zip(names, given, ran) if g is None and r]
+    if not slipped:
+        return settings, None
+    more = f" (and {len(slipped) - 1} more)" if len(slipped) > 1 else ""
+    return settings, (f"record {slipped[0]!r}{more} slips at the best fit (its quasi-static model runs away: "
+                      f"stick-slip), and no g = N/M was given: its slips ran with inertia at g = {space.g:g} m/s^2 ("
+                      f"params' g; FrictionParams' default 9.81 is a block under its own weight), which sets "
+                      f"their falls; give the machine's g (Record(g=...), sweep.fit(g=...), the fit file's g, "
+                      f"'# g = ... m/s^2' in the record) (docs/fit.md)")
 
 
 def record_k(data) -> float | None:

@@ -7,7 +7,8 @@ starts from steady sliding at the first segment's velocity at the record's first
 
 The reader takes text files as laboratories write them: columns separated by tabs, semicolons, commas or blanks
 (the first data row decides; trailing delimiters ignored), decimal commas, CR LF, latin-1 (µm) or UTF-16; comment
-lines starting with ``#`` or ``%`` (``# k = 2e3 1/m`` there sets the stiffness); title lines and key-value lines
+lines starting with ``#`` or ``%`` (``# k = 2e3 1/m`` there sets the stiffness, ``# g = 1e4 m/s^2`` the machine's
+inertia g = N/M); title lines and key-value lines
 above the header; a header naming the columns with their units in brackets or parentheses (``Time (s)``, ``mu
 [-]``), as the name's last part (PSU's ``time_s``, ``lpdisp_um``, ``shr_stress_mpa``) or in a units row below the
 names (xlook's ``sec  mic  MPa  .``); quoted fields; time stamps (read as seconds); columns it does not use (a row
@@ -40,7 +41,7 @@ import numpy as np
 from ..errors import InputError
 from .units import FORCE, RECORD_UNITS
 
-__all__ = ["ROLES", "Record", "is_record_file", "read_record"]
+__all__ = ["G_RANGE", "ROLES", "Record", "check_g", "is_record_file", "read_record"]
 
 ROLES = ("time", "displacement", "velocity", "mu", "shear", "normal")
 """The columns a record may have (``columns`` maps these to the file's names)."""
@@ -113,8 +114,10 @@ class Record:
     parameters); ``noise`` [1] per sample, one number, or None (estimated); ``sample`` and ``name`` as for a Curve;
     ``detrend`` "time" or "displacement": the model carries a linear trend c (t - t[0]) or c (x - x[0]) of its own
     slope c [1/s or 1/m] per record, the one that fits best at each parameter set (projected out; fitted as one
-    more parameter: sweep.fit.result reports it, ``detrend_slope_time`` / ``_displacement``). :meth:`window` cuts
-    a record to a time range."""
+    more parameter: sweep.fit.result reports it, ``detrend_slope_time`` / ``_displacement``); ``g`` [m s-2] the
+    machine's inertia g = N/M, its normal load over its moving mass (None: the fit's ``g``, else its default:
+    quasi-static, inertia only where the model's slip runs away; docs/fit.md, "The machine's inertia").
+    :meth:`window` cuts a record to a time range."""
 
     t: np.ndarray
     mu: np.ndarray
@@ -126,6 +129,7 @@ class Record:
     sample: str = "sample"
     name: str = "record"
     detrend: str | None = None
+    g: float | None = None
 
     def __post_init__(self) -> None:
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 (frozen)
@@ -156,6 +160,8 @@ class Record:
             if not (np.isfinite(k) and k > 0):
                 raise InputError(f"{where}: k must be > 0 [1/m] (k = K/(M g)), got {self.k!r}")
             set_("k", k)
+        if self.g is not None:
+            set_("g", check_g(f"{where}: g", self.g))
         if self.noise is not None:
             noise = np.broadcast_to(np.asarray(self.noise, dtype=float), t.shape).copy()
             if not np.all(np.isfinite(noise) & (noise > 0)):
@@ -191,6 +197,23 @@ class Record:
         cut = {f: None if getattr(self, f) is None else getattr(self, f)[keep]
                for f in ("mu", "displacement", "velocity", "noise")}
         return replace(self, t=t, steps=steps, **cut)
+
+
+G_RANGE = (1e-3, 1e12)
+"""Allowed range of a machine's g = N/M [m s-2] (the normal load over the moving mass; a block under its own weight
+9.81, a laboratory machine ~1e3..1e6): beyond it a unit mistake."""
+
+
+def check_g(name: str, value) -> float:
+    """``value`` as a machine's g = N/M [m s-2] in :data:`G_RANGE` (InputError naming ``name`` otherwise)."""
+    try:
+        g = float(value)
+    except (TypeError, ValueError):
+        g = float("nan")
+    if isinstance(value, bool) or not G_RANGE[0] <= g <= G_RANGE[1]:
+        raise InputError(f"{name} must be a number in [{G_RANGE[0]:g}, {G_RANGE[1]:g}] m/s^2 (g = N/M, the normal "
+                         f"load over the machine's moving mass; k = K/(M g) = K/N), got {value!r}")
+    return g
 
 
 def _column(where: str, role: str, values, n: int | None = None) -> np.ndarray:
@@ -510,7 +533,7 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
                 units: Mapping[str, str] | None = None, steps: Sequence[tuple[float, float]] | None = None,
                 k: float | None = None, noise: float | None = None, sample: str | None = None,
                 name: str | None = None, detrend: str | None = None, t_start: float | None = None,
-                t_end: float | None = None) -> Record:
+                t_end: float | None = None, g: float | None = None) -> Record:
     """A :class:`Record` from a laboratory text file (module docstring), in SI units.
 
     ``columns`` maps roles (:data:`ROLES`) to the file's column names where the reader does not know them;
@@ -518,7 +541,8 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
     ``steps`` the history as (start time [s], velocity [m/s]) (default: found from the load point); ``k`` [1/m]
     (default: ``# k = value unit`` in the file's comments, else the fit's); ``noise`` [1] of mu (default: estimated);
     ``sample`` (default: ``# sample = name`` in the comments, else "sample") and ``name`` (the file's stem);
-    ``detrend`` as :class:`Record`'s; ``t_start``, ``t_end`` [s, the file's clock]: keep only the samples between
+    ``detrend`` as :class:`Record`'s; ``g`` [m/s^2] the machine's g = N/M (default: ``# g = value m/s^2`` in the
+    file's comments, else the fit's); ``t_start``, ``t_end`` [s, the file's clock]: keep only the samples between
     them (:meth:`Record.window`: a record that starts in a hold is cut to a time in steady sliding)."""
     path = Path(path)
     if not path.is_file():
@@ -598,9 +622,15 @@ def read_record(path: str | os.PathLike, columns: Mapping[str, str] | None = Non
         if _unit_key(unit) not in _STIFFNESS:
             raise InputError(f"{where}: '# k = {value} {unit}': unit must be one of {sorted(_STIFFNESS)}")
         k = float(value) * _STIFFNESS[_unit_key(unit)]
+    if g is None and "g" in h.meta:
+        value, unit = h.meta["g"]
+        if _unit_key(unit) not in ("", "m/s^2", "m/s2", "ms-2", "m/s/s", "m/s²"):
+            raise InputError(f"{where}: '# g = {value} {unit}': g = N/M is in m/s^2 (write '# g = {value} m/s^2')")
+        g = check_g(f"{where}: '# g = {value} {unit}'", value)
     rec = Record(t, mu, displacement=col("displacement") if "displacement" in found else None,
                  velocity=col("velocity") if "velocity" in found else None, steps=steps, k=k, noise=noise,
-                 sample=sample or h.meta.get("sample", ("sample", ""))[0], name=name or path.stem, detrend=detrend)
+                 sample=sample or h.meta.get("sample", ("sample", ""))[0], name=name or path.stem, detrend=detrend,
+                 g=g)
     return rec if t_start is None and t_end is None else rec.window(t_start, t_end)
 
 

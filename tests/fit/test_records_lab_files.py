@@ -7,15 +7,13 @@ written, the load history found equal to the true one (times within a sample spa
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import pytest
 from lab_files import HISTORIES, LAYOUTS, TRUTH, K, make
 
 import sweep
 from sweep.errors import InputError
-from sweep.fit.records import Record, is_record_file, read_record
+from sweep.fit.records import is_record_file, read_record
 from sweep.fit.segments import detect_steps, record_steps
 
 START = sweep.FrictionParams.from_lab(0.7 * TRUTH["a"], 1.3 * TRUTH["b"], 1.3 * TRUTH["Dc"], TRUTH["mu0"])
@@ -196,23 +194,3 @@ def test_a_logger_that_does_not_sample_faster_at_changes(history, seed):
     for (start, _), (t0, _) in zip(steps[1:], true[1:]):
         assert abs(start - t0) <= lab.spacing_at(t0), (start, t0)
     np.testing.assert_allclose(steps[:, 1], true[:, 1], rtol=0.01, atol=0)
-
-
-def test_fast_slides_with_the_default_inertia_warn_and_a_machines_g_fits_them():
-    """The 10 -> 100 um/s steps (gamma/A = v^2/(g Dc a) = 0.0102 at g = 9.81, above friction_at's 1e-2) of a
-    quasi-static reference: with FrictionParams' default g (a block under its own weight) the fit models an inertia
-    the machine lacks and says so in one PlausibilityWarning naming the record and g; with a machine's g = N/M = 1e4
-    m/s^2 no warning, and the truth within 3 standard errors."""
-    from sweep.scene.plausibility import PlausibilityWarning
-
-    lab = make("steps", seed=1)
-    rec = Record(lab.t, lab.mu, displacement=lab.disp, k=K, detrend="time", name="p1")
-    lab_params = [TRUTH[n] for n in ("a", "b", "Dc", "mu0")]
-    with pytest.warns(PlausibilityWarning, match=r"record 'p1' slides at 0\.0001 m/s: with g = N/M = 9\.81"):
-        sweep.fit(rec, free=tuple(TRUTH), params=sweep.FrictionParams.from_lab(*lab_params), search="local")
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", PlausibilityWarning)
-        ds = sweep.fit(rec, free=tuple(TRUTH), params=sweep.FrictionParams.from_lab(*lab_params, g=1e4),
-                       search="local")
-    assert int(ds["fit_status"][0]) == 0
-    assert all(abs(v) < 3 for v in _z(ds).values()), _z(ds)

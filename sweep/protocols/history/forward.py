@@ -24,7 +24,7 @@ from ... import physics
 from ...errors import InputError
 from ...status import Status
 
-__all__ = ["INERTIA_LIMIT", "PARAMS", "FrictionSamples", "LoadHistory", "friction_at"]
+__all__ = ["INERTIA_LIMIT", "PARAMS", "FrictionSamples", "LoadHistory", "friction_at", "sample_friction"]
 
 PARAMS = ("A", "m1", "m2", "D0", "m0", "V0", "K_over_M")
 """The parameters friction_at needs (``g`` optional, 9.81 m s-2)."""
@@ -130,7 +130,8 @@ def _times(t: ArrayLike, total: float) -> np.ndarray:
 
 
 def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike, *, state_law: str = "aging",
-                rtol: float = 1e-6, max_steps: int = 1_000_000, stretch: float = 0.0) -> FrictionSamples:
+                rtol: float = 1e-6, max_steps: int = 1_000_000, stretch: float = 0.0,
+                inertia: str = "auto", estimates: bool = True) -> FrictionSamples:
     """Friction mu(t) of a spring-slider under the load history ``load`` at the times ``t`` [s] from its start
     (sorted, in [0, load.total]), for every parameter set of ``params`` in one compiled call.
 
@@ -142,12 +143,18 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
     softer than critical: a stick-slip record) (``model`` of the result); ``state_law`` "aging" or "slip" (a
     slip-law set that would need inertia keeps the status quasistatic_breakdown, its values NaN from the runaway
     on). ``rtol``: the relative accuracy asked of mu in units of (|mu| + A); ``max_steps``: the step budget of one
-    run over all segments.
+    run over all segments. ``inertia`` "auto" (the above) or "breakdown": inertia only for the sets whose
+    quasi-static run breaks down, whatever gamma/A (a machine whose inertia is negligible while it slides steadily,
+    g the one its slips need: sweep.fit's records without a given g). ``estimates`` False: the tighter run alone
+    (half the work; ``error`` NaN, and no error_above_tol: the rounds of a fit, whose best fits are checked with
+    estimates).
     """
     from ...integrate.models.history import LAW_CODES
 
     if state_law not in LAW_CODES:
         raise InputError(f"state_law must be one of {sorted(LAW_CODES)}, got {state_law!r}")
+    if inertia not in ("auto", "breakdown"):
+        raise InputError(f"inertia must be 'auto' or 'breakdown', got {inertia!r}")
     if not isinstance(load, LoadHistory):
         raise InputError(f"load must be a LoadHistory, got {type(load).__name__}")
     rtol = float(rtol)
@@ -158,9 +165,15 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
     stretch = float(stretch)
     if not math.isfinite(stretch):
         raise InputError(f"stretch must be finite [m], got {stretch!r}")
-    p = _params(params)
-    times = _times(t, load.total)
+    return sample_friction(_params(params), load, _times(t, load.total), state_law, rtol, int(max_steps), stretch,
+                           inertia, bool(estimates))
 
+
+def sample_friction(p: dict[str, np.ndarray], load: LoadHistory, times: np.ndarray, state_law: str, rtol: float,
+                    max_steps: int, stretch: float, inertia: str, estimates: bool) -> FrictionSamples:
+    """:func:`friction_at` of checked arguments: ``p`` a float array (n_sets,) for each name of PARAMS and g,
+    ``times`` sorted in [0, load.total] (a record fit's rounds, whose sets lie within their bounds, call it without
+    the checks: ~0.1 ms a call of ~0.3)."""
     V = load.velocities[0]
     chi = physics.reduced_stiffness(p["K_over_M"], p["D0"], p["g"])
     mu1 = physics.mu1(V, p["m1"], p["m2"], p["V0"])
@@ -173,7 +186,7 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
     mu_ref = np.asarray(physics.mu_d(V, p["m0"], p["m1"], p["m2"], p["V0"]), float).reshape(-1)
 
     G = V**2 / (p["g"] * p["D0"]) / A  # gamma/A at V
-    inertial = G * np.max(ratios[0]) ** 2 > INERTIA_LIMIT
+    inertial = (G * np.max(ratios[0]) ** 2 > INERTIA_LIMIT) & (inertia == "auto")
     quasistatic = np.flatnonzero(~inertial if state_law == "aging" else np.ones(A.size, bool))
     out = {"mu_t": np.full((A.size, times.size), np.nan), "mu_t_error": np.full((A.size, times.size), np.nan),
            "status": np.zeros(A.size, np.int8), "steps": np.zeros(A.size, np.int64)}
@@ -182,7 +195,7 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
         if not rows.size:
             return
         part = model(k[rows], a[rows], b[rows], A[rows], mu_ref[rows], state_law, s_kick[rows], ratios[rows],
-                     durations[rows], scale[rows], G[rows], times, rtol, max_steps)
+                     durations[rows], scale[rows], G[rows], times, rtol, max_steps, estimates)
         for name, x in part.items():
             out[name][rows] = x + out[name][rows] if name == "steps" else x  # steps: a run that broke down too
 
@@ -197,19 +210,24 @@ def friction_at(params: Mapping[str, ArrayLike], load: LoadHistory, t: ArrayLike
     return FrictionSamples(mu=out["mu_t"], error=out["mu_t_error"], status=status, steps=out["steps"], model=model)
 
 
-def _quasistatic(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, G, times, rtol, max_steps):
+def _quasistatic(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, G, times, rtol, max_steps,
+                 estimates):
     from .sampled import two_runs
 
-    return two_runs(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, times, rtol, max_steps)
+    return two_runs(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, times, rtol, max_steps,
+                    estimates)
 
 
-def _inertial(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, G, times, rtol, max_steps):
-    """The inertial pair (aging law) at rtol/TIGHTER and rtol/TIGHTER^2, read off as the quasi-static pair."""
+def _inertial(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, G, times, rtol, max_steps,
+              estimates):
+    """The inertial pair (aging law) at rtol/TIGHTER and rtol/TIGHTER^2 (the tighter alone without ``estimates``),
+    read off as the quasi-static pair."""
     from ...accuracy import TIGHTER
     from .inertial import inertial_samples
     from .sampled import read_samples
 
     reduced = np.ascontiguousarray(durations * scale[:, None])
-    (s1, st1, n1), (s2, st2, n2) = (inertial_samples(k, a, b, G, s_kick, ratios, reduced, scale, times,
-                                                     rtol / TIGHTER**e, max_steps) for e in (1, 2))
-    return read_samples(s1, s2, st1, st2, A, mu_ref, rtol, n1 + n2)
+    runs = [inertial_samples(k, a, b, G, s_kick, ratios, reduced, scale, times, rtol / TIGHTER**e, max_steps)
+            for e in ((1, 2) if estimates else (2,))]
+    (s1, st1, n1), (s2, st2, n2) = runs[0], runs[-1]
+    return read_samples(s1, s2, st1, st2, A, mu_ref, rtol, n2 + (n1 if estimates else 0), estimates)
