@@ -131,7 +131,8 @@ class RecordStack(ProblemStack):
         from ..protocols.history.forward import RTOL_RANGE, sample_friction
 
         U = layout.size
-        mu, err = np.full((U, self.n_max), np.nan), np.full((U, self.n_max), np.nan)
+        mu = np.empty((U, self.n_max))  # (every row's residuals filled, its padding NaN, below)
+        err = np.full((U, self.n_max), np.nan) if errors else None
         # without estimates (the optimisations' rounds): friction_at's pair one decade looser, whose tighter run is
         # at rtol/TIGHTER, as the stop path's single run (sweep.fit.forward); ~0.65x the cost; the best fits are
         # checked at rtol with estimates (sweep.fit.core), the difference counted in engine_error
@@ -162,8 +163,10 @@ class RecordStack(ProblemStack):
                     resid = self.observed[q, col:col + t.size] - m
                     m = m + np.sum(w2 * x * resid, axis=1, keepdims=True) / np.sum(w2 * x * x) * x
                 mu[rows, col:col + t.size] = m
-                err[rows, col:col + t.size] = np.where(ok, out.error, np.nan)
+                if errors:
+                    err[rows, col:col + t.size] = np.where(ok, out.error, np.nan)
                 col += t.size
+            mu[rows, col:] = np.nan
         self.rounds += 1
         if self.on_round is not None:
             self.on_round(self.rounds, U)

@@ -181,12 +181,12 @@ def sample_friction(p: dict[str, np.ndarray], load: LoadHistory, times: np.ndarr
     k, a, b = np.asarray(chi / A, float), np.asarray(mu1 / A, float), p["m2"] / A
     s_kick = k * (stretch / p["D0"])
     scale = V / p["D0"]
-    ratios = np.tile(load.velocities / V, (A.size, 1))
-    durations = np.tile(load.durations, (A.size, 1))
+    ratios = np.repeat((load.velocities / V)[None, :], A.size, axis=0)
+    durations = np.repeat(load.durations[None, :], A.size, axis=0)
     mu_ref = np.asarray(physics.mu_d(V, p["m0"], p["m1"], p["m2"], p["V0"]), float).reshape(-1)
 
     G = V**2 / (p["g"] * p["D0"]) / A  # gamma/A at V
-    inertial = (G * np.max(ratios[0]) ** 2 > INERTIA_LIMIT) & (inertia == "auto")
+    inertial = (G * float(np.max(load.velocities) / V) ** 2 > INERTIA_LIMIT) & (inertia == "auto")
     quasistatic = np.flatnonzero(~inertial if state_law == "aging" else np.ones(A.size, bool))
     out = {"mu_t": np.full((A.size, times.size), np.nan), "mu_t_error": np.full((A.size, times.size), np.nan),
            "status": np.zeros(A.size, np.int8), "steps": np.zeros(A.size, np.int64)}

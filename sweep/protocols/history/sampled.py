@@ -15,17 +15,18 @@ __all__ = ["read_samples", "run_sampled", "two_runs"]
 
 
 def two_runs(k, a, b, A, mu_ref, state_law: str, s_kick, ratios, durations, scale, times, rtol: float,
-             max_steps: int) -> dict[str, np.ndarray]:
+             max_steps: int, estimates: bool = True) -> dict[str, np.ndarray]:
     """The dense-output driver run at rtol/TIGHTER and rtol/TIGHTER^2 for every set (k, a, b, A, mu_ref = mu_d(V),
     s_kick, scale = V/D0 [1/s] per set; ratios and physical durations [s] (sets, segments); sorted ``times`` [s]):
     ``mu_t`` = mu_ref + A s of the tighter run and ``mu_t_error`` (sets, times); ``status`` (ok, max_steps,
-    step_underflow, or error_above_tol where an error exceeds rtol (|mu| + A)) and ``steps`` per set."""
+    step_underflow, or error_above_tol where an error exceeds rtol (|mu| + A)) and ``steps`` per set. Without
+    ``estimates`` the tighter run alone (the same ``mu_t``; ``mu_t_error`` NaN, no error_above_tol)."""
     from ...integrate.history_dense import history_dense_batch
     from ...integrate.models.history import LAW_CODES
 
     n, m, times = k.size, ratios.shape[1], np.ascontiguousarray(times, dtype=float)
     runs = []
-    for e in (1, 2):
+    for e in (1, 2) if estimates else (2,):
         s_out = np.empty((n, times.size))
         status, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
         records = [np.empty((n, m)) for _ in range(3)]  # not read here
@@ -33,8 +34,9 @@ def two_runs(k, a, b, A, mu_ref, state_law: str, s_kick, ratios, durations, scal
                             rtol / TIGHTER**e, int(max_steps), *records, np.zeros((n, m), np.int8), s_out, status,
                             steps)
         runs.append((s_out, status, steps))
-    (s_loose, st_loose, n_loose), (s_tight, st_tight, n_tight) = runs
-    return read_samples(s_loose, s_tight, st_loose, st_tight, A, mu_ref, rtol, n_loose + n_tight)
+    (s_loose, st_loose, n_loose), (s_tight, st_tight, n_tight) = runs[0], runs[-1]
+    return read_samples(s_loose, s_tight, st_loose, st_tight, A, mu_ref, rtol,
+                        n_tight + (n_loose if estimates else 0), estimates)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -56,14 +58,19 @@ def _read_off(s_loose, s_tight, A, mu_ref, rtol, mu, error, above):  # pragma: n
         above[i] = flag
 
 
-def read_samples(s_loose, s_tight, st_loose, st_tight, A, mu_ref, rtol: float, steps) -> dict[str, np.ndarray]:
+def read_samples(s_loose, s_tight, st_loose, st_tight, A, mu_ref, rtol: float, steps, estimates: bool = True
+                 ) -> dict[str, np.ndarray]:
     """mu_t, mu_t_error (sets, times), status and steps from the s samples of a looser and a tighter run (any driver)
     and their statuses: mu = mu_ref + A s of the tighter run, the error the difference to the looser (inf where
-    only the looser failed), error_above_tol where an error exceeds rtol (|mu| + A)."""
+    only the looser failed), error_above_tol where an error exceeds rtol (|mu| + A). Without ``estimates`` (the
+    looser run not made: pass the tighter twice) the error is NaN and the status the tighter run's."""
     s_loose, s_tight = np.asarray(s_loose, dtype=float), np.asarray(s_tight, dtype=float)
     mu, error, above = np.empty(s_tight.shape), np.empty(s_tight.shape), np.empty(s_tight.shape[0], np.bool_)
     _read_off(s_loose, s_tight, np.asarray(A, dtype=float), np.asarray(mu_ref, dtype=float), float(rtol), mu, error,
               above)
+    if not estimates:
+        error[:] = np.nan
+        return {"mu_t": mu, "mu_t_error": error, "status": np.asarray(st_tight, np.int8), "steps": steps}
     status = np.where(st_tight != Status.OK, st_tight, st_loose).astype(np.int8)
     status[(status == Status.OK) & above] = Status.ERROR_ABOVE_TOL
     return {"mu_t": mu, "mu_t_error": error, "status": status, "steps": steps}
