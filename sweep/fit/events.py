@@ -175,18 +175,18 @@ def away_from_changes(t: np.ndarray, events: list[tuple[int, float]], changes: n
 def record_slip_events(record) -> list[tuple[int, float]]:
     """A record's slip events at its own sampling (:func:`slip_events` at :func:`event_scale`) away from the changes
     of its load history (:func:`away_from_changes`)."""
-    events = slip_events(record.mu, event_scale(record.t, record.mu))
-    return away_from_changes(record.t, events, load_changes(record)) if events else events
+    stride, _, events = _record_finest(record, functools.partial(load_changes, record))
+    return events if stride == 1 else []
 
 
-def _finest_events(t: np.ndarray, mu: np.ndarray, model: np.ndarray, changes: Callable[[], np.ndarray]
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, list[tuple[int, float]]]:
-    """(t, mu, model, scale, the record's events) at the finest sampling of the record that shows slip events: every
-    sample, else every 2nd, 4th, ... (COARSER), while at least MIN_COARSE samples remain; the model at the same
-    samples. A record sampled finer than its slips (a slip spread over more than SHORT samples: a laboratory logger
-    at a few hundred Hz, a slip lasting ~ half the machine's natural period) shows no event at its own rate; at a
-    coarser one its slips fall within SHORT samples again, and a model through it is counted at that rate too. Falls
-    at the load history's changes are not slips (:func:`away_from_changes`), at any rate."""
+def _finest_events(t: np.ndarray, mu: np.ndarray, changes: Callable[[], np.ndarray]
+                   ) -> tuple[int, float, list[tuple[int, float]]]:
+    """(stride, scale, the record's events) at the finest sampling of the record that shows slip events: every
+    sample, else every 2nd, 4th, ... (COARSER), while at least MIN_COARSE samples remain; (1, 0, []) where none does.
+    A record sampled finer than its slips (a slip spread over more than SHORT samples: a laboratory logger at a few
+    hundred Hz, a slip lasting ~ half the machine's natural period) shows no event at its own rate; at a coarser one
+    its slips fall within SHORT samples again, and a model through it is counted at that rate too. Falls at the load
+    history's changes are not slips (:func:`away_from_changes`), at any rate."""
     for stride in (1, *COARSER):
         if stride > 1 and t.size // stride < MIN_COARSE:
             break
@@ -195,8 +195,18 @@ def _finest_events(t: np.ndarray, mu: np.ndarray, model: np.ndarray, changes: Ca
         rec = slip_events(ms, scale)
         rec = away_from_changes(ts, rec, changes()) if rec else rec
         if rec:
-            return ts, ms, model[::stride], scale, rec
-    return t, mu, model, event_scale(t, mu), []
+            return stride, scale, rec
+    return 1, 0.0, []
+
+
+def _record_finest(record, changes: Callable[[], np.ndarray]) -> tuple[int, float, list[tuple[int, float]]]:
+    """:func:`_finest_events` of a record (sweep.fit.records.Record), found once: a record's data do not change (a
+    fit looks at them in its event stage and in its verdicts; ~1 ms a record of 1,000 samples without events)."""
+    found = record.__dict__.get("_finest_events")
+    if found is None:
+        found = _finest_events(np.asarray(record.t, float), np.asarray(record.mu, float), changes)
+        object.__setattr__(record, "_finest_events", found)  # (Record is frozen; not one of its fields)
+    return found
 
 
 def record_events(records, residuals: np.ndarray, weights: np.ndarray) -> list[tuple[str, list[float], list[float]]]:
@@ -212,7 +222,8 @@ def record_events(records, residuals: np.ndarray, weights: np.ndarray) -> list[t
         sl = slice(col, col + d.t.size)
         model = d.mu + residuals[sl] / weights[sl]
         changes = functools.cache(functools.partial(load_changes, d))  # (found only where a fall asks)
-        t, mu, model, scale, rec = _finest_events(d.t, d.mu, model, changes)
+        stride, scale, rec = _record_finest(d, changes)
+        t, mu, model = d.t[::stride], d.mu[::stride], model[::stride]
         mod = away_from_changes(t, slip_events(model, scale), changes()) if rec else []
         if rec and (not same_events(rec, mod, scale) or _misplaced(t, mu, model, rec, scale)
                     or serial_correlation(residuals[sl]) > SERIAL / np.sqrt(d.t.size)):
