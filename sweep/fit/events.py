@@ -116,8 +116,21 @@ def same_events(record: list[tuple[int, float]], model: list[tuple[int, float]],
     """Whether a model's slip events are the record's (both :func:`slip_events` at the record's noise ``scale``):
     as many, each within WIDE samples of the record's and its fall within DROP noise scales of it (a fit that
     describes the record to its noise misses a fall by a few scales at most)."""
-    return len(record) == len(model) and all(abs(i - j) <= WIDE and abs(f - g) <= DROP * scale
-                                             for (i, f), (j, g) in zip(record, model))
+    return _differ(record, model, scale) is None
+
+
+def _differ(record: list[tuple[int, float]], model: list[tuple[int, float]], scale: float
+            ) -> tuple[str, float] | None:
+    """How a model's slip events differ from the record's (:func:`same_events`): ("count", model's count), ("place",
+    the largest offset [samples] beyond WIDE) or ("fall", the largest difference of a fall [noise scales] beyond
+    DROP); None where they do not."""
+    if len(record) != len(model):
+        return "count", float(len(model))
+    off = max(abs(i - j) for (i, _), (j, _) in zip(record, model))
+    if off > WIDE:
+        return "place", float(off)
+    falls = max(abs(f - g) for (_, f), (_, g) in zip(record, model)) / scale
+    return ("fall", float(falls)) if falls > DROP else None
 
 
 def event_times(t: np.ndarray, mu: np.ndarray, events: list[tuple[int, float]]
@@ -144,11 +157,25 @@ def serial_correlation(r: np.ndarray) -> float:
 
 
 def _misplaced(t: np.ndarray, mu: np.ndarray, model: np.ndarray, events: list[tuple[int, float]], scale: float
-               ) -> bool:
-    """Whether the model differs from the record by more than DROP noise scales at a sample of one of the record's
-    events (from the sample before its fall to the one after its lowest): a fall a sample or two off."""
+               ) -> float:
+    """The largest difference of the model from the record [noise scales] at a sample of one of the record's events
+    (from the sample before its fall to the one after its lowest): above DROP, a fall a sample or two off."""
     _, low, _ = event_times(t, mu, events)
-    return any(np.max(np.abs(model[i:j + 2] - mu[i:j + 2])) > DROP * scale for (i, _), j in zip(events, low))
+    return max(float(np.max(np.abs(model[i:j + 2] - mu[i:j + 2]))) / scale for (i, _), j in zip(events, low))
+
+
+def _missed(t: np.ndarray, mu: np.ndarray, model: np.ndarray, rec: list[tuple[int, float]],
+            mod: list[tuple[int, float]], scale: float, residuals: np.ndarray) -> tuple[str, float] | None:
+    """Why a model misses the record's slip events ``rec`` (its own ``mod``), None where it does not
+    (:func:`record_events`)."""
+    differ = _differ(rec, mod, scale)
+    if differ is not None:
+        return differ
+    off = _misplaced(t, mu, model, rec, scale)
+    if off > DROP:
+        return "sample", off
+    serial = serial_correlation(residuals) * np.sqrt(residuals.size)
+    return ("serial", float(serial)) if serial > SERIAL else None
 
 
 def load_changes(record) -> np.ndarray:
@@ -209,14 +236,17 @@ def _record_finest(record, changes: Callable[[], np.ndarray]) -> tuple[int, floa
     return found
 
 
-def record_events(records, residuals: np.ndarray, weights: np.ndarray) -> list[tuple[str, list[float], list[float]]]:
+def record_events(records, residuals: np.ndarray, weights: np.ndarray
+                  ) -> list[tuple[str, list[float], list[float], str, float]]:
     """Per record of a problem whose best fit misses its slip events (``records`` in residual order,
-    sweep.fit.records.Record): (name, the falls of the record's events, those of the model's at the best fit), the
-    model from the weighted residuals r = (model - mu) w of the best fit. Missed: other events than the record's
-    (:func:`same_events`), the same ones a sample or two off (a residual of more than DROP noise scales at one of
-    the record's events: a single residual the size of a fall, which neither the count nor the serial correlation
-    sees and an estimated noise absorbs), or the same ones with serially correlated residuals over the record
-    (lag-1 correlation above SERIAL/sqrt(n): the module docstring)."""
+    sweep.fit.records.Record): (name, the falls of the record's events, those of the model's at the best fit, why,
+    by how much), the model from the weighted residuals r = (model - mu) w of the best fit. Missed, the first that
+    applies: other events than the record's (:func:`same_events`: why "count", "place" or "fall", as
+    :func:`_differ`), the same ones a sample or two off ("sample": a residual of more than DROP noise scales at one
+    of the record's events, its size in noise scales: a single residual the size of a fall, which neither the count
+    nor the serial correlation sees and an estimated noise absorbs), or the same ones with serially correlated
+    residuals over the record ("serial": lag-1 correlation above SERIAL/sqrt(n), the module docstring; by how much
+    in units of 1/sqrt(n))."""
     out, col = [], 0
     for d in records:
         sl = slice(col, col + d.t.size)
@@ -225,8 +255,8 @@ def record_events(records, residuals: np.ndarray, weights: np.ndarray) -> list[t
         stride, scale, rec = _record_finest(d, changes)
         t, mu, model = d.t[::stride], d.mu[::stride], model[::stride]
         mod = away_from_changes(t, slip_events(model, scale), changes()) if rec else []
-        if rec and (not same_events(rec, mod, scale) or _misplaced(t, mu, model, rec, scale)
-                    or serial_correlation(residuals[sl]) > SERIAL / np.sqrt(d.t.size)):
-            out.append((d.name, [f for _, f in rec], [f for _, f in mod]))
+        why = _missed(t, mu, model, rec, mod, scale, residuals[sl]) if rec else None
+        if why is not None:
+            out.append((d.name, [f for _, f in rec], [f for _, f in mod], *why))
         col += d.t.size
     return out

@@ -23,8 +23,10 @@ A sample's ``fit_status`` is the most severe of (codes in :data:`FIT_STATUS`, in
 * ``events_missed`` (code 6, a record fit's, as severe as poor_fit and named instead of it where both apply): a
   record shows slip events (the sharp drops of a stick-slip sawtooth, sweep.fit.events) and the model at the best
   fit a different number of them (a stable model sliding through a sawtooth has none), or one far from a record's
-  event, or a fall that differs from its by more than sweep.fit.events.DROP noise scales of the record: its
-  estimated noise (many times the real one) makes its misfit look right (issue 34).
+  event, or a fall that differs from its by more than sweep.fit.events.DROP noise scales of the record, or the same
+  events a sample or two off, or the same events with serially correlated residuals (a local minimum that describes
+  the sawtooth another way): an estimated noise absorbs each of these (issue 34). The warning names the reason per
+  record (:data:`MISSED`).
 
 ``ok`` is 0; every other status is a failed fit (``sweep fit`` then exits 1).
 """
@@ -74,9 +76,9 @@ class Verdict:
     pushed: list[tuple[str, float, str]]
     misfit: tuple[float, int] | None = None
     """(chi^2, degrees of freedom) where the noise was given and the misfit is a poor fit's."""
-    events: list[tuple[str, list[float], list[float]]] | None = None
-    """(record, the falls of its slip events, those of the best fit's) of the records the best fit misses, where
-    events_missed."""
+    events: list[tuple[str, list[float], list[float], str, float]] | None = None
+    """(record, the falls of its slip events, those of the best fit's, why, by how much: sweep.fit.events.record_events)
+    of the records the best fit misses, where events_missed."""
 
     @property
     def failed(self) -> bool:
@@ -125,13 +127,32 @@ def judge(fit: LocalFit, cov: np.ndarray, s2: float, space: ParamSpace, model_fa
     return Verdict(status, flags, unsolved, pushed, poor)
 
 
-def missed_events(verdict: Verdict, missed: list[tuple[str, list[float], list[float]]]) -> Verdict:
+def missed_events(verdict: Verdict, missed: list[tuple[str, list[float], list[float], str, float]]) -> Verdict:
     """``verdict`` with status events_missed where nothing more severe than poor_fit failed and the best fit misses
-    some record's slip events (``missed``: (record, the falls of its events, the model's), as
+    some record's slip events (``missed``: (record, the falls of its events, the model's, why, by how much), as
     sweep.fit.events.record_events gives them)."""
     if missed and verdict.status in (0, 5):
         verdict.status, verdict.events = 6, missed
     return verdict
+
+
+MISSED = {
+    "count": "the record slips {n} time(s) (falls {falls}), the best fit {n_model} ({model})",
+    "place": "as many slips, but one {x:.0f} samples from the record's (falls {falls}; the best fit's {model})",
+    "fall": "as many slips in place, but a fall {x:.3g} noise scales off the record's (falls {falls}; the best "
+            "fit's {model})",
+    "sample": "the same slips, one a sample or two off the record's (a residual of {x:.3g} noise scales at it; falls "
+              "{falls})",
+    "serial": "the same slips, but serially correlated residuals (lag-1 correlation {x:.3g}/sqrt(n), white noise's "
+              "above 3/sqrt(n) once in ~1e3): a local minimum that describes the sawtooth another way",
+}
+"""What the warning says of each reason of sweep.fit.events.record_events for a record the best fit misses."""
+
+
+def _missed(record: str, falls: list[float], model: list[float], why: str, x: float) -> str:
+    stable = ": it slides through the sawtooth stably" if why == "count" and not model else ""
+    return f"record {record!r}: " + MISSED[why].format(n=len(falls), n_model=len(model), falls=_falls(falls),
+                                                         model=_falls(model), x=x) + stable
 
 
 def _falls(falls: list[float]) -> str:
@@ -172,12 +193,11 @@ def summary(names: list[str], verdicts: list[Verdict], max_rounds: int) -> str |
                      f"parameter set describes the data, or the noise given is too small; check the noise, the load "
                      f"history (steps) and whether a trend needs a detrend")
     if by[6]:
-        which = _names([f"{n}: record {r!r} has {len(e)} slip event(s) (falls {_falls(e)}), the best fit "
-                        f"{len(m)} ({_falls(m)})" for n, v in by[6] for r, e, m in v.events])
-        parts.append(f"events_missed: the model at the best fit misses the record's slip events ({which}): it slides "
-                     f"through a stick-slip sawtooth another way (stably where it has none), and an estimated noise "
-                     f"many times the record's hides it; start nearer the truth (with k below (b - a)/Dc the "
-                     f"model can slip), or give the noise")
+        which = _names([f"{n}: {_missed(*e)}" for n, v in by[6] for e in v.events])
+        stable = any(why == "count" and not m for _, v in by[6] for _, _, m, why, _ in v.events)
+        parts.append(f"events_missed: the model at the best fit misses the record's slip events ({which}), and an "
+                     f"estimated noise absorbs the difference; start nearer the truth"
+                     + (" (with k below (b - a)/Dc the model can slip)" if stable else "") + ", or give the noise")
     return (f"the fit failed for {len(failed)} of {len(verdicts)} sample(s) ({_names([n for n, _ in failed])}): "
             + "; ".join(parts) + " (fit_status in the output)")
 

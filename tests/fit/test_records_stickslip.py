@@ -7,6 +7,7 @@ mass; 9.81 m/s^2 is sweep.fit's default, FrictionParams.g), irregular sampling a
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -154,10 +155,10 @@ def test_a_stable_model_misses_the_sawtooths_events(one_event):
     smaller, _ = inertial_reference_at(A, 0.8 * (B - A), 0.0, 1e-5, k * 9.81, STEP.velocities, [5.0, 20.0], t,
                                        m0=MU0, V0=V0, g=9.81)
     assert record_events([rec], mu + NOISE * rng.standard_normal(t.size) - rec.mu, w) == []
-    (name, falls, model), = record_events([rec], stable - rec.mu, w)
-    assert name == "saw" and len(falls) == 1 and falls[0] > 3 * A and model == []
-    (_, falls, model), = record_events([rec], smaller - rec.mu, w)
-    assert len(model) == 1 and falls[0] - model[0] > 10 * NOISE
+    (name, falls, model, why, _), = record_events([rec], stable - rec.mu, w)
+    assert name == "saw" and len(falls) == 1 and falls[0] > 3 * A and model == [] and why == "count"
+    (_, falls, model, why, _), = record_events([rec], smaller - rec.mu, w)
+    assert len(model) == 1 and falls[0] - model[0] > 10 * NOISE and why == "fall"
 
 
 def _fit(rec, start):
@@ -170,10 +171,11 @@ def _fit(rec, start):
 
 def test_sawtooth_fits_that_miss_the_events_are_not_ok(one_event):
     """The one-event sawtooth, noise estimated, three draws, fitted with b and Dc held 30 % below the truth (a and mu0
-    free): no model of that family makes the record's event (measured: falls 0.054-0.072 where the record's fall
-    ~0.087, estimated noise 78-129x the drawn one): fit_status events_missed, one warning line naming the record and
-    both falls; from the truth, a, b, Dc and mu0 free, the same draws fit ok (noise within 15 %). (From a start 30 %
-    off with a, b, Dc free the fit now finds the events: tests/fit/test_records_sawtooth_fit.py.)"""
+    free): no model of that family makes the record's event (measured: a stable model, or the event 47 samples off;
+    estimated noise many times the drawn one): fit_status events_missed, one warning line naming the record and the
+    reason (the count, or the place); from the truth, a, b, Dc and mu0 free, the same draws fit ok (noise within
+    15 %). (From a start 30 % off with a, b, Dc free the fit now finds the events:
+    tests/fit/test_records_sawtooth_fit.py.)"""
     from sweep.fit.verdict import FIT_STATUS
 
     t, mu, disp, k = one_event
@@ -186,7 +188,8 @@ def test_sawtooth_fits_that_miss_the_events_are_not_ok(one_event):
                            profiles=False)
         assert FIT_STATUS[int(ds["fit_status"][0])] == "events_missed" and float(ds["datum_noise"][0]) > 10 * NOISE
         line, = [str(m.message) for m in caught if "events_missed" in str(m.message)]
-        assert f"record 'draw{i}' has 1 slip event(s)" in line
+        assert re.search(f"record 'draw{i}': (the record slips 1 time|as many slips, but one [0-9]+ samples from)",
+                         line), line
         status, noise, lines = _fit(rec, {"a": A, "b": B, "Dc": 1e-5})
         assert status == 0 and abs(noise / NOISE - 1) < 0.15 and not [m for m in lines if "fit failed" in m]
 
