@@ -1,12 +1,14 @@
 """The driven scene's peers (issue 35): the engine beside numbalsoda, diffrax and scipy on the same driven points.
 
-    python benchmarks/peers.py --driven [--quick] [--models quasistatic,auto] [--out ...] [--no-png]
+    python benchmarks/peers.py --driven [--quick] [--models quasistatic,auto,deep_inertial] [--out ...] [--no-png]
 
 (default output benchmarks/results/peers_driven.json and .png)
 
-The grid (the issue's): preset sample2; V 20 values log-spaced over 0.1..5 um/s; K/M 40 values log-spaced from
-0.3 x the smallest to 3 x the largest quasi-static (K/M)_c over those V. Two scenes: model "quasistatic" and model
-"auto" (inertia where the quasi-static run breaks down; each point then runs the model the engine used for it).
+Scenes (grids from benchmarks/driven_lanes.issue_grid): the issue's grid, preset sample2, V 20 values log-spaced over
+0.1..5 um/s, K/M 40 values log-spaced from 0.3 x the smallest to 3 x the largest quasi-static (K/M)_c over those V,
+with model "quasistatic" and model "auto" (inertia where the quasi-static run breaks down; each point then runs the
+model the engine used for it); and "deep_inertial", driven_lanes.py's deep stick-slip grid (model inertial, V 10 x
+K/M 10 over 0.05..0.5 x the smallest (K/M)_c, every point stick-slip).
 
 Every tool integrates the engine's own equations (sweep.integrate.models.driven: (z, u) quasi-static, (z, u, w) with
 inertia, reduced k, a, b, g from the engine's plan) from the engine's start (z = perturbation, u = w = 0) over the
@@ -21,19 +23,35 @@ HORIZON the engine needed for that point (measured once, at the default rtol):
   apart at tau 579) and passes between output samples, so a sampled trajectory cannot call it (a user would add an
   event). A tool calls runaway where a sample has ln xi' > W_RUNAWAY - RUNAWAY_SLACK.
 
-The peers return the state at SAMPLES_PER_CYCLE output times per cycle (numbalsoda's lsoda and diffrax's SaveAt
-interpolate to them without shortening their steps); the extrema of z between samples are located by Newton on the
-quintic Hermite interpolant of (z, z', z'') at the two samples around the sign change of z' (z' and z'' from the
-right-hand side at the sampled states). From the extrema, every tool's cycles are booked as the engine books them
-(a_k = half the peak-to-peak stretch, growth = ln(a_k/a_k-1)/T_k) and its regime is called by the engine's own rule
-(sweep.integrate.driven._decide, DECAYED, W_RUNAWAY): the regime each would call from that horizon.
+The peers return the state at output times (SAMPLES_PER_CYCLE per cycle; numbalsoda NUMBALSODA_SAMPLES_PER_CYCLE);
+numbalsoda's lsoda and diffrax's SaveAt interpolate to them without shortening their steps. The extrema of z
+between samples are located by Newton on the quintic Hermite interpolant of (z, z', z'') at the two samples around
+the sign change of z' (z' and z'' from the right-hand side at the sampled states). Where the samples do not resolve
+an extremum (an inertial slip ends within ~g tau, far below a sample spacing: at 1000 samples a cycle scipy Radau at
+1e-10 had amplitudes 4.7e-4 off and miscalled regimes), each tool locates it as a user of it would:
+
+* numbalsoda (no events): while the quintic and the cubic Hermite interpolants (z, z' only) disagree by more than
+  its own tolerance (rtol |z| + atol), LSODA is restarted from the sample before the sign change over
+  REFINE_SUBSAMPLES samples of the bracket, up to REFINE_LEVELS times (inside the timed njit loop);
+* scipy: an event at ln xi' = 0 (z' = 0) located on the dense output, and a sample EVENT_BRACKET x the spacing
+  either side of it;
+* diffrax: the samples only (not refined).
+
+From the extrema, every tool's cycles are booked as the engine books them (a_k = half the peak-to-peak stretch,
+growth = ln(a_k/a_k-1)/T_k, a maximum rising less than REBOUND x the last amplitude skipped as a rebound) and its
+regime is called by the engine's own rule (sweep.integrate.driven._decide, DECAYED, W_RUNAWAY): the regime each
+would call from that horizon.
 
 Accuracy: against scipy Radau (analytic Jacobian) at REF_RTOL on a fixed-seed subsample, through the same sampling
-at REF_SAMPLES_PER_CYCLE, checked against Radau at CHECK_RTOL on a few points (the floor below which errors are not
-resolved): the error of the growth rate per cycle |g - g_ref| T_ref and of the amplitude |a/a_ref - 1|, on the
-subsample's points whose reference closed at least two cycles, and the regimes that differ from the reference's.
-Work: time per point per core over the whole grid (scipy: the subsample), JIT compile excluded (one untimed call
-first). Writes JSON and PNG (time per point per core vs max growth-rate error, per scene).
+and events at REF_SAMPLES_PER_CYCLE, checked against Radau at CHECK_RTOL on a few points (the floor below which
+errors are not resolved): the error of the growth rate per cycle |g - g_ref| T_ref and of the amplitude
+|a/a_ref - 1|, on the subsample's points whose reference closed at least two cycles, and the regimes that differ
+from the reference's.
+A setting matches an error level where its growth rates and amplitudes are both within it and every regime is the
+reference's. The horizon is longer than the engine's own run (it stops at its decision), which costs the peers
+extra time: horizon / the reference's decision time is in the JSON. Work: time per point per core over the whole
+grid (engine, numbalsoda; diffrax and scipy: the subsample, at SLOW_TOLS), JIT compile excluded (one untimed call
+first). Writes JSON and PNG (time per point per core vs the larger of the growth and amplitude errors, per scene).
 """
 
 from __future__ import annotations
@@ -52,25 +70,32 @@ from numba import njit, prange
 
 import sweep
 from sweep import physics
-from sweep.accuracy import DECAYED, W_RUNAWAY, driven_stepper_rtol
+from sweep.accuracy import DECAYED, REBOUND, W_RUNAWAY, driven_stepper_rtol
 from sweep.integrate.driven import HISTORY, Regime, _decide, _linear_amplitude
 from sweep.integrate.models.driven import DrivenParams, log_velocity_rate, make_driven_rhs
 from sweep.integrate.models.state_laws import STATE_LAWS
 from sweep.protocols.driven.chunk import driven_chunk
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "peers_driven.json"
-V_RANGE, N_V, N_KM = (1e-7, 5e-6), 20, 40
-KM_SPAN = (0.3, 3.0)  # x the smallest and the largest quasi-static (K/M)_c over V
+N_V, N_KM = 20, 40  # the issue grid (driven_lanes.issue_grid)
 ENGINE_RTOLS = (1e-6, 1e-8, 1e-9)  # scene rtol; the stepper runs at driven_stepper_rtol (1e-9, 1e-10, 1e-11)
 PEER_TOLS = (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
 PEER_TOLS_QUICK = (1e-7, 1e-9, 1e-11)
+# the slow peers (seconds a point in Python or in lockstep under vmap) at fewer tolerances; with inertial points
+# fewer still: diffrax's Kvaerno5 under vmap took 1.6 s a point at 1e-7 and 21.6 s at 1e-9 on the quick auto grid,
+# both with regimes unlike the reference's
+SLOW_TOLS = {"diffrax_1t": (1e-7, 1e-9, 1e-11), "scipy_LSODA": (1e-7, 1e-9, 1e-11), "scipy_Radau": (1e-7, 1e-9)}
+SLOW_TOLS_INERTIAL = {**SLOW_TOLS, "diffrax_1t": (1e-7,)}
 ATOL_OVER_RTOL = 1e-3  # x the perturbation: the state's scale near steady sliding
 SAMPLES_PER_CYCLE = 1000
+EVENT_BRACKET = 1e-6  # x the sample spacing: scipy's samples either side of an extremum (module docstring)
+REFINE_SUBSAMPLES, REFINE_LEVELS = 32, 6  # an unresolved extremum's re-integration (module docstring)
+NUMBALSODA_SAMPLES_PER_CYCLE = 100  # with the refinement as accurate as 1000 and 1.5-2x faster (quick QS grid)
 REF_SAMPLES_PER_CYCLE = 3000
 RUNAWAY_SEARCH = 1e6  # tau: where the engine's runaway time is looked for
 RUNAWAY_SLACK = 0.1  # a tool calls runaway once ln xi' > W_RUNAWAY - RUNAWAY_SLACK (module docstring)
 REF_RTOL, CHECK_RTOL = 1e-10, 1e-12
-N_SUB, N_SUB_QUICK = 24, 8
+N_SUB, N_SUB_QUICK = 12, 6
 N_CHECK = 2
 SEED = 20261128
 LSODA_MXSTEP = 10_000_000
@@ -79,15 +104,19 @@ REPEATS, REPEATS_QUICK = 2, 1
 XLA_ONE_THREAD = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
 
 
-def driven_scene(model: str, quick: bool) -> sweep.Scene:
-    """The issue's driven grid (every 4th K/M and V with ``quick``)."""
-    p = sweep.presets["sample2"]
-    V = np.logspace(*np.log10(V_RANGE), N_V)
-    kc = physics.hopf_K_over_M(V, p.A, p.m1, p.m2, p.D0, p.V0)
-    KM = np.logspace(math.log10(KM_SPAN[0] * np.nanmin(kc)), math.log10(KM_SPAN[1] * np.nanmax(kc)), N_KM)
+SCENES = ("quasistatic", "auto", "deep_inertial")
+
+
+def driven_scene(name: str, quick: bool) -> sweep.Scene:
+    """The issue's driven grid with model ``name`` (quasistatic, auto; every 4th K/M and V with ``quick``), or the
+    deep inertial stick-slip grid (``deep_inertial``: model inertial; every 2nd): driven_lanes.issue_grid's."""
+    from driven_lanes import issue_grid
+
+    deep = name == "deep_inertial"
+    p, KM, V = issue_grid(10, 10, deep=True) if deep else issue_grid(N_V, N_KM)
     if quick:
-        KM, V = KM[::4], V[::4]
-    return sweep.Scene(protocol="driven", params=p, K_over_M=KM, V=V, model=model)
+        KM, V = (KM[::2], V[::2]) if deep else (KM[::4], V[::4])
+    return sweep.Scene(protocol="driven", params=p, K_over_M=KM, V=V, model="inertial" if deep else name)
 
 
 # ------------------------------------------------------------------------------------ cycle bookkeeping
@@ -98,13 +127,23 @@ _RHS = (make_driven_rhs(STATE_LAWS["aging"].rate, False), make_driven_rhs(STATE_
 STEADY_I, RUNAWAY_I, UNDECIDED_I = int(Regime.STEADY), int(Regime.RUNAWAY), int(Regime.UNDECIDED)
 
 
-def _make_observe(inertial: bool):
+@njit
+def _no_restart(y0, ts, data, rtol, atol):
+    """The plain observe's stand-in for a tool's restart (never called: ``refine`` is False)."""
+    return np.empty((ts.size, y0.size)), False
+
+
+def _make_observe(inertial: bool, restart=_no_restart, refine: bool = False):
+    """observe(t, Y, n_valid, p, perturbation, rtol, atol, data) for the model (``inertial``); with ``refine``, an
+    extremum the samples do not resolve is located on the tool's own re-integration ``restart(y0, ts, data, rtol,
+    atol) -> (Y at ts, success)`` from the sample before it (module docstring)."""
     rhs = _RHS[inertial]
 
     @njit
     def extremum(t0, t1, y0, y1, p, d0, d1):
-        """(t, z) of the extremum of z between samples (t0, y0) and (t1, y1): Newton on the quintic Hermite
-        interpolant of z with z' and z'' from the right-hand side."""
+        """(t, z, error estimate) of the extremum of z between samples (t0, y0) and (t1, y1): Newton on the quintic
+        Hermite interpolant of z with z' and z'' from the right-hand side; the error estimate is its distance to the
+        cubic Hermite interpolant (z, z' only) there."""
         dt = t1 - t0
         lw0 = rhs(y0, p, d0)
         s0 = -math.exp(min(lw0, 700.0)) * log_velocity_rate(y0, d0, p) * dt * dt
@@ -125,33 +164,72 @@ def _make_observe(inertial: bool):
             if abs(step) < 1e-14:
                 break
         z = c[0] + x * (c[1] + x * (c[2] + x * (c[3] + x * (c[4] + x * c[5]))))
-        return t0 + x * dt, z
+        cubic = z0 + x * (g0 + x * (3.0 * dz - 2.0 * g0 - g1 + x * (g0 + g1 - 2.0 * dz)))
+        return t0 + x * dt, z, abs(z - cubic)
 
     @njit
-    def observe(t, Y, n_valid, p, perturbation):
-        """(regime, growth_rate, period, amplitude, cycles) called from the samples Y[:n_valid] at times t, by the
-        engine's bookkeeping (sweep.integrate.driven.simulate) with its extrema located between samples."""
+    def locate(t0, t1, y0, y1, p, d0, d1, rtol, atol, data):
+        """(t, z) of the extremum between two samples; with ``refine``, while the interpolants disagree by more than
+        the tool's tolerance (rtol |z| + atol), the bracket is re-integrated from its start at REFINE_SUBSAMPLES
+        samples and the sub-bracket with the same sign change taken (at most REFINE_LEVELS times)."""
+        t, z, err = extremum(t0, t1, y0, y1, p, d0, d1)
+        if not refine:
+            return t, z
+        up = d0[0] > 0.0
+        ya, yb = y0.copy(), y1.copy()
+        da, db = d0.copy(), d1.copy()
+        for _ in range(REFINE_LEVELS):
+            if err <= rtol * abs(z) + atol:
+                break
+            ts = np.linspace(t0, t1, REFINE_SUBSAMPLES + 1)
+            Ys, ok = restart(ya, ts, data, rtol, atol)
+            if not ok:
+                break
+            rhs(Ys[0], p, da)
+            found = False
+            for m in range(1, ts.size):
+                rhs(Ys[m], p, db)
+                if (da[0] > 0.0 and db[0] <= 0.0) if up else (da[0] < 0.0 and db[0] >= 0.0):
+                    t0, t1 = ts[m - 1], ts[m]
+                    ya[:], yb[:] = Ys[m - 1], Ys[m]
+                    found = True
+                    break
+                da[:] = db
+            if not found:  # the sign change is not found again (the restart's own error): keep the last estimate
+                break
+            t, z, err = extremum(t0, t1, ya, yb, p, da, db)
+        return t, z
+
+    @njit
+    def observe(t, Y, n_valid, p, perturbation, rtol, atol, data):
+        """(regime, growth_rate, period, amplitude, cycles, tau of the decision) called from the samples Y[:n_valid]
+        at times t, by the
+        engine's bookkeeping (sweep.integrate.driven.simulate: cycles cut at maxima, rebounds skipped) with its
+        extrema located between samples."""
         n = Y.shape[1]
         d0, d1 = np.empty(n), np.empty(n)
         amp, per, grow = np.full(HISTORY, np.nan), np.full(HISTORY, np.nan), np.full(HISTORY, np.nan)
         z_min, t_max_prev, amp_first = math.inf, math.nan, math.nan
         a_start = _linear_amplitude(p, perturbation)
         cycles = 0
+        after_rebound = False
         rhs(Y[0], p, d0)
         dz = d0[0]
         for j in range(1, n_valid):
             lw1 = rhs(Y[j], p, d1)
             if not math.isfinite(lw1) or lw1 > W_RUNAWAY - RUNAWAY_SLACK:
-                return RUNAWAY_I, grow[-1], per[-1], math.nan, cycles
+                return RUNAWAY_I, grow[-1], per[-1], math.nan, cycles, t[j]
             norm = 0.0
             for m in range(n):
                 norm = max(norm, abs(Y[j, m]))
             if norm < DECAYED * perturbation:
-                return STEADY_I, grow[-1], per[-1], 0.0, cycles
+                return STEADY_I, grow[-1], per[-1], 0.0, cycles, t[j]
             dz1 = d1[0]
             if dz > 0.0 and dz1 <= 0.0:
-                t_peak, z_top = extremum(t[j - 1], t[j], Y[j - 1], Y[j], p, d0, d1)
-                if z_min < math.inf and math.isfinite(t_max_prev):
+                rhs(Y[j - 1], p, d0)
+                t_peak, z_top = locate(t[j - 1], t[j], Y[j - 1], Y[j], p, d0, d1, rtol, atol, data)
+                rebound = 0.5 * (z_top - z_min) < REBOUND * amp[-1]  # as the engine: not a cycle end
+                if not rebound and z_min < math.inf and math.isfinite(t_max_prev):
                     cycles += 1
                     for i in range(HISTORY - 1):
                         amp[i], per[i], grow[i] = amp[i + 1], per[i + 1], grow[i + 1]
@@ -161,12 +239,17 @@ def _make_observe(inertial: bool):
                         amp_first = amp[-1]
                     regime = _decide(amp, grow, perturbation, amp_first, a_start, cycles)
                     if regime != Regime.UNDECIDED:
-                        return regime.value, grow[-1], per[-1], 0.0 if regime == Regime.STEADY else amp[-1], cycles
-                t_max_prev = t_peak
+                        amplitude = 0.0 if regime == Regime.STEADY else amp[-1]
+                        return regime.value, grow[-1], per[-1], amplitude, cycles, t_peak
+                if not rebound:
+                    t_max_prev = t_peak
+                after_rebound = rebound
             elif dz < 0.0 and dz1 >= 0.0:
-                z_min = extremum(t[j - 1], t[j], Y[j - 1], Y[j], p, d0, d1)[1]
+                rhs(Y[j - 1], p, d0)
+                z_new = locate(t[j - 1], t[j], Y[j - 1], Y[j], p, d0, d1, rtol, atol, data)[1]
+                z_min = min(z_min, z_new) if after_rebound else z_new
             dz = dz1
-        return UNDECIDED_I, grow[-1], per[-1], math.nan, cycles
+        return UNDECIDED_I, grow[-1], per[-1], math.nan, cycles, math.nan
 
     return observe
 
@@ -175,8 +258,8 @@ OBSERVE = (_make_observe(False), _make_observe(True))
 
 
 def observe_point(t, Y, n_valid, k, a, b, g, perturbation):
-    """The regime and observables a tool's samples give (see :func:`_make_observe`)."""
-    return OBSERVE[int(g > 0.0)](t, Y, n_valid, DrivenParams(k, a, b, g), perturbation)
+    """The regime and observables a tool's samples give (see :func:`_make_observe`; extrema from the samples)."""
+    return OBSERVE[int(g > 0.0)](t, Y, n_valid, DrivenParams(k, a, b, g), perturbation, 0.0, 0.0, np.empty(4))
 
 
 # --------------------------------------------------------------------------------------------- points
@@ -290,7 +373,13 @@ def numbalsoda_tool():
     lsoda = numbalsoda.lsoda
 
     def make_batch(inertial):
-        observe, n, ptr = OBSERVE[inertial], 3 if inertial else 2, ptrs[inertial]
+        n, ptr = 3 if inertial else 2, ptrs[inertial]
+
+        @njit
+        def restart(y0, ts, data, rtol, atol):
+            return lsoda(ptr, y0, ts, data=data, rtol=rtol, atol=atol, mxstep=LSODA_MXSTEP)
+
+        observe = _make_observe(inertial, restart, refine=True)
 
         @njit(parallel=True)
         def batch(k, a, b, g, T, samples, perturbation, rtol, atol, out):
@@ -298,15 +387,16 @@ def numbalsoda_tool():
                 y0 = np.zeros(n)
                 y0[0] = perturbation
                 t = np.linspace(0.0, T[j], samples[j])
-                usol, success = lsoda(ptr, y0, t, data=np.array([k[j], a[j], b[j], g[j]]), rtol=rtol, atol=atol,
-                                      mxstep=LSODA_MXSTEP)
+                data = np.array([k[j], a[j], b[j], g[j]])
+                usol, success = lsoda(ptr, y0, t, data=data, rtol=rtol, atol=atol, mxstep=LSODA_MXSTEP)
                 n_valid = samples[j]
                 if not success:  # the rows after a failure are not written: stop at the first non-finite one
                     for m in range(samples[j]):
                         if not (math.isfinite(usol[m, 0]) and math.isfinite(usol[m, 1])):
                             n_valid = m
                             break
-                r = observe(t, usol, max(n_valid, 1), DrivenParams(k[j], a[j], b[j], g[j]), perturbation)
+                r = observe(t, usol, max(n_valid, 1), DrivenParams(k[j], a[j], b[j], g[j]), perturbation, rtol, atol,
+                            data)
                 out[j, 0], out[j, 1], out[j, 2], out[j, 3], out[j, 4] = r[0], r[1], r[2], r[3], r[4]
                 if not success and r[0] != RUNAWAY_I:
                     out[j, 0] = UNDECIDED_I
@@ -322,7 +412,8 @@ def numbalsoda_tool():
                 continue
             sel = idx[where]
             part = np.full((sel.size, 5), np.nan)
-            batches[inertial](pts.k[sel], pts.a[sel], pts.b[sel], pts.g[sel], pts.horizon[sel], pts.samples[sel],
+            samples = (pts.samples[sel] - 1) * NUMBALSODA_SAMPLES_PER_CYCLE // SAMPLES_PER_CYCLE + 2
+            batches[inertial](pts.k[sel], pts.a[sel], pts.b[sel], pts.g[sel], pts.horizon[sel], samples,
                               pts.perturbation, rtol, ATOL_OVER_RTOL * rtol * pts.perturbation, part)
             out[where] = part
         res = dict(zip(("regime", "growth_rate", "period", "amplitude", "cycles"), out.T))
@@ -416,8 +507,9 @@ def diffrax_tool():
 
 def scipy_solve(pts, i, rtol, method, samples_per_cycle=SAMPLES_PER_CYCLE, slack=RUNAWAY_SLACK):
     """One point with scipy's solve_ivp (``method``; Radau and LSODA get the analytic Jacobian), sampled at
-    ``samples_per_cycle`` per cycle of the horizon (None: at its steps), stopped where ln xi' > W_RUNAWAY - slack:
-    (t, Y, success, nfev, Y and t with the runaway event's state appended)."""
+    ``samples_per_cycle`` per cycle of the horizon (None: at its steps) and EVENT_BRACKET x the sample spacing
+    either side of each z' = 0 (an event: ln xi' = 0, located on the dense output), stopped where
+    ln xi' > W_RUNAWAY - slack: (t, Y, success, nfev, Y and t with the runaway event's state appended)."""
     from scipy.integrate import solve_ivp
     k, a, b, g = pts.k[i], pts.a[i], pts.b[i], pts.g[i]
     inertial = g > 0.0
@@ -443,19 +535,26 @@ def scipy_solve(pts, i, rtol, method, samples_per_cycle=SAMPLES_PER_CYCLE, slack
         dw = (k, -(a + 2.0 * b * u + 1.0))
         return [[-e * dw[0], -e * dw[1]], [-e * dw[0], -eu - e * dw[1]]]
 
+    def log_velocity(t, y):
+        return y[2] if inertial else k * y[0] - y[1] * (a + b * y[1]) - y[1]
+
     def runaway(t, y):
-        return (y[2] if inertial else k * y[0] - y[1] * (a + b * y[1]) - y[1]) - (W_RUNAWAY - 0.5 * slack)
+        return log_velocity(t, y) - (W_RUNAWAY - 0.5 * slack)
     runaway.terminal = True
 
     y0 = [pts.perturbation, 0.0] + ([0.0] if inertial else [])
-    n_cycles = (pts.samples[i] - 1) / SAMPLES_PER_CYCLE
-    t = None if samples_per_cycle is None else np.linspace(0.0, pts.horizon[i], max(
-        2, int(math.ceil(samples_per_cycle * n_cycles)) + 1))
     kw = {"jac": jac} if method in ("Radau", "LSODA", "BDF") else {}
-    sol = solve_ivp(f, (0.0, pts.horizon[i]), y0, method=method, t_eval=t, rtol=rtol,
-                    atol=ATOL_OVER_RTOL * rtol * pts.perturbation, events=runaway, **kw)
-    Y = np.asarray(sol.y, float).reshape(len(y0), -1).T
-    t = np.asarray(sol.t, float)
+    sol = solve_ivp(f, (0.0, pts.horizon[i]), y0, method=method, rtol=rtol, atol=ATOL_OVER_RTOL * rtol *
+                    pts.perturbation, events=(runaway, log_velocity), dense_output=samples_per_cycle is not None, **kw)
+    if samples_per_cycle is None:
+        Y, t = np.asarray(sol.y, float).T, np.asarray(sol.t, float)
+    else:  # the samples, and a pair either side of each z' = 0 (a bracket that resolves the extremum), from the
+        # dense output
+        n_cycles = (pts.samples[i] - 1) / SAMPLES_PER_CYCLE
+        t = np.linspace(0.0, pts.horizon[i], max(2, int(math.ceil(samples_per_cycle * n_cycles)) + 1))
+        half = EVENT_BRACKET * (t[1] - t[0])
+        t = np.unique(np.concatenate([t, sol.t_events[1] - half, sol.t_events[1] + half]).clip(0.0, sol.t[-1]))
+        Y = np.asarray(sol.sol(t), float).T
     if sol.status == 1:  # ran away: the samples up to the event, and the event's state
         return t, Y, True, sol.nfev, np.vstack([Y, sol.y_events[0]]), np.append(t, sol.t_events[0])
     return t, Y, sol.status == 0, sol.nfev, Y, t
@@ -478,7 +577,7 @@ def scipy_tool(method):
 def reference(pts, sub):
     """scipy Radau at REF_RTOL (REF_SAMPLES_PER_CYCLE) on ``sub``; CHECK_RTOL on N_CHECK of them."""
     t0 = time.perf_counter()
-    ref = {f: np.empty(sub.size) for f in ("regime", "growth_rate", "period", "amplitude", "cycles")}
+    ref = {f: np.empty(sub.size) for f in ("regime", "growth_rate", "period", "amplitude", "cycles", "decided")}
     for j, i in enumerate(sub):
         _, _, _, _, Y, t = scipy_solve(pts, i, REF_RTOL, "Radau", REF_SAMPLES_PER_CYCLE)
         for f, v in zip(ref, observe_point(t, Y, Y.shape[0], pts.k[i], pts.a[i], pts.b[i], pts.g[i],
@@ -500,7 +599,14 @@ def reference(pts, sub):
                          f"{len(chk)} points", "seconds": ref_s,
                  "regimes": {Regime(int(r)).name.lower(): int((ref["regime"] == r).sum()) for r in np.unique(
                      ref["regime"])},
-                 "check_points": sub[chk].tolist(), "floor_growth_per_cycle": floor[0], "floor_amplitude": floor[1]}
+                 "check_points": sub[chk].tolist(), "floor_growth_per_cycle": floor[0], "floor_amplitude": floor[1],
+                 "horizon_over_decision": _spread(pts.horizon[sub] / ref["decided"])}
+
+
+def _spread(x):
+    """min, median, max of the finite values of x (None: none)."""
+    x = x[np.isfinite(x)]
+    return {"min": float(x.min()), "median": float(np.median(x)), "max": float(x.max())} if x.size else None
 
 
 # --------------------------------------------------------------------------------------------- timing
@@ -546,7 +652,8 @@ def bench_scene(name, scene, tools, peer_tols, engine_rtols, repeats, n_sub, qui
     engine = [(f"engine_{nt}t", f"engine driven_chunk (kernel path), {nt} thread{'s' * (nt > 1)}",
                engine_tool(scene, plan, nt), ("grid", "sub") if nt == 1 else ("grid",), engine_rtols)
               for nt in sorted({1, n_all})]
-    for tname, label, solve, scopes, tols in engine + [t + (peer_tols,) for t in tools]:
+    slow = SLOW_TOLS_INERTIAL if pts.engine["inertial"].any() else SLOW_TOLS
+    for tname, label, solve, scopes, tols in engine + [t + (slow.get(t[0], peer_tols),) for t in tools]:
         entry = out.setdefault(tname, {"label": label, "threads": 1 if not tname.startswith("engine") or
                                        tname.endswith("_1t") else n_all, "scopes": {}})
         for scope in scopes:
@@ -556,17 +663,33 @@ def bench_scene(name, scene, tools, peer_tols, engine_rtols, repeats, n_sub, qui
                 tt = time.perf_counter()
                 try:
                     scipy = tname.startswith("scipy")
-                    wall, cpu, res, load = time_one(solve, pts, idx, rt, 1 if scipy else repeats, not scipy)
+                    parts = {}  # a peer on a scene of both models: each model's points timed on their own
+                    for cls, of_cls in _classes(pts, idx, not tname.startswith("engine")).items():
+                        parts[cls] = (of_cls, *time_one(solve, pts, idx[of_cls], rt, 1 if scipy else repeats,
+                                                        not scipy))
                 except Exception as exc:
                     entry["failed"] = f"{type(exc).__name__}: {exc}"[:400]
                     print(f"    {tname:16s} {scope:4s} rtol {rt:7.0e}: failed ({entry['failed']})", flush=True)
                     break
+                wall, cpu = sum(p[1] for p in parts.values()), sum(p[2] for p in parts.values())
+                load = [p[4] for p in parts.values()][0]
+                res = {}
+                for of_cls, _, _, r, _ in parts.values():
+                    for fld, v in r.items():
+                        res.setdefault(fld, np.empty(idx.size, np.asarray(v).dtype))[of_cls] = v
                 res_sub = {f: np.asarray(v)[sub] for f, v in res.items()} if scope == "grid" else res
                 row = {"rtol": rt, "stepper_rtol": driven_stepper_rtol(rt) if tname.startswith("engine") else rt,
                        "points": int(idx.size), "best_wall_s": wall, "best_cpu_s": cpu,
                        "us_per_point_per_core": wall * entry["threads"] / idx.size * 1e6,
                        "points_per_s_per_core": idx.size / (wall * entry["threads"]), "loadavg": load,
                        **errors(res_sub, ref, compared[sub])}
+                if len(parts) > 1:
+                    on_sub = np.isin(idx, sub) if scope == "grid" else np.ones(idx.size, bool)
+                    row["models"] = {cls: {"points": int(of_cls.sum()), "best_wall_s": p_wall,
+                                           **errors({f: v[of_cls & on_sub] for f, v in res.items()},
+                                                    {f: v[_class_mask(pts, sub, cls)] for f, v in ref.items()},
+                                                    compared[sub][_class_mask(pts, sub, cls)])}
+                                     for cls, (of_cls, p_wall, *_) in parts.items()}
                 if scope == "grid":
                     row["regimes_differing_from_engine"] = int((np.asarray(res["regime"]) !=
                                                                 pts.engine["regime"])[compared].sum())
@@ -578,6 +701,9 @@ def bench_scene(name, scene, tools, peer_tols, engine_rtols, repeats, n_sub, qui
                       f"{row['regimes_differing_from_reference']}"
                       f"  ({time.perf_counter() - tt:.1f} s)", flush=True)
             entry["scopes"][scope] = rows
+    inertial = pts.g > 0.0
+    shares = {"quasistatic": float(1.0 - inertial.mean()), "inertial": float(inertial.mean())} if 0 < inertial.sum(
+    ) < n else None
     return {"shape": list(scene.shape), "points": n, "model": scene.model, "engine_regimes": regimes,
             "inertial_points": int(pts.engine["inertial"].sum()),
             "K_over_M_range": [float(scene.K_over_M.min()), float(scene.K_over_M.max())],
@@ -585,19 +711,38 @@ def bench_scene(name, scene, tools, peer_tols, engine_rtols, repeats, n_sub, qui
             "horizon_tau": {"min": float(pts.horizon.min()), "median": float(np.median(pts.horizon)),
                             "max": float(pts.horizon.max())},
             "subsample": {"points": int(sub.size), "seed": SEED, "flat_indices": sub.tolist()},
-            "reference": ref_info, "tools": out, "matched": matched(out), "seconds": time.perf_counter() - t0}
+            "reference": ref_info, "tools": out, "matched": matched(out, shares), "seconds": time.perf_counter() - t0}
 
 
-def matched(out):
-    """Per growth-error level: each tool's cheapest setting (subsample accuracy, grid time where it ran there)
-    reaching it, and the engine's speed-up per core over the best peer."""
+def _class_mask(pts, idx, cls):
+    return (pts.g[idx] > 0.0) == (cls == "inertial")
+
+
+def _classes(pts, idx, split):
+    """{model: mask of idx}: both models apart where ``split`` and idx holds both, else all of idx as one."""
+    masks = {cls: _class_mask(pts, idx, cls) for cls in ("quasistatic", "inertial")}
+    if not split or not all(m.any() for m in masks.values()):
+        return {"all": np.ones(idx.size, bool)}
+    return masks
+
+
+def _meets(row, lvl):
+    """Growth rates per cycle and amplitudes within ``lvl`` of the reference's, every regime the reference's."""
+    return (row["max_growth_err_per_cycle"] is not None and row["max_growth_err_per_cycle"] <= lvl
+            and (row["max_amplitude_rel_err"] or 0.0) <= lvl and row["regimes_differing_from_reference"] == 0)
+
+
+def matched(out, shares=None):
+    """Per error level (:func:`_meets`): each tool's cheapest setting (subsample accuracy, grid time where it ran
+    there), the engine's speed-up per core over the best peer, and, on a scene of both models (``shares``: each
+    model's share of the grid's points), over the best peer per model (each model's points by its own cheapest
+    peer setting that meets the level on them, times weighted by the shares)."""
     levels = {}
     for lvl in (1e-4, 1e-5, 1e-6, 1e-7, 1e-8):
         ent = {}
         for tname, t in out.items():
             scope = "grid" if "grid" in t["scopes"] else "sub"
-            ok = [r for r in t["scopes"].get(scope, []) if r["max_growth_err_per_cycle"] is not None
-                  and r["max_growth_err_per_cycle"] <= lvl and r["regimes_differing_from_reference"] == 0]
+            ok = [r for r in t["scopes"].get(scope, []) if _meets(r, lvl)]
             if ok:
                 best = min(ok, key=lambda r: r["us_per_point_per_core"])
                 ent[tname] = {"rtol": best["rtol"], "us_per_point_per_core": best["us_per_point_per_core"],
@@ -608,6 +753,22 @@ def matched(out):
         if bp and "engine_1t" in ent:
             ent["engine_1t_speedup_vs_best_peer"] = ent[bp]["us_per_point_per_core"] / ent["engine_1t"][
                 "us_per_point_per_core"]
+        per_model, total = {}, 0.0
+        for cls, share in (shares or {}).items():
+            cands = [(m["best_wall_s"] / m["points"] * 1e6, tname, r["rtol"])
+                     for tname, t in out.items() if not tname.startswith("engine")
+                     for r in t["scopes"].get("grid" if "grid" in t["scopes"] else "sub", [])
+                     if (m := r.get("models", {}).get(cls)) and _meets(m, lvl)]
+            if not cands:
+                per_model = {}
+                break
+            us, tname, rt = min(cands)
+            per_model[cls] = {"tool": tname, "rtol": rt, "us_per_point": us, "share": share}
+            total += share * us
+        if per_model:
+            ent["best_peer_per_model"] = {"models": per_model, "us_per_point_per_core": total}
+            if "engine_1t" in ent:
+                ent["engine_1t_speedup_vs_best_peer_per_model"] = total / ent["engine_1t"]["us_per_point_per_core"]
         levels[f"{lvl:g}"] = ent
     return levels
 
@@ -627,11 +788,13 @@ def plot(result, path):
             scope = "grid" if "grid" in t["scopes"] else "sub"
             rows = [r for r in t["scopes"].get(scope, []) if r["max_growth_err_per_cycle"]]
             if rows:
-                ax.loglog([r["max_growth_err_per_cycle"] for r in rows], [r["us_per_point_per_core"] for r in rows],
+                ax.loglog([max(r["max_growth_err_per_cycle"], r["max_amplitude_rel_err"] or 0.0) for r in rows],
+                          [r["us_per_point_per_core"] for r in rows],
                           "-" if tname.startswith("engine") else "--", marker="o", ms=3,
                           label=f"{t['label']} [{scope}: {rows[0]['points']} pts]")
         ax.axvspan(1e-17, sc["reference"]["floor_growth_per_cycle"], color="0.9", zorder=0)
-        ax.set_xlabel("max growth-rate error per cycle |g - g_ref| T (subsample, vs scipy Radau 1e-10)")
+        ax.set_xlabel("max of growth-rate error per cycle |g - g_ref| T and amplitude error |a/a_ref - 1|\n"
+                      "(subsample, vs scipy Radau 1e-10)", fontsize=8)
         ax.set_ylabel("us per point per core")
         ax.set_title(f"driven, model {sc['model']}: {sc['shape'][0]} x {sc['shape'][1]}", fontsize=9)
         ax.grid(True, alpha=0.3)
@@ -650,10 +813,16 @@ def print_table(result):
         for lvl, ent in sc["matched"].items():
             bp = ent["best_peer"]
             e = ent.get("engine_1t")
-            print(f"  growth err <= {lvl:>6s}: engine 1t {e['us_per_point_per_core'] if e else float('nan'):10.1f} "
+            print(f"  errors <= {lvl:>6s}: engine 1t {e['us_per_point_per_core'] if e else float('nan'):10.1f} "
                   f"us, best peer {bp or '-':14s} "
                   f"{ent[bp]['us_per_point_per_core'] if bp else float('nan'):10.1f} us, engine x"
                   f"{ent.get('engine_1t_speedup_vs_best_peer', float('nan')):.2f}")
+            if "best_peer_per_model" in ent:
+                pm = ent["best_peer_per_model"]
+                print("      best peer per model: " + ", ".join(
+                    f"{cls} {m['tool']} {m['rtol']:g} {m['us_per_point']:.1f} us" for cls, m in pm["models"].items())
+                    + f" -> {pm['us_per_point_per_core']:.1f} us, engine x"
+                      f"{ent.get('engine_1t_speedup_vs_best_peer_per_model', float('nan')):.2f}")
 
 
 def main(argv=None):
@@ -667,7 +836,7 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="every 4th K/M and V, 8-point subsample, 3 peer tolerances")
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
     ap.add_argument("--no-png", action="store_true")
-    ap.add_argument("--models", default="quasistatic,auto")
+    ap.add_argument("--models", default=",".join(SCENES), help="scenes: " + ", ".join(SCENES))
     args = ap.parse_args(argv)
     warnings.simplefilter("ignore", RuntimeWarning)
     t_start = time.perf_counter()
@@ -705,9 +874,11 @@ def main(argv=None):
                      "engine_stepper_rtols": [driven_stepper_rtol(r) for r in ENGINE_RTOLS],
                      "atol_peers": f"{ATOL_OVER_RTOL:g} x rtol x perturbation", "repeats": repeats,
                      "samples_per_cycle": SAMPLES_PER_CYCLE, "seed": SEED,
-                     "grid": f"sample2, V {N_V} log-spaced {V_RANGE[0]:g}..{V_RANGE[1]:g} m/s, K/M {N_KM} log-spaced "
-                             f"{KM_SPAN[0]:g} x min .. {KM_SPAN[1]:g} x max quasi-static (K/M)_c"
-                             + (" (every 4th K/M and V)" if args.quick else ""),
+                     "grid": "sample2, V 20 log-spaced 0.1..5 um/s, K/M 40 log-spaced 0.3 x min .. 3 x max "
+                             "quasi-static (K/M)_c" + (" (every 4th K/M and V)" if args.quick else ""),
+                     "deep_grid": "sample2, V 10 log-spaced 0.1..5 um/s, K/M 10 log-spaced 0.05 .. 0.5 x the smallest "
+                                  "(K/M)_c, model inertial (driven_lanes.issue_grid)"
+                                  + (" (every 2nd K/M and V)" if args.quick else ""),
                      "horizon": "(cycles + 1.5) x period of the engine at rtol 1e-6 where it closed >= 2 cycles, "
                                 "else from the linear theory (module docstring)",
                      "per_core": "wall x threads / points; JIT excluded (an untimed call first)",
