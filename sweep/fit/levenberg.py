@@ -18,17 +18,18 @@ Then, per task, in scaled variables z = theta/scale (scale: ParamSpace.scale):
 
 Jacobians: forward differences d r/d theta_j = (r(theta + h_j) - r(theta))/h_j, h_j = FD_STEP x scale_j (backward
 where the upper bound is closer), m + 1 sets an iteration: the Jacobian steers the steps, and its error (~FD_STEP)
-barely moves the optimum they stop at (sweep.fit.local). :func:`central_jacobian` gives the central differences
-(r(theta + h_j) - r(theta - h_j))/(2 h_j) at a best fit, for its covariance: with the engine at rtol 1e-6 they carry
-a relative error ~rtol/FD_STEP ~ 1e-3 and a truncation error ~FD_STEP^2 ~ 1e-6, far below what the noise of a
-measured curve (>~1e-3) resolves.
+barely moves the optimum they stop at (sweep.fit.local). The Jacobian of the best set, which the last step used,
+also gives its covariance (:attr:`Solutions.jac`): with the engine at rtol 1e-6 it carries a relative error
+~rtol/FD_STEP ~ 1e-3 and a truncation error ~FD_STEP ~ 1e-3, far below what the noise of a measured curve (>~1e-3)
+resolves (central differences, 2p sets more, moved the standard errors of 100 records and 30 stop curves by < 1.4e-3
+of themselves and the 95 % bounds by < 4e-4 of their half-widths).
 
 An offset parameter (ProblemStack.offset: a record's mu0, which shifts every weighted residual along a direction g
 that depends on no parameter) is handled exactly: its Jacobian column is g (no forward solve: its neighbour set is
 not posted), and after every forward solve it moves to its best value given the others, c = -sum r g / sum g^2
 (clipped to its bounds; r += c g, exactly the residuals there). The others' columns do not depend on it, so the
 forward-difference Jacobian of the trial set holds at the moved set too: 4 sets an iteration instead of 5 for a, b,
-Dc, mu0, 6 instead of 8 for the central Jacobian. With :attr:`Tolerances.resolved` too, 100 records of their own
+Dc, mu0. With :attr:`Tolerances.resolved` too, 100 records of their own
 times (benchmarks/fit_records.py's, from its start: a, b 20 % low, Dc 2x high, search "local") took 6.3 rounds each
 on average instead of 8.2 (at most 7 instead of 17), the least-squares stage 0.35 s instead of 0.53-0.60 s (A/B in
 one process, 3 runs each); best values moved by < 7e-3 standard errors, interval ends by < 5e-4 of the half-widths.
@@ -49,8 +50,7 @@ import numpy as np
 from .space import ParamSpace
 from .stack import ProblemStack
 
-__all__ = ["FD_STEP", "FIT", "HOLD", "STATUS", "STATUS_FLAGS", "Solutions", "Tolerances", "central_jacobian",
-           "solve"]
+__all__ = ["FD_STEP", "FIT", "HOLD", "STATUS", "STATUS_FLAGS", "Solutions", "Tolerances", "solve"]
 
 FD_STEP = 1e-3
 """Finite-difference step relative to each parameter's scale (ParamSpace.scale)."""
@@ -92,8 +92,11 @@ STATUS_FLAGS = {0: "max_rounds_reached", 1: "nothing_to_move", 2: "misfit_conver
 class Solutions:
     """Per task: best parameter set (T, p) (held parameters at their values), its weighted residuals (T, n_max),
     misfit (T,), function evaluations (rounds in which the task posted sets), whether sliding was stable before every
-    stop, the status (a key of STATUS) and the number of residuals the model gave no number for at the best set
-    (MODEL_FAILED stands in for them in ``residuals`` and ``rss``)."""
+    stop, the status (a key of STATUS), the number of residuals the model gave no number for at the best set
+    (MODEL_FAILED stands in for them in ``residuals`` and ``rss``) and the Jacobian (T, n_max, m) of the residuals
+    over the moving parameters (in their order in theta) at the best set that the last step used: forward
+    differences, with the offset parameter's exact column (Broyden's secant approximation where :func:`solve` had
+    ``jac0``)."""
 
     theta: np.ndarray
     residuals: np.ndarray
@@ -102,33 +105,27 @@ class Solutions:
     stable: np.ndarray
     status: np.ndarray
     failures: np.ndarray
+    jac: np.ndarray
 
 
-def _neighbours(theta: np.ndarray, cols: np.ndarray, sp: ParamSpace, central: bool
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """(sets (T, S, p): theta then its finite-difference neighbours along ``cols`` (T, m), widths (T, m): signed
-    distance from the lower neighbour to the upper one)."""
+def _neighbours(theta: np.ndarray, cols: np.ndarray, sp: ParamSpace) -> tuple[np.ndarray, np.ndarray]:
+    """(sets (T, 1 + m, p): theta then its forward-difference neighbours along ``cols`` (T, m), widths (T, m): signed
+    distance from theta to its neighbour)."""
     T, m = cols.shape
     ti = np.arange(T)[:, None]
     base = theta[ti, cols]
     h = FD_STEP * sp.scale[cols]
     up, down = np.minimum(base + h, sp.upper[cols]), np.maximum(base - h, sp.lower[cols])
-    S = 1 + (2 if central else 1) * m
-    sets = np.repeat(theta[:, None, :], S, axis=1)
+    sets = np.repeat(theta[:, None, :], 1 + m, axis=1)
     k = np.arange(m)[None, :]
-    if central:
-        sets[ti, 1 + 2 * k, cols] = up
-        sets[ti, 2 + 2 * k, cols] = down
-        return sets, up - down
     one = np.where(up > base, up, down)
     sets[ti, 1 + k, cols] = one
     return sets, one - base
 
 
-def _jacobian(r: np.ndarray, widths: np.ndarray, central: bool) -> np.ndarray:
+def _jacobian(r: np.ndarray, widths: np.ndarray) -> np.ndarray:
     """(T, n, m) from the residuals (T, S, n) of :func:`_neighbours`' sets."""
-    d = r[:, 1::2] - r[:, 2::2] if central else r[:, 1:] - r[:, :1]
-    return np.swapaxes(d / widths[:, :, None], 1, 2)
+    return np.swapaxes((r[:, 1:] - r[:, :1]) / widths[:, :, None], 1, 2)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -270,23 +267,6 @@ def _step(z, g, H, frozen, lam, lo, hi, eye) -> tuple[np.ndarray, np.ndarray, np
     return raw, dz, pred
 
 
-def central_jacobian(stack: ProblemStack, problem: np.ndarray, theta: np.ndarray, residuals: np.ndarray
-                     ) -> np.ndarray:
-    """Central-difference Jacobian (T, n_max, p) of every task at ``theta`` (T, p) over every free parameter: one
-    engine round of the 2p neighbours, ``residuals`` (T, n_max) those at ``theta`` itself (known)."""
-    problem = np.asarray(problem, dtype=np.intp)
-    T, p = theta.shape
-    solved = [k for k in range(p) if k != stack.offset]  # the offset parameter's column is known (module docstring)
-    cols = np.broadcast_to(np.array(solved, dtype=np.intp), (T, len(solved)))
-    sets, widths = _neighbours(theta, cols, stack.space, True)
-    r, _, _ = stack.residuals(problem, sets[:, 1:])
-    jac = np.zeros((T, residuals.shape[1], p))
-    jac[:, :, solved] = _jacobian(np.concatenate((residuals[:, None, :], r), axis=1), widths, True)
-    if stack.offset is not None:
-        jac[:, :, stack.offset] = _offset_column(stack, problem)
-    return jac
-
-
 def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np.ndarray | None = None,
           tol: Tolerances = FIT, jac0: np.ndarray | None = None) -> Solutions:
     """Minimise every task's misfit; task i belongs to problem ``problem[i]`` and starts at ``theta0[i]`` (clipped
@@ -324,12 +304,12 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
             r, ok, bad = stack.residuals(problem[idx], th[:, None, :])
             r, J = r[:, 0], None
         else:
-            sets, widths = _neighbours(th, cols[idx], sp, False)
+            sets, widths = _neighbours(th, cols[idx], sp)
             at = np.flatnonzero(k_off[idx] < m)
             sets[at, 1 + k_off[idx[at]]] = th[at]  # no solve: the same set as the trial (solved once)
             widths[at, k_off[idx[at]]] = 1.0
             r, ok, bad = stack.residuals(problem[idx], sets)
-            J = _jacobian(r, widths, False) * scale[idx][:, None, :]
+            J = _jacobian(r, widths) * scale[idx][:, None, :]
             r = r[:, 0]
             if at.size:
                 J[at, :, k_off[idx[at]]] = g_off[idx[at]] * scale[idx[at], k_off[idx[at]]][:, None]
@@ -343,7 +323,8 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
     nfev = np.ones(T, np.intp)
     if m == 0:  # nothing to move: the residuals at the start
         r, ok, bad = stack.residuals(problem, theta[:, None, :])
-        return Solutions(theta, r[:, 0], _sumsq(r[:, 0], n), nfev, ok[:, 0], np.ones(T, np.intp), bad[:, 0])
+        return Solutions(theta, r[:, 0], _sumsq(r[:, 0], n), nfev, ok[:, 0], np.ones(T, np.intp), bad[:, 0],
+                         np.zeros((T, stack.n_max, 0)))
     status = np.zeros(T, np.intp)
     r, J, stable, failures = post(np.arange(T), theta)
     if broyden:
@@ -420,4 +401,4 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
         rss[acc] = rss_t[better]
         status[acc[done]] = 2
         active[acc[done]] = False
-    return Solutions(theta, r, rss, nfev, stable, status, failures)
+    return Solutions(theta, r, rss, nfev, stable, status, failures, J / scale[:, None, :])
