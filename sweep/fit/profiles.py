@@ -112,16 +112,13 @@ def profile_all(problems: list[Problem], best: list[np.ndarray], best_rss: list[
     jacs_all = np.zeros((len(problems), stack.n_max, p))  # each padded with zero rows to n_max
     for q, jac in enumerate(jacs):
         jacs_all[q, :jac.shape[0]] = jac
-    others = np.array([[k for k in range(p) if k != j] for j in range(p)], dtype=np.intp).reshape(p, p - 1)
 
     def run(tasks):
         q, j = (np.array([t[k] for t in tasks], dtype=np.intp) for k in (0, 1))
         value = np.array([t[2] for t in tasks], dtype=float)
         hold = np.zeros((len(tasks), p), bool)
         hold[np.arange(len(tasks)), j] = True
-        jac0 = jacs_all[q[:, None, None], np.arange(stack.n_max)[None, :, None], others[j][:, None, :]]
-        sol = solve(stack, q, _starts(best_all, covs_all, q, j, value), hold=hold, tol=HOLD,
-                    jac0=jac0)
+        sol = solve(stack, q, _starts(best_all, covs_all, q, j, value), hold=hold, tol=HOLD, jac0=jacs_all)
         for (q, j, value), rss in zip(tasks, sol.rss):
             points.setdefault((q, j), []).append((value, float(rss)))
 
