@@ -140,8 +140,10 @@ class RecordStack(ProblemStack):
         k_free = "k" in self.space.names
         if errors:
             self.inertial = np.zeros((U, max(len(ld) for ld in self.loads)), bool)
-        for u in np.unique(layout):
-            rows, q = np.flatnonzero(layout == u), self.representative[u]
+        order = np.argsort(layout, kind="stable")  # the blocks of each layout, in order
+        cuts = np.flatnonzero(np.diff(layout[order])) + 1
+        for rows in np.split(order, cuts) if U else []:
+            q = self.representative[layout[rows[0]]]
             p = params[rows]
             col = 0
             for i, ((load, t, k_rec, g_rec), x) in enumerate(zip(self.loads[q], self.trends[q])):
@@ -157,7 +159,7 @@ class RecordStack(ProblemStack):
                 if errors:
                     self.inertial[rows, i] = out.model == 1
                 ok = ((out.status == VALUED[0]) | (out.status == VALUED[1]))[:, None]
-                m = np.where(ok, out.mu, np.nan)
+                m = out.mu if ok.all() else np.where(ok, out.mu, np.nan)
                 if x is not None:  # the record's linear trend: its best slope per set, projected out
                     w2 = self.weights[q, col:col + t.size] ** 2
                     resid = self.observed[q, col:col + t.size] - m
