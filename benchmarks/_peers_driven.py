@@ -88,6 +88,7 @@ SLOW_TOLS = {"diffrax_1t": (1e-7, 1e-9, 1e-11), "scipy_LSODA": (1e-7, 1e-9, 1e-1
 SLOW_TOLS_INERTIAL = {**SLOW_TOLS, "diffrax_1t": (1e-7,)}
 ATOL_OVER_RTOL = 1e-3  # x the perturbation: the state's scale near steady sliding
 SAMPLES_PER_CYCLE = 1000
+SCIPY_PIECE = 2000.0  # tau: scipy integrates in pieces this long (scipy_solve)
 EVENT_BRACKET = 1e-6  # x the sample spacing: scipy's samples either side of an extremum (module docstring)
 REFINE_SUBSAMPLES, REFINE_LEVELS = 32, 6  # an unresolved extremum's re-integration (module docstring)
 NUMBALSODA_SAMPLES_PER_CYCLE = 100  # with the refinement as accurate as 1000 and 1.5-2x faster (quick QS grid)
@@ -544,20 +545,32 @@ def scipy_solve(pts, i, rtol, method, samples_per_cycle=SAMPLES_PER_CYCLE, slack
 
     y0 = [pts.perturbation, 0.0] + ([0.0] if inertial else [])
     kw = {"jac": jac} if method in ("Radau", "LSODA", "BDF") else {}
-    sol = solve_ivp(f, (0.0, pts.horizon[i]), y0, method=method, rtol=rtol, atol=ATOL_OVER_RTOL * rtol *
-                    pts.perturbation, events=(runaway, log_velocity), dense_output=samples_per_cycle is not None, **kw)
-    if samples_per_cycle is None:
-        Y, t = np.asarray(sol.y, float).T, np.asarray(sol.t, float)
-    else:  # the samples, and a pair either side of each z' = 0 (a bracket that resolves the extremum), from the
-        # dense output
+    grid = None
+    if samples_per_cycle is not None:
         n_cycles = (pts.samples[i] - 1) / SAMPLES_PER_CYCLE
-        t = np.linspace(0.0, pts.horizon[i], max(2, int(math.ceil(samples_per_cycle * n_cycles)) + 1))
-        half = EVENT_BRACKET * (t[1] - t[0])
-        t = np.unique(np.concatenate([t, sol.t_events[1] - half, sol.t_events[1] + half]).clip(0.0, sol.t[-1]))
-        Y = np.asarray(sol.sol(t), float).T
+        grid = np.linspace(0.0, pts.horizon[i], max(2, int(math.ceil(samples_per_cycle * n_cycles)) + 1))
+    ts, Ys, nfev, start, y = [], [], 0, 0.0, y0
+    while True:  # in pieces of SCIPY_PIECE tau from tau = 0 (autonomous): a slip's end needs steps below the
+        # spacing of doubles at tau ~ 5e4 (scipy Radau stopped there on the deep grid)
+        span = min(SCIPY_PIECE, pts.horizon[i] - start)
+        sol = solve_ivp(f, (0.0, span), y, method=method, rtol=rtol, atol=ATOL_OVER_RTOL * rtol * pts.perturbation,
+                        events=(runaway, log_velocity), dense_output=grid is not None, **kw)
+        nfev += sol.nfev
+        if grid is None:
+            t = np.asarray(sol.t, float)
+        else:  # the samples, and a pair either side of each z' = 0 (a bracket that resolves the extremum)
+            t = grid[(grid >= start) & (grid <= start + sol.t[-1])] - start
+            half = EVENT_BRACKET * (grid[1] - grid[0])
+            t = np.unique(np.concatenate([t, sol.t_events[1] - half, sol.t_events[1] + half]).clip(0.0, sol.t[-1]))
+        ts.append(t + start)
+        Ys.append(np.asarray(sol.y, float).T if grid is None else np.asarray(sol.sol(t), float).T)
+        if sol.status != 0 or start + span >= pts.horizon[i]:
+            break
+        start, y = start + span, sol.y[:, -1]
+    t, Y = np.concatenate(ts), np.vstack(Ys)
     if sol.status == 1:  # ran away: the samples up to the event, and the event's state
-        return t, Y, True, sol.nfev, np.vstack([Y, sol.y_events[0]]), np.append(t, sol.t_events[0])
-    return t, Y, sol.status == 0, sol.nfev, Y, t
+        return t, Y, True, nfev, np.vstack([Y, sol.y_events[0]]), np.append(t, start + sol.t_events[0])
+    return t, Y, sol.status == 0, nfev, Y, t
 
 
 def scipy_tool(method):
