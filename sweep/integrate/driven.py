@@ -275,7 +275,8 @@ def _largest(size, v):
 @functools.cache
 def scalar_parts(law: str, with_inertia: bool):
     """(rhs, advance, extremum) of one variant, made once per process: the driver below and the lanes
-    (sweep/integrate/lanes_driven.py, which locate their extrema with this ``extremum``) share them."""
+    (sweep/integrate/lanes_driven.py and lanes_driven_inertial.py, which locate their extrema with this
+    ``extremum`` and take their stiff RODAS3 steps with this ``advance``) share them."""
     rhs = make_driven_rhs(STATE_LAWS[law].rate, with_inertia)
     variant = (law, "inertial" if with_inertia else "quasistatic")
     advance = _make_advance(rhs, with_inertia, variant)
@@ -284,7 +285,7 @@ def scalar_parts(law: str, with_inertia: bool):
 
 def _slaved_parts(law: str):
     """(rhs, advance, extremum) of the inertial model on its slow manifold (:func:`make_slaved_rhs`), made once per
-    process."""
+    process (the inertial lanes locate their extrema on the manifold with this ``extremum``)."""
     rhs = make_slaved_rhs(STATE_LAWS[law].rate)
     variant = (law, "slaved")
     advance = _make_advance(rhs, True, variant)  # (z, u, w), always called with stiff False

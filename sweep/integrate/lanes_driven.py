@@ -18,13 +18,17 @@ Once no point is queued, the busy lanes are gathered into the first half, then t
 only those are stepped (:data:`WIDTHS`): a batch ends with its longest points, which then no longer pay for 16
 lanes (issue grid, 1 thread: 0.070 -> 0.056 s; its longest point alone 58 -> 34 ms, the one-point driver's 37).
 
-Where the arithmetic differs from the one-point driver: the exponentials are :func:`sweep.integrate.solvers.vmath.
-exp_f64` (<= 2.3e-16 relative, vectorisable; the driver calls libm) and the controller's powers are exp2 of
-:func:`sweep.integrate.lanes_adaptive._log2_approx` (0.5 %: a step factor needs no more). Steps therefore differ
-from the driver's at the tolerance's level, and so do growth rates and amplitudes (within their estimates;
-tests/integrate/test_lanes_driven.py). A point's numbers do not depend on its lane or neighbours.
+Where the arithmetic differs from the one-point driver: the exponentials of the right-hand side are
+:func:`sweep.integrate.solvers.vmath.exp_f64` (<= 2.3e-16 relative, vectorisable; the driver calls libm); the
+controller's factor is the driver's (exp_f64 of :func:`sweep.integrate.lanes_adaptive._log2_approx`, 0.5 %: a step
+factor needs no more), up to rounding. Steps therefore differ from the driver's at the tolerance's level, and so do
+growth rates and amplitudes (within their estimates; tests/integrate/test_lanes_driven.py). A point's numbers do
+not depend on its lane or neighbours.
 
-Only the quasi-static model with the aging law runs here (the scalar driver runs the slip law and the inertial model).
+Only the quasi-static model with the aging law runs here; the inertial model runs in
+:mod:`sweep.integrate.lanes_driven_inertial`, which shares the cycle bookkeeping (:class:`Bookkeeping`,
+:func:`book_state`, :func:`book_maximum`, :func:`book_minimum`) and the lane loop (:func:`make_run_lanes`) with this
+module; the slip law runs on the one-point driver.
 """
 
 from __future__ import annotations

@@ -172,14 +172,14 @@ def _attempt_source(width: int) -> str:
                   f"        {', '.join(f(_STAGES + 3 * (i - 2) + n) for n in range(3))} = dzi, dui, dwi"]
     lines += head + [f"        {c}e = {c}1 + h * ({combo(b, n, 6)})" for n, c in enumerate(names)]
     lines += ["        dze, due, dwe, lwe, wse = rate(ze, ue, we, m, k, a, bb, g)"]
-    lines += [f"        e{c} = h * ({combo(e, n, 7)})" for n, c in enumerate(names)]
+    lines += [f"        e_{c} = h * ({combo(e, n, 7)})" for n, c in enumerate(names)]  # (ew is e^w)
     lines += [
         f"        size, tau, logprev, rej, ew = {f(_SIZE)}, {f(_TAU)}, {f(_LOGPREV)}, {f(_REJ)}, {f(_EW)}",
         # the driver's choice of stepper: RODAS3 (the scalar loop) where the inertial mode would hold dp5 down
         "        stiff = m < half and h * abs(one / (ew * g) + dw1) > stiff_switch",
-        "        finite = ze == ze and ue == ue and we == we and ez == ez and eu == eu and ew_ == ew_",
+        "        finite = ze == ze and ue == ue and we == we and e_z == e_z and e_u == e_u and e_w == e_w",
         "        tol = rtol * (slaved_tol if m > half else one)",
-        "        err = max(max(abs(ez), abs(eu)), abs(ew_)) / (tol * max(max(size, abs(ze)), max(abs(ue), abs(we))))",
+        "        err = max(max(abs(e_z), abs(e_u)), abs(e_w)) / (tol * max(max(size, abs(ze)), max(abs(ue), abs(we))))",
         "        err = err if finite else one",
         "        accept = finite and err <= one and not stiff",
         "        lerr = _log2_approx(max(err, err_floor))",
@@ -213,8 +213,7 @@ def _attempt_source(width: int) -> str:
         f"        {f(_ZE)}, {f(_UE)}, {f(_WE)}, {f(_DZE)}, {f(_DUE)}, {f(_DWE)} = ze, ue, we, dze, due, dwe",
         f"        {f(_LWE)}, {f(_HN)}, {f(_LERR)} = lwe, hn, lerr",
     ]
-    # the error estimate of w is "ew_" (ew is e^w of the lane's state)
-    return ("\n".join(lines) + "\n").replace("        ew = h * (", "        ew_ = h * (")
+    return "\n".join(lines) + "\n"
 
 
 @functools.cache
