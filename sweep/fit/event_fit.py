@@ -9,9 +9,10 @@ events_missed, 1 not_converged); with this stage on 6 of 6, 2.5-3.1 s a fit inst
 the same draws' starts: 10 starts (boxes in a and Dc only) gave 5 of 6 (one events_missed: a local minimum with the
 record's event, serially correlated residuals, sweep.fit.events), the start's box alone 4 of 6; plain least squares
 from 9 starts (a box of factor 1.3, no aligned stage, search local) 4 of 6, and two fits ok at a wrong local minimum
-(noise 1.18x and 2.42x; before the serial-correlation check). Not reached: a three-event sawtooth (the plain misfit's
-basin is ~0.3 % wide in Dc: 0 of 6, all events_missed), and a record sampled at two rates with a gap (of 4 draws 3
-not_converged and 1 events_missed, at noise 1.05-1.7x).
+(noise 1.18x and 2.42x; before the serial-correlation check). A three-event sawtooth (600 samples over 35 s; its
+plain misfit's valley ~0.25 % wide in b) was reached by none of 6 draws (all events_missed) until the continuation
+and the finer forward differences below (:data:`EVENT_FD_STEP`): 6 of 6 ok with covering intervals, 2.9-3.8 s a
+fit; a record sampled at two rates with a gap: 4 of 4 ok (before: 3 not_converged, 1 events_missed).
 
 What: for the problems whose records show slip events (sweep.fit.events.slip_events), before the least squares
 (sweep.fit.core), :func:`event_start` runs, from several starts each, a least squares of event-aligned residuals
@@ -29,6 +30,11 @@ residuals (the likelihood of the data). The aligned residuals of a record, in it
   an event the model lacks counts as one at the record's end (time) with no fall term (both continuous as an event
   leaves through the end).
 
+Continuation: the stage above runs on the records cut midway between their first and second slip events (all of a
+record with one); a record with more is extended one event at a time, each cut fitted by a plain least squares from
+the last one's best, and the fit's least squares take the whole records from there (measured on the three-event
+sawtooth: without it 0 of 6, 3 not_converged and 3 events_missed, from the whole records' stage).
+
 Starts: the global stage's best point and the given start, each also multiplied by SPREAD^(+-1) in every free
 parameter but the offset (the corners of a box; 2 (2^3 + 1) = 18 starts for a, b, Dc, mu0 free), all of them as
 tasks of one vectorised least squares (sweep.fit.levenberg). Records without events take none of this (their fits
@@ -44,15 +50,23 @@ from collections.abc import Sequence
 import numpy as np
 
 from .events import event_scale, event_times, record_slip_events, slip_events
-from .levenberg import HOLD, Tolerances, solve
+from .levenberg import FD_STEP, FIT, HOLD, Tolerances, solve
+from .problem import Problem
 from .stack import ProblemStack
 
-__all__ = ["ALIGNED", "SPREAD", "STAGE_RTOL", "AlignedStack", "event_problems", "event_start"]
+__all__ = ["ALIGNED", "EVENT_FD_STEP", "SPREAD", "STAGE_RTOL", "AlignedStack", "event_problems", "event_start"]
 
 ALIGNED = Tolerances(ftol=1e-6, xtol=1e-5, max_rounds=60)
 """Stopping rules of the aligned least squares: it only needs to land in the plain misfit's basin."""
 SPREAD = 1.5
 """Factor of the box of starts around the given start (module docstring)."""
+EVENT_FD_STEP = 1e-5
+"""Forward-difference step (relative to each parameter's scale) of the least squares of a stick-slip problem,
+instead of sweep.fit.levenberg.FD_STEP = 1e-3: a three-event sawtooth's misfit valley is ~0.25 % wide in b (with a,
+Dc at the truth), so a step of 1e-3 of the scale spans much of it and the least squares stall on its wall (from a
+point 2-4 % off along the valley: no move at 1e-3, part of the way at 1e-4, to the truth at 1e-5; measured on the
+two-event window of tests/fit/test_records_sawtooth_fit.py's three-event record). The slips make the model's
+derivatives large, so the engine's error (rtol) stays far below the differences."""
 STAGE_RTOL = 1e-4
 """Engine rtol of the stage's forward solves (at least; the global stage's default): it only finds the basin, and the
 fit's least squares follow at the fit's rtol. Measured on the one-event sawtooth from 30 % off (six draws, one after
@@ -106,7 +120,7 @@ class AlignedStack:
     residuals' places, then 2 per event. Failed solves keep the plain MODEL_FAILED residuals."""
 
     def __init__(self, base: ProblemStack, problems: np.ndarray):
-        self.base, self.space, self.offset = base, base.space, base.offset
+        self.base, self.space, self.offset, self.fd_step = base, base.space, base.offset, base.fd_step
         self.events = {int(q): [] for q in problems}
         for q in self.events:
             col = 0
@@ -162,16 +176,44 @@ def _box(theta: np.ndarray, spread: float, offset: int | None) -> list[np.ndarra
     return out
 
 
+def _cut(d, j: int):
+    """Record ``d`` up to midway between its slip events j and j + 1 (1-based; itself where it has at most j)."""
+    ev = record_slip_events(d)
+    if len(ev) <= j:
+        return d
+    times = event_times(d.t - d.t[0], d.mu, ev)[0]
+    return d.window(t_end=float(d.t[0] + 0.5 * (times[j - 1] + times[j])))
+
+
+def _stage(stack: ProblemStack, qs: np.ndarray, j: int) -> ProblemStack:
+    """A record stack of the problems ``qs`` of ``stack`` with their records cut after their j-th slip event
+    (:func:`_cut`), at the stack's engine settings and stick-slip forward-difference step."""
+    from .record_forward import RecordStack
+
+    cut = [Problem(stack.problems[q].name, tuple(_cut(d, j) for d in stack.problems[q].data), stack.space)
+           for q in qs]
+    out = RecordStack(cut, stack.rtol, estimates=False)
+    out.fd_step = np.full(len(cut), EVENT_FD_STEP)
+    return out
+
+
 def event_start(stack: ProblemStack, theta0: Sequence[np.ndarray], start: np.ndarray | None = None,
                 spread: float = SPREAD) -> list[np.ndarray]:
     """Starts for the plain least squares of every problem of the record stack ``stack``: ``theta0[q]`` (the global
     stage's best point, or the start) as it is for problems without slip events; for the others the best of the
     aligned-then-plain least squares (module docstring) from theta0[q], ``start`` (the given start; None: theta0
-    alone) and the boxes around them (factor ``spread``)."""
+    alone) and the boxes around them (factor ``spread``), on the records cut after their first slip event, then
+    extended by one event at a time (a plain least squares from the last one's best each: a continuation). Sets
+    ``stack.fd_step``: :data:`EVENT_FD_STEP` for the problems with slip events (the fit's own least squares too)."""
     theta = [np.array(th, dtype=float) for th in theta0]
     qs = event_problems(stack)
     if not qs.size:
         return theta
+    stack.fd_step = np.full(len(stack.problems), FD_STEP)
+    stack.fd_step[qs] = EVENT_FD_STEP
+    n_events = max(len(record_slip_events(d)) for q in qs for d in stack.problems[q].data)
+    full, stack = stack, _stage(stack, qs, 1)  # the first event's window (all of it where one event)
+    qs_full, qs = qs, np.arange(qs.size)
     sp = stack.space
     given = [] if start is None else [np.asarray(start, dtype=float)]
     starts = [[s for c in [theta[q]] + given for s in [c] + _box(c, spread, stack.offset)] for q in qs]
@@ -181,11 +223,19 @@ def event_start(stack: ProblemStack, theta0: Sequence[np.ndarray], start: np.nda
     loose = stack.with_settings(max(stack.rtol, STAGE_RTOL), estimates=False)  # the basin only: a looser engine
     th = solve(AlignedStack(loose, qs), tasks, th, tol=ALIGNED).theta
     plain = solve(loose, tasks, th, tol=HOLD)
-    stack.rounds += loose.rounds  # counted with the fit's least squares (sweep.fit.core)
+    full.rounds += loose.rounds  # counted with the fit's least squares (sweep.fit.core)
     # the least plain misfit, a set the model solved throughout first (a failed solve never wins: sweep.fit.stack)
     rss = np.where(plain.failures == 0, plain.rss, np.inf).reshape(qs.size, C)
     best = np.argmin(rss, axis=1)
-    for i, q in enumerate(qs):
+    for i, q in enumerate(qs_full):
         if np.isfinite(rss[i, best[i]]):
             theta[q] = plain.theta[i * C + best[i]]
+    for j in range(2, n_events + 1):  # one more event each (the last stage is the fit's own least squares)
+        stage = _stage(full, qs_full, j - 1) if j > 2 else stack
+        stage.rounds = 0
+        fit = solve(stage, qs, np.array([theta[q] for q in qs_full]), tol=FIT)
+        full.rounds += stage.rounds
+        for i, q in enumerate(qs_full):
+            if fit.failures[i] == 0:
+                theta[q] = fit.theta[i]
     return theta

@@ -16,8 +16,9 @@ Then, per task, in scaled variables z = theta/scale (scale: ParamSpace.scale):
 * a task stops when its predicted or actual decrease falls below ftol x the misfit, when the step falls below xtol
   (relative, scaled variables), or after max_rounds rounds (status 0).
 
-Jacobians: forward differences d r/d theta_j = (r(theta + h_j) - r(theta))/h_j, h_j = FD_STEP x scale_j (backward
-where the upper bound is closer), m + 1 sets an iteration: the Jacobian steers the steps, and its error (~FD_STEP)
+Jacobians: forward differences d r/d theta_j = (r(theta + h_j) - r(theta))/h_j, h_j = FD_STEP x scale_j (a stick-slip
+problem's finer step instead: ProblemStack.fd_step, sweep.fit.event_fit; backward where the upper bound is closer),
+m + 1 sets an iteration: the Jacobian steers the steps, and its error (~FD_STEP)
 barely moves the optimum they stop at (sweep.fit.local). The Jacobian of the best set, which the last step used,
 also gives its covariance (:attr:`Solutions.jac`): with the engine at rtol 1e-6 it carries a relative error
 ~rtol/FD_STEP ~ 1e-3 and a truncation error ~FD_STEP ~ 1e-3, far below what the noise of a measured curve (>~1e-3)
@@ -107,13 +108,14 @@ class Solutions:
     jac: np.ndarray | None
 
 
-def _neighbours(theta: np.ndarray, cols: np.ndarray, sp: ParamSpace) -> tuple[np.ndarray, np.ndarray]:
+def _neighbours(theta: np.ndarray, cols: np.ndarray, sp: ParamSpace, step: float | np.ndarray = FD_STEP
+                ) -> tuple[np.ndarray, np.ndarray]:
     """(sets (T, 1 + m, p): theta then its forward-difference neighbours along ``cols`` (T, m), widths (T, m): signed
-    distance from theta to its neighbour)."""
+    distance from theta to its neighbour); ``step`` relative to the scale, one or per task (T, 1)."""
     T, m = cols.shape
     ti = np.arange(T)[:, None]
     base = theta[ti, cols]
-    h = FD_STEP * sp.scale[cols]
+    h = step * sp.scale[cols]
     up, down = np.minimum(base + h, sp.upper[cols]), np.maximum(base - h, sp.lower[cols])
     sets = np.repeat(theta[:, None, :], 1 + m, axis=1)
     k = np.arange(m)[None, :]
@@ -327,7 +329,8 @@ def solve(stack: ProblemStack, problem: np.ndarray, theta0: np.ndarray, hold: np
             r, ok, bad = stack.residuals(problem[idx], th[:, None, :])
             r, J = r[:, 0], None
         else:
-            sets, widths = _neighbours(th, cols[idx], sp)
+            sets, widths = _neighbours(th, cols[idx], sp, FD_STEP if stack.fd_step is None  # (a stick-slip
+                                       else stack.fd_step[problem[idx]][:, None])  # problem's: sweep.fit.event_fit)
             at = np.flatnonzero(k_off[idx] < m)
             sets[at, 1 + k_off[idx[at]]] = th[at]  # no solve: the same set as the trial (solved once)
             widths[at, k_off[idx[at]]] = 1.0

@@ -140,6 +140,9 @@ class ProblemStack:
     direction that depends on no parameter (:meth:`offset_direction`): the global stage then solves its grid with
     that parameter at its start only and puts it at its best value per set (sweep.fit.globalstage). None: none
     (relaxation curves and relaxed slips)."""
+    fd_step: np.ndarray | None = None
+    """Per problem, the least squares' forward-difference step relative to each parameter's scale (None:
+    sweep.fit.levenberg.FD_STEP for all; sweep.fit.event_fit sets a finer one for stick-slip problems)."""
 
     def __init__(self, problems: Sequence[Problem], rtol: float,
                  on_round: Callable[[int, int], None] | None = None, estimates: bool = True):

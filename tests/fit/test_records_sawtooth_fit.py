@@ -138,10 +138,9 @@ def _never_ok_wrongly(ds, truth: dict[str, float]) -> str:
 
 def test_irregularly_sampled_sawtooth_is_never_ok_wrongly():
     """A one-event sawtooth sampled at two rates (200 samples over 25 s and 150 more in 8-14 s, where the event is)
-    with a 1 s gap: one draw from a start 30 % off. Measured (4 draws): 3 not_converged (the least squares run out
-    of rounds) and 1 events_missed, at noise 1.05-1.7x, the first draw's intervals all covering (with the stage's
-    engine at the fit's rtol 1e-6: 4 not_converged at 0.98-1.35x, all covering; with boxes of starts in a and Dc
-    only: noise 1.4-3.5x); tested: no fit says ok with the wrong model."""
+    with a 1 s gap: one draw from a start 30 % off: ok, the noise within 15 %, the intervals covering. Measured (4
+    draws): 4 ok at noise 0.96-1.06x, 3 with all four intervals covering (before the stick-slip problems' finer
+    forward differences, event_fit.EVENT_FD_STEP: 3 not_converged and 1 events_missed at noise 1.05-1.7x)."""
     rng = np.random.default_rng(11)
     t = np.sort(np.concatenate(([0.0], rng.uniform(0.0, 25.0, 200), rng.uniform(8.0, 14.0, 150))))
     t = t[(t < 15.5) | (t > 16.5)]
@@ -152,16 +151,23 @@ def test_irregularly_sampled_sawtooth_is_never_ok_wrongly():
     truth = {"a": A, "b": B, "Dc": 1e-5, "mu0": MU0}
     rec = Record(t, mu + NOISE * rng.standard_normal(t.size), displacement=disp, k=k)
     f = rng.choice([0.7, 1.3], 3)
-    _never_ok_wrongly(_fit(rec, 1e-5, {"a": A * f[0], "b": B * f[1], "Dc": 1e-5 * f[2]}), truth)
+    assert _never_ok_wrongly(_fit(rec, 1e-5, {"a": A * f[0], "b": B * f[1], "Dc": 1e-5 * f[2]}), truth) == "ok"
 
 
-def test_three_event_sawtooth_is_never_ok_wrongly():
-    """The three-event sawtooth (Dc = 3 um, k = 833/m, 600 samples over 35 s), one draw from 30 % off. Measured (six
-    draws): all six end events_missed (estimated noise 23-83x); the misfit's basin is ~0.3 % wide in Dc (the third
-    event moves by ~3 samples per 0.5 %), which neither the aligned stage nor its ten starts reach. Tested: the fit
-    does not say ok with the wrong model."""
+def test_three_event_sawtooth_fitted_from_starts_30_percent_off():
+    """The three-event sawtooth (Dc = 3 um, k = 833/m, 600 samples over 35 s), six draws, each from a start 30 % off
+    in a, b and Dc: ok with every 95 % interval covering the truth on >= 5 (measured: 6, 2.9-3.8 s a fit; from 2 %
+    off also 6), never ok otherwise. Its misfit's valley is ~0.25 % wide in b: the event stage on the records cut
+    after their first event, then one event more at a time, each least squares with forward differences of 1e-5
+    (event_fit.EVENT_FD_STEP). Without the continuation: 0 of 6 (3 not_converged, 3 events_missed); with it but
+    the default differences of 1e-3: 1 of 6 ok, its intervals not covering."""
     t, mu, disp, k = sawtooth(3e-6, 9.81, 600, seed=3)
     truth = {"a": A, "b": B, "Dc": 3e-6, "mu0": MU0}
     rng = np.random.default_rng(21)
-    rec = Record(t, mu + NOISE * rng.standard_normal(t.size), displacement=disp, k=k)
-    assert _never_ok_wrongly(_fit(rec, 3e-6, {"a": 0.7 * A, "b": 1.3 * B, "Dc": 1.3 * 3e-6}), truth) != "ok"
+    good = 0
+    for i in range(6):
+        rec = Record(t, mu + NOISE * rng.standard_normal(t.size), displacement=disp, k=k, name=f"d{i}")
+        f = rng.choice([0.7, 1.3], 3)
+        ds = _fit(rec, 3e-6, {"a": A * f[0], "b": B * f[1], "Dc": 3e-6 * f[2]})
+        good += _never_ok_wrongly(ds, truth) == "ok"
+    assert good >= 5, good
