@@ -40,6 +40,10 @@ RECORD_FREE = ("a", "b", "Dc", "mu0", "k")
 
 MAX_STEPS = 1_000_000
 """friction_at's step budget of a run (its default)."""
+ROUND_CHUNK = 4096
+"""Parameter sets of a round's records per compiled call at most (a global stage's grid in pieces that stay in the
+caches)."""
+_BREAKDOWN = int(Status.QUASISTATIC_BREAKDOWN)
 VALUED = (int(Status.OK), int(Status.ERROR_ABOVE_TOL))
 """friction_at statuses whose values a record fit uses: error_above_tol too (in stick-slip the estimate exceeds the
 error ~9x, and a sawtooth's own truth got it; its error enters engine_error like any other)."""
@@ -91,6 +95,20 @@ class RecordStack(ProblemStack):
         for q, pr in enumerate(self.problems):
             self.observed[q, :pr.n_residuals], self.weights[q, :pr.n_residuals] = pr.observed, pr.weights
         self.loads = [[_load_and_times(d) for d in pr.data] for pr in self.problems]
+        # every record's times a row of one table, its history a row of the table of its number of segments: a
+        # round's records in one compiled call (sample_friction_rows)
+        flat = [ld for lds in self.loads for ld in lds]
+        self.record_id = np.cumsum([0] + [len(lds) for lds in self.loads])
+        self.record_n = np.array([t.size for _, t, _, _ in flat], dtype=np.intp)
+        self.times_table = np.full((len(flat), int(self.record_n.max())), np.nan)
+        for r, (_, t, _, _) in enumerate(flat):
+            self.times_table[r, :t.size] = t
+        self.segments = np.array([ld.velocities.size for ld, _, _, _ in flat], dtype=np.intp)
+        self.history_table = {m: (np.array([ld.velocities for ld, _, _, _ in flat if ld.velocities.size == m]),
+                                  np.array([ld.durations for ld, _, _, _ in flat if ld.velocities.size == m]))
+                              for m in np.unique(self.segments)}
+        self.history_row = np.array([np.count_nonzero(self.segments[:r] == self.segments[r])
+                                     for r in range(len(flat))], dtype=np.intp)
         # problems whose records have the same histories, times and k share a layout, hence their model values (the
         # global grid is solved once for all of them); a detrended record's model depends on its data: its own
         keys: dict[tuple, int] = {}
@@ -128,7 +146,7 @@ class RecordStack(ProblemStack):
         """mu (U, n_max) in residual order of U blocks (a layout and a parameter set each), NaN where friction_at
         did not give a value (status not in VALUED); all stable (a record may hold stick-slip); with ``errors`` their
         estimates, and ``self.inertial`` (U, records) says which record of each block ran with inertia."""
-        from ..protocols.history.forward import RTOL_RANGE, sample_friction
+        from ..protocols.history.forward import RTOL_RANGE
 
         U = layout.size
         mu = np.empty((U, self.n_max))  # (every row's residuals filled, its padding NaN, below)
@@ -137,43 +155,87 @@ class RecordStack(ProblemStack):
         # at rtol/TIGHTER, as the stop path's single run (sweep.fit.forward); ~0.65x the cost; the best fits are
         # checked at rtol with estimates (sweep.fit.core), the difference counted in engine_error
         rtol = self.rtol if self.estimates else min(self.rtol * TIGHTER, RTOL_RANGE[1])
-        k_free = "k" in self.space.names
         if errors:
             self.inertial = np.zeros((U, max(len(ld) for ld in self.loads)), bool)
         order = np.argsort(layout, kind="stable")  # the blocks of each layout, in order
         cuts = np.flatnonzero(np.diff(layout[order])) + 1
+        jobs, size = [], 0  # (blocks, problem, record of it, record id, first residual): one friction_at each
         for rows in np.split(order, cuts) if U else []:
             q = self.representative[layout[rows[0]]]
-            p = params[rows]
             col = 0
-            for i, ((load, t, k_rec, g_rec), x) in enumerate(zip(self.loads[q], self.trends[q])):
-                k = p[:, 4] if k_free or k_rec is None else np.full(rows.size, k_rec)
-                g = self.g if g_rec is None else g_rec  # without the machine's g: quasi-static but where slips need it
-                lab = {"A": p[:, 0], "m1": p[:, 1] - p[:, 0], "m2": np.zeros(rows.size), "D0": p[:, 2],
-                       "m0": p[:, 3], "V0": np.full(rows.size, self.V0), "K_over_M": k * g,
-                       "g": np.full(rows.size, g)}  # g = N/M: the machine's inertia (docs/physics.md 7b)
-                # friction_at without its checks (the sets lie within their bounds, the times were checked once):
-                # the rounds' tighter run alone, the check's pair with estimates
-                out = sample_friction(lab, load, t, "aging", rtol, MAX_STEPS, 0.0,
-                                      "breakdown" if g_rec is None else "auto", self.estimates)
-                if errors:
-                    self.inertial[rows, i] = out.model == 1
-                ok = ((out.status == VALUED[0]) | (out.status == VALUED[1]))[:, None]
-                m = out.mu if ok.all() else np.where(ok, out.mu, np.nan)
-                if x is not None:  # the record's linear trend: its best slope per set, projected out
-                    w2 = self.weights[q, col:col + t.size] ** 2
-                    resid = self.observed[q, col:col + t.size] - m
-                    m = m + np.sum(w2 * x * resid, axis=1, keepdims=True) / np.sum(w2 * x * x) * x
-                mu[rows, col:col + t.size] = m
-                if errors:
-                    err[rows, col:col + t.size] = np.where(ok, out.error, np.nan)
+            for i, (_, t, _, _) in enumerate(self.loads[q]):
+                jobs.append((rows, q, i, self.record_id[q] + i, col))
                 col += t.size
+                size += rows.size
+                if size >= ROUND_CHUNK:  # (one call of all of a global stage's sets: its arrays leave the caches)
+                    self._jobs(jobs, params, rtol, mu, err)
+                    jobs, size = [], 0
             mu[rows, col:] = np.nan
+        if jobs:
+            self._jobs(jobs, params, rtol, mu, err)
         self.rounds += 1
         if self.on_round is not None:
             self.on_round(self.rounds, U)
         ok = np.ones(U, bool)
         return (mu, ok, err) if errors else (mu, ok)
+
+    def _lab(self, p: np.ndarray, k_rec: np.ndarray, g: np.ndarray) -> dict[str, np.ndarray]:
+        """friction_at's parameters of the sets ``p`` (rows of (a, b, Dc, mu0, k)) of records with k ``k_rec`` (NaN:
+        the set's) and machine g ``g`` [m s-2] (docs/physics.md 7b)."""
+        k = p[:, 4] if "k" in self.space.names else np.where(np.isnan(k_rec), p[:, 4], k_rec)
+        return {"A": p[:, 0], "m1": p[:, 1] - p[:, 0], "m2": np.zeros(p.shape[0]), "D0": p[:, 2], "m0": p[:, 3],
+                "V0": np.full(p.shape[0], self.V0), "K_over_M": k * g, "g": g}
+
+    def _jobs(self, jobs: list[tuple], params: np.ndarray, rtol: float, mu: np.ndarray, err: np.ndarray | None
+              ) -> None:
+        """Model values (and error estimates into ``err``) of ``jobs`` (:meth:`_model`'s) written into ``mu``: every
+        set quasi-statically in one call per number of segments (sample_friction_rows); a job with a set that needs
+        inertia (a record with g given whose fastest slide has gamma/A > INERTIA_LIMIT, or a quasi-static run that
+        breaks down) again by sample_friction (friction_at without its checks), which gives it."""
+        from ..protocols.history.forward import INERTIA_LIMIT, sample_friction, sample_friction_rows
+
+        sizes = np.array([rows.size for rows, *_ in jobs])
+        blocks = np.concatenate([rows for rows, *_ in jobs])
+        rid = np.repeat(np.array([r for *_, r, _ in jobs], dtype=np.intp), sizes)
+        flat = [self.loads[q][i] for _, q, i, _, _ in jobs]
+        k_rec = np.repeat(np.array([np.nan if k is None else k for _, _, k, _ in flat]), sizes)
+        g_rec = [g for _, _, _, g in flat]
+        g = np.repeat(np.array([self.g if gr is None else gr for gr in g_rec]), sizes)  # none given: quasi-static
+        auto = np.repeat(np.array([gr is not None for gr in g_rec]), sizes)  # but where slips need inertia
+        lab = self._lab(params[blocks], k_rec, g)
+        mu_sets = np.empty((blocks.size, self.times_table.shape[1]))
+        err_sets = np.empty_like(mu_sets) if err is not None else None
+        status, inertial = np.empty(blocks.size, np.int8), np.zeros(blocks.size, bool)
+        for m in np.unique(self.segments[rid]):
+            sel = np.flatnonzero(self.segments[rid] == m)
+            vel, dur = (x[self.history_row[rid[sel]]] for x in self.history_table[m])
+            out, fastest = sample_friction_rows({n: x[sel] for n, x in lab.items()}, vel, dur, self.times_table,
+                                                rid[sel], self.record_n[rid[sel]], rtol, MAX_STEPS, self.estimates)
+            mu_sets[sel], status[sel] = out.mu, out.status
+            if err_sets is not None:
+                err_sets[sel] = out.error
+            inertial[sel] = ((fastest > INERTIA_LIMIT) & auto[sel]) | (out.status == _BREAKDOWN)
+        start = np.concatenate(([0], np.cumsum(sizes)))
+        for j, (rows, q, i, r, col) in enumerate(jobs):
+            sets, n = slice(start[j], start[j + 1]), self.record_n[r]
+            m, e, st = mu_sets[sets, :n], (err_sets[sets, :n] if err_sets is not None else None), status[sets]
+            if inertial[sets].any():  # (the quasi-static run's numbers were friction_at's for the other sets)
+                load, t, _, g_r = self.loads[q][i]
+                out = sample_friction({name: x[sets] for name, x in lab.items()}, load, t, "aging", rtol, MAX_STEPS,
+                                      0.0, "breakdown" if g_r is None else "auto", self.estimates)
+                m, e, st = out.mu, out.error, out.status
+                if err is not None:
+                    self.inertial[rows, i] = out.model == 1
+            ok = ((st == VALUED[0]) | (st == VALUED[1]))[:, None]
+            m = m if ok.all() else np.where(ok, m, np.nan)
+            x = self.trends[q][i]
+            if x is not None:  # the record's linear trend: its best slope per set, projected out
+                w2 = self.weights[q, col:col + n] ** 2
+                resid = self.observed[q, col:col + n] - m
+                m = m + np.sum(w2 * x * resid, axis=1, keepdims=True) / np.sum(w2 * x * x) * x
+            mu[rows, col:col + n] = m
+            if err is not None:
+                err[rows, col:col + n] = np.where(ok, e, np.nan)
 
 
 def _load_and_times(d) -> tuple:

@@ -168,4 +168,17 @@ def history_dense_batch(k, a, b, law, s_kick, ratios, durations, scale, times, t
                                                   s_out[i])
 
 
+@njit(nogil=True, cache=True, fastmath=FAST, error_model="numpy")
+def history_dense_rows(k, a, b, law, s_kick, ratios, durations, scale, times, time_row, n_times, tol, max_steps,
+                       s_start, s_end, s_peak, steady, s_out, status, steps):
+    """:func:`history_dense_batch` with sample times of each set's own: set i's are times[time_row[i], :n_times[i]]
+    (a table of several records' sorted times [s] from their histories' starts, one a row) and its samples go to
+    s_out[i, :n_times[i]] (the rest of the row untouched): a fit's records, each of its own times, in one call."""
+    for i in range(k.size):
+        n = n_times[i]
+        status[i], steps[i] = history_dense_point(k[i], a[i], b[i], law, s_kick[i], ratios[i], durations[i], scale[i],
+                                                  times[time_row[i], :n], tol, max_steps, s_start[i], s_end[i],
+                                                  s_peak[i], steady[i], s_out[i, :n])
+
+
 pin_module(__name__)

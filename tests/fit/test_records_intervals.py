@@ -106,3 +106,60 @@ def test_a_start_far_off_reaches_the_truth(step):
     assert int(ds["fit_status"][0]) == 0
     for n, v in TRUE.items():
         assert float(ds[f"{n}_lower"][0]) <= v <= float(ds[f"{n}_upper"][0]), (n, float(ds[n][0]))
+
+
+def test_a_round_in_one_call_gives_friction_at_per_record():
+    """A round's records in one compiled call per number of segments (RecordStack, sample_friction_rows) give
+    friction_at's numbers per record, bit for bit: records of their own times with 2 and 3 segments, two records
+    sharing parameters (one problem), a detrended record (its model minus friction_at's is a line in its times), a
+    record with its machine's g whose slide has gamma/A > INERTIA_LIMIT and a soft spring's stick-slip record (both
+    with inertia, friction_at alone), with and without estimates."""
+    from sweep.accuracy import TIGHTER
+    from sweep.fit.problem import make_problems
+    from sweep.fit.record_forward import RecordStack, make_record_space
+    from sweep.fit.segments import load_history
+    from sweep.protocols.history.forward import friction_at
+
+    rng = np.random.default_rng(5)
+
+    def times(n, end):
+        return np.sort(np.concatenate(([0.0], rng.uniform(0.0, end, n - 1))))
+
+    t2, t3, t4 = times(300, 60.0), times(250, 60.0), times(200, 60.0)
+    steps3 = ((0.0, 1e-6), (20.0, 1e-5), (40.0, 1e-6))
+    recs = [Record(t2, np.full(t2.size, 0.6), steps=((0.0, 1e-6), (20.0, 1e-5)), k=K, name="two", sample="s0"),
+            Record(t3, np.full(t3.size, 0.6), steps=steps3, k=K, name="three", sample="s0"),
+            Record(t4, 0.6 + 1e-4 * t4, steps=steps3, k=K, name="trend", detrend="time", sample="s1"),
+            Record(t3, np.full(t3.size, 0.6), steps=((0.0, 1e-5), (20.0, 1e-3)), k=K, g=1.0, name="fast",
+                   sample="s2"),
+            Record(t2, np.full(t2.size, 0.6), steps=((0.0, 1e-6), (20.0, 1e-5)), k=100.0, name="soft", sample="s3")]
+    space = make_record_space(("a", "b", "Dc", "mu0"), START, K)
+    problems = make_problems(recs, space, per_data_set=False)
+    sets = np.array([[0.01, 0.015, 1e-5, 0.6], [0.011, 0.014, 2e-5, 0.61]])
+    for estimates in (False, True):
+        stack = RecordStack(problems, 1e-6, estimates=estimates)
+        layout = np.repeat(stack.layout, sets.shape[0])
+        params = stack._params(np.tile(sets, (len(problems), 1)))
+        got = stack._model(layout, params, errors=estimates)
+        rtol = 1e-6 if estimates else 1e-6 * TIGHTER  # (the rounds' rtol, as the stack computes it)
+        for q, pr in enumerate(problems):
+            col = 0
+            for d in pr.data:
+                a, b, dc, mu0 = params[2 * q:2 * q + 2, :4].T  # (the space's sets as the stack sees them)
+                g = d.g or START.g
+                lab = {"A": a, "m1": b - a, "m2": np.zeros(2), "D0": dc, "m0": mu0, "V0": np.full(2, START.V0),
+                       "K_over_M": d.k * g * np.ones(2), "g": np.full(2, g)}
+                ref = friction_at(lab, load_history(d), d.t - d.t[0], rtol=rtol, estimates=estimates,
+                                  inertia="auto" if d.g else "breakdown")
+                rows = slice(2 * q, 2 * q + 2)
+                mine = got[0][rows, col:col + d.t.size]
+                if d.detrend:
+                    line = mine - ref.mu
+                    assert np.allclose(line, line[:, -1:] * (d.t - d.t[0]) / (d.t[-1] - d.t[0]), atol=1e-12)
+                else:
+                    assert np.array_equal(mine, ref.mu, equal_nan=True), d.name
+                    if estimates:
+                        assert np.array_equal(got[2][rows, col:col + d.t.size], ref.error, equal_nan=True)
+                if d.name in ("fast", "soft"):
+                    assert np.all(ref.model == 1), d.name  # the fallback was exercised
+                col += d.t.size

@@ -24,7 +24,8 @@ from ... import physics
 from ...errors import InputError
 from ...status import Status
 
-__all__ = ["INERTIA_LIMIT", "PARAMS", "FrictionSamples", "LoadHistory", "friction_at", "sample_friction"]
+__all__ = ["INERTIA_LIMIT", "PARAMS", "FrictionSamples", "LoadHistory", "friction_at", "sample_friction",
+           "sample_friction_rows"]
 
 PARAMS = ("A", "m1", "m2", "D0", "m0", "V0", "K_over_M")
 """The parameters friction_at needs (``g`` optional, 9.81 m s-2)."""
@@ -175,19 +176,10 @@ def sample_friction(p: dict[str, np.ndarray], load: LoadHistory, times: np.ndarr
     """:func:`friction_at` of checked arguments: ``p`` a float array (n_sets,) for each name of PARAMS and g,
     ``times`` sorted in [0, load.total] (a record fit's rounds, whose sets lie within their bounds, call it without
     the checks: ~0.1 ms a call of ~0.3)."""
-    V = load.velocities[0]
-    chi = physics.reduced_stiffness(p["K_over_M"], p["D0"], p["g"])
-    mu1 = physics.mu1(V, p["m1"], p["m2"], p["V0"])
-    A = p["A"]
-    k, a, b = np.asarray(chi / A, float), np.asarray(mu1 / A, float), p["m2"] / A
-    s_kick = k * (stretch / p["D0"])
-    scale = V / p["D0"]
-    ratios = np.repeat((load.velocities / V)[None, :], A.size, axis=0)
-    durations = np.repeat(load.durations[None, :], A.size, axis=0)
-    mu_ref = np.asarray(physics.mu_d(V, p["m0"], p["m1"], p["m2"], p["V0"]), float).reshape(-1)
-
-    G = V**2 / (p["g"] * p["D0"]) / A  # gamma/A at V
-    inertial = (G * float(np.max(load.velocities) / V) ** 2 > INERTIA_LIMIT) & (inertia == "auto")
+    n = p["A"].size
+    k, a, b, A, mu_ref, s_kick, ratios, durations, scale, G, fastest = _reduced(
+        p, np.repeat(load.velocities[None, :], n, axis=0), np.repeat(load.durations[None, :], n, axis=0), stretch)
+    inertial = (fastest > INERTIA_LIMIT) & (inertia == "auto")
     quasistatic = np.flatnonzero(~inertial if state_law == "aging" else np.ones(A.size, bool))
     if quasistatic.size == A.size:  # every set (a fit's rounds): the quasi-static run's arrays are the result's
         out = _quasistatic(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, G, times, rtol,
@@ -214,6 +206,42 @@ def sample_friction(p: dict[str, np.ndarray], load: LoadHistory, times: np.ndarr
         status[(status == Status.OK) & inertial] = Status.QUASISTATIC_BREAKDOWN
     model = (inertial & (state_law == "aging")).astype(np.int8)
     return FrictionSamples(mu=out["mu_t"], error=out["mu_t_error"], status=status, steps=out["steps"], model=model)
+
+
+def _reduced(p: dict[str, np.ndarray], velocities: np.ndarray, durations: np.ndarray, stretch: float) -> tuple:
+    """(k, a, b, A, mu_ref, s_kick, ratios, durations, scale, G, gamma/A at the fastest segment) per set of the
+    checked ``p``, each set with its own history (``velocities``, ``durations`` (sets, segments)): the reduction of
+    the module docstring with V = its first velocity; G = gamma/A at V."""
+    V = velocities[:, 0]
+    chi = physics.reduced_stiffness(p["K_over_M"], p["D0"], p["g"])
+    mu1 = physics.mu1(V, p["m1"], p["m2"], p["V0"])
+    A = p["A"]
+    k, a, b = np.asarray(chi / A, float), np.asarray(mu1 / A, float), p["m2"] / A
+    s_kick = k * (stretch / p["D0"])
+    scale = V / p["D0"]
+    ratios = velocities / V[:, None]
+    mu_ref = np.asarray(physics.mu_d(V, p["m0"], p["m1"], p["m2"], p["V0"]), float).reshape(-1)
+    G = V**2 / (p["g"] * p["D0"]) / A  # gamma/A at V
+    return (k, a, b, A, mu_ref, s_kick, ratios, np.ascontiguousarray(durations, dtype=float), scale, G,
+            G * (np.max(velocities, axis=1) / V) ** 2)
+
+
+def sample_friction_rows(p: dict[str, np.ndarray], velocities: np.ndarray, durations: np.ndarray, times: np.ndarray,
+                         time_row: np.ndarray, n_times: np.ndarray, rtol: float, max_steps: int, estimates: bool
+                         ) -> tuple[FrictionSamples, np.ndarray]:
+    """:func:`sample_friction` (aging law, no stretch) of sets each with its own history and times: set i's load
+    velocities[i], durations[i] (sets, segments), its times times[time_row[i], :n_times[i]] (a table of checked
+    times, a row per record), all quasi-static, in one compiled call (a record fit's round: its records, each of its
+    own times, at once). Returns the samples (mu and error (sets, times.shape[1]), NaN beyond a set's times) and
+    gamma/A at each set's fastest segment (a set above INERTIA_LIMIT, or whose status is quasistatic_breakdown,
+    needs :func:`sample_friction`'s inertia; the numbers of the others are its, bit for bit)."""
+    k, a, b, A, mu_ref, s_kick, ratios, durations, scale, _, fastest = _reduced(p, velocities, durations, 0.0)
+    from .sampled import two_runs
+
+    out = two_runs(k, a, b, A, mu_ref, "aging", s_kick, ratios, durations, scale, times, rtol, max_steps, estimates,
+                   time_row, n_times)
+    return FrictionSamples(mu=out["mu_t"], error=out["mu_t_error"], status=out["status"], steps=out["steps"],
+                           model=np.zeros(k.size, np.int8)), fastest
 
 
 def _quasistatic(k, a, b, A, mu_ref, state_law, s_kick, ratios, durations, scale, G, times, rtol, max_steps,

@@ -15,24 +15,27 @@ __all__ = ["read_samples", "run_sampled", "two_runs"]
 
 
 def two_runs(k, a, b, A, mu_ref, state_law: str, s_kick, ratios, durations, scale, times, rtol: float,
-             max_steps: int, estimates: bool = True) -> dict[str, np.ndarray]:
+             max_steps: int, estimates: bool = True, time_row=None, n_times=None) -> dict[str, np.ndarray]:
     """The dense-output driver run at rtol/TIGHTER and rtol/TIGHTER^2 for every set (k, a, b, A, mu_ref = mu_d(V),
     s_kick, scale = V/D0 [1/s] per set; ratios and physical durations [s] (sets, segments); sorted ``times`` [s]):
     ``mu_t`` = mu_ref + A s of the tighter run and ``mu_t_error`` (sets, times); ``status`` (ok, max_steps,
     step_underflow, or error_above_tol where an error exceeds rtol (|mu| + A)) and ``steps`` per set. Without
-    ``estimates`` the tighter run alone (the same ``mu_t``; ``mu_t_error`` NaN, no error_above_tol)."""
-    from ...integrate.history_dense import history_dense_batch
+    ``estimates`` the tighter run alone (the same ``mu_t``; ``mu_t_error`` NaN, no error_above_tol). With
+    ``time_row`` and ``n_times``, ``times`` is a table whose row time_row[i] holds set i's times, n_times[i] of them
+    (several records' sets in one call; the rows of the results NaN beyond)."""
+    from ...integrate.history_dense import history_dense_batch, history_dense_rows
     from ...integrate.models.history import LAW_CODES
 
     n, m, times = k.size, ratios.shape[1], np.ascontiguousarray(times, dtype=float)
+    own = () if time_row is None else tuple(np.ascontiguousarray(x, np.int64) for x in (time_row, n_times))
     runs = []
     for e in (1, 2) if estimates else (2,):
-        s_out = np.empty((n, times.size))
+        s_out = np.empty((n, times.shape[-1])) if time_row is None else np.full((n, times.shape[-1]), np.nan)
         status, steps = np.zeros(n, np.int8), np.zeros(n, np.int64)
         records = [np.empty((n, m)) for _ in range(3)]  # not read here
-        history_dense_batch(k, a, b, LAW_CODES[state_law], s_kick, ratios, durations, scale, times,
-                            rtol / TIGHTER**e, int(max_steps), *records, np.zeros((n, m), np.int8), s_out, status,
-                            steps)
+        (history_dense_rows if own else history_dense_batch)(
+            k, a, b, LAW_CODES[state_law], s_kick, ratios, durations, scale, times, *own, rtol / TIGHTER**e,
+            int(max_steps), *records, np.zeros((n, m), np.int8), s_out, status, steps)
         runs.append((s_out, status, steps))
     (s_loose, st_loose, n_loose), (s_tight, st_tight, n_tight) = runs[0], runs[-1]
     return read_samples(s_loose, s_tight, st_loose, st_tight, A, mu_ref, rtol,
