@@ -91,7 +91,8 @@ SAMPLES_PER_CYCLE = 1000
 SCIPY_PIECE = 2000.0  # tau: scipy integrates in pieces this long (scipy_solve)
 EVENT_BRACKET = 1e-6  # x the sample spacing: scipy's samples either side of an extremum (module docstring)
 REFINE_SUBSAMPLES, REFINE_LEVELS = 32, 6  # an unresolved extremum's re-integration (module docstring)
-NUMBALSODA_SAMPLES_PER_CYCLE = 100  # with the refinement as accurate as 1000 and 1.5-2x faster (quick QS grid)
+NUMBALSODA_SAMPLES_PER_CYCLE = 1000  # at 100 (1.5-2x faster on the quick grid) 2 of the 12 subsample points of the
+# full quasi-static grid (stick-slip, 4 cycles) came out undecided at every rtol
 REF_SAMPLES_PER_CYCLE = 3000
 RUNAWAY_SEARCH = 1e6  # tau: where the engine's runaway time is looked for
 RUNAWAY_SLACK = 0.1  # a tool calls runaway once ln xi' > W_RUNAWAY - RUNAWAY_SLACK (module docstring)
@@ -883,6 +884,7 @@ def main(argv=None):
         "sweep_source_digest_start_end": [digest0, common.sweep_digest()],
         "loadavg_start_end": [load0, common.loadavg()],
         "peers_status": status,
+        "tools_missing": {name: why for name, why in status.items() if why != "ok"},
         "settings": {"peer_tols": list(peer_tols), "engine_rtols": list(ENGINE_RTOLS),
                      "engine_stepper_rtols": [driven_stepper_rtol(r) for r in ENGINE_RTOLS],
                      "atol_peers": f"{ATOL_OVER_RTOL:g} x rtol x perturbation", "repeats": repeats,

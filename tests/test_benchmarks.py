@@ -136,6 +136,23 @@ def test_peers_with_the_peers_installed_here(tmp_path):
             assert status != "ok"
 
 
+@pytest.mark.slow
+def test_peers_driven_quasistatic(tmp_path):
+    """peers.py --driven --quick on the quasi-static scene (~3 min): every optional peer ran or is missing with its
+    reason; against the independent scipy Radau reference (resolved: its 1e-12 check within 1e-9 per cycle) the
+    engine at its tightest rtol calls every regime of the subsample as the reference does, with growth rates within
+    1e-8 per cycle and amplitudes within 1e-8."""
+    result = run_script("peers", tmp_path, "--driven", "--models", "quasistatic")
+    for peer in OPTIONAL_PEERS:
+        assert result["peers_status"][peer] == "ok" or result["tools_missing"][peer].startswith("not installed")
+    scene = result["scenes"]["quasistatic"]
+    assert scene["reference"]["floor_growth_per_cycle"] < 1e-9
+    tight = min(scene["tools"]["engine_1t"]["scopes"]["sub"], key=lambda r: r["rtol"])
+    assert tight["regimes_differing_from_reference"] == 0
+    assert tight["points_compared"] > 0 and tight["max_growth_err_per_cycle"] < 1e-8
+    assert tight["max_amplitude_rel_err"] is None or tight["max_amplitude_rel_err"] < 1e-8
+
+
 def test_peers_without_the_optional_peers(tmp_path):
     """jax and numbalsoda hidden (modules that raise ImportError ahead of them on sys.path): the run goes on with
     the engine and scipy and says which peers were missing."""
