@@ -182,7 +182,8 @@ def _cut(d, j: int):
     if len(ev) <= j:
         return d
     times = event_times(d.t - d.t[0], d.mu, ev)[0]
-    return d.window(t_end=float(d.t[0] + 0.5 * (times[j - 1] + times[j])))
+    end = float(d.t[0] + 0.5 * (times[j - 1] + times[j]))
+    return d.window(t_end=end) if np.count_nonzero(d.t <= end) >= 10 else d  # (a Record keeps 10 samples at least)
 
 
 def _stage(stack: ProblemStack, qs: np.ndarray, j: int) -> ProblemStack:

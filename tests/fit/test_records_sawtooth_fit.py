@@ -171,3 +171,19 @@ def test_three_event_sawtooth_fitted_from_starts_30_percent_off():
         ds = _fit(rec, 3e-6, {"a": A * f[0], "b": B * f[1], "Dc": 3e-6 * f[2]})
         good += _never_ok_wrongly(ds, truth) == "ok"
     assert good >= 5, good
+
+
+def test_the_continuation_cuts_a_record_between_its_events():
+    """event_fit._cut: the three-event record cut after its first and second events keeps one and two of them (the
+    cut midway to the next), after its third (or more) the whole record."""
+    from sweep.fit.event_fit import _cut
+    from sweep.fit.events import record_slip_events
+
+    t, mu, disp, k = sawtooth(3e-6, 9.81, 600, seed=3)
+    rec = Record(t, mu + NOISE * np.random.default_rng(2).standard_normal(t.size), displacement=disp, k=k)
+    events = record_slip_events(rec)
+    assert len(events) == 3
+    for j in (1, 2):
+        cut = _cut(rec, j)
+        assert len(record_slip_events(cut)) == j and events[j - 1][0] < cut.n < events[j][0]
+    assert _cut(rec, 3) is rec and _cut(rec, 5) is rec
