@@ -98,15 +98,15 @@ def _z(ds):
 @pytest.mark.parametrize("history, layout", [("steps", "xlook"), ("shs", "decimal_commas")])
 def test_whole_path_fits_from_thirty_percent_off(tmp_path, history, layout):
     """read_record (k given, the drift detrended) -> sweep.fit with a, b, Dc, mu0 free from 30 % off, the history
-    found from the file: ok, the truth within 4 standard errors (the forward model's own bias on the 100 um/s step
-    is up to 2 of them, measured on noiseless data: see the final report of this campaign), the estimated noise
-    within 10 % of the drawn one."""
+    found from the file: ok, the truth within 3 standard errors (measured: 1.21 at most; with inertia at g = 9.81,
+    which the quasi-static reference lacks, the steps' a was 1.65 off: tests/fit/test_records_inertia.py), the
+    estimated noise within 10 % of the drawn one."""
     lab = make(history, seed=2 if history == "shs" else 1)
     rec = read_record(LAYOUTS[layout](lab, tmp_path / "r.txt"), k=K, detrend="time")
     ds = sweep.fit(rec, free=tuple(TRUTH), params=START, search="local")
     assert int(ds["fit_status"][0]) == 0
     z = _z(ds)
-    assert all(abs(v) < 4 for v in z.values()), z
+    assert all(abs(v) < 3 for v in z.values()), z
     assert float(ds["datum_noise"][0]) == pytest.approx(lab.noise, rel=0.1)
 
 
