@@ -40,9 +40,12 @@ RECORD_FREE = ("a", "b", "Dc", "mu0", "k")
 
 MAX_STEPS = 1_000_000
 """friction_at's step budget of a run (its default)."""
-ROUND_CHUNK = 4096
-"""Parameter sets of a round's records per compiled call at most (a global stage's grid in pieces that stay in the
-caches)."""
+ROUND_CHUNK = 1024
+"""Parameter sets of a round's records per compiled call at most (pieces whose arrays stay in the caches)."""
+ALONE = 64
+"""A record with more parameter sets than this in a round (a global stage's grid) is run by itself, as friction_at
+would (batched with others, a global stage of 100 records of their own times took ~7 % longer: its quasi-static runs
+that break down ran again with inertia)."""
 _BREAKDOWN = int(Status.QUASISTATIC_BREAKDOWN)
 VALUED = (int(Status.OK), int(Status.ERROR_ABOVE_TOL))
 """friction_at statuses whose values a record fit uses: error_above_tol too (in stick-slip the estimate exceeds the
@@ -164,10 +167,14 @@ class RecordStack(ProblemStack):
             q = self.representative[layout[rows[0]]]
             col = 0
             for i, (_, t, _, _) in enumerate(self.loads[q]):
-                jobs.append((rows, q, i, self.record_id[q] + i, col))
+                job = (rows, q, i, self.record_id[q] + i, col)
                 col += t.size
+                if rows.size > ALONE:  # (a global stage's grid: one call a record already amortises its Python)
+                    self._jobs([job], params, rtol, mu, err, batched=False)
+                    continue
+                jobs.append(job)
                 size += rows.size
-                if size >= ROUND_CHUNK:  # (one call of all of a global stage's sets: its arrays leave the caches)
+                if size >= ROUND_CHUNK:
                     self._jobs(jobs, params, rtol, mu, err)
                     jobs, size = [], 0
             mu[rows, col:] = np.nan
@@ -186,12 +193,13 @@ class RecordStack(ProblemStack):
         return {"A": p[:, 0], "m1": p[:, 1] - p[:, 0], "m2": np.zeros(p.shape[0]), "D0": p[:, 2], "m0": p[:, 3],
                 "V0": np.full(p.shape[0], self.V0), "K_over_M": k * g, "g": g}
 
-    def _jobs(self, jobs: list[tuple], params: np.ndarray, rtol: float, mu: np.ndarray, err: np.ndarray | None
-              ) -> None:
+    def _jobs(self, jobs: list[tuple], params: np.ndarray, rtol: float, mu: np.ndarray, err: np.ndarray | None,
+              batched: bool = True) -> None:
         """Model values (and error estimates into ``err``) of ``jobs`` (:meth:`_model`'s) written into ``mu``: every
-        set quasi-statically in one call per number of segments (sample_friction_rows); a job with a set that needs
-        inertia (a record with g given whose fastest slide has gamma/A > INERTIA_LIMIT, or a quasi-static run that
-        breaks down) again by sample_friction (friction_at without its checks), which gives it."""
+        set quasi-statically in one call per number of segments (sample_friction_rows); the sets that need inertia
+        (a record with g given whose fastest slide has gamma/A > INERTIA_LIMIT, or a quasi-static run that breaks
+        down) again by sample_friction (friction_at without its checks), which gives it; not ``batched``: every set
+        by sample_friction."""
         from ..protocols.history.forward import INERTIA_LIMIT, sample_friction, sample_friction_rows
 
         sizes = np.array([rows.size for rows, *_ in jobs])
@@ -205,8 +213,8 @@ class RecordStack(ProblemStack):
         lab = self._lab(params[blocks], k_rec, g)
         mu_sets = np.empty((blocks.size, self.times_table.shape[1]))
         err_sets = np.empty_like(mu_sets) if err is not None else None
-        status, inertial = np.empty(blocks.size, np.int8), np.zeros(blocks.size, bool)
-        for m in np.unique(self.segments[rid]):
+        status, inertial = np.empty(blocks.size, np.int8), np.full(blocks.size, not batched)
+        for m in np.unique(self.segments[rid]) if batched else ():
             sel = np.flatnonzero(self.segments[rid] == m)
             vel, dur = (x[self.history_row[rid[sel]]] for x in self.history_table[m])
             out, fastest = sample_friction_rows({n: x[sel] for n, x in lab.items()}, vel, dur, self.times_table,
@@ -219,13 +227,18 @@ class RecordStack(ProblemStack):
         for j, (rows, q, i, r, col) in enumerate(jobs):
             sets, n = slice(start[j], start[j + 1]), self.record_n[r]
             m, e, st = mu_sets[sets, :n], (err_sets[sets, :n] if err_sets is not None else None), status[sets]
-            if inertial[sets].any():  # (the quasi-static run's numbers were friction_at's for the other sets)
+            again = np.flatnonzero(inertial[sets])
+            if again.size:  # those sets alone (a set's numbers are its own: the others' are friction_at's already)
                 load, t, _, g_r = self.loads[q][i]
-                out = sample_friction({name: x[sets] for name, x in lab.items()}, load, t, "aging", rtol, MAX_STEPS,
-                                      0.0, "breakdown" if g_r is None else "auto", self.estimates)
-                m, e, st = out.mu, out.error, out.status
+                out = sample_friction({name: x[sets][again] for name, x in lab.items()}, load, t, "aging", rtol,
+                                      MAX_STEPS, 0.0, "breakdown" if g_r is None else "auto", self.estimates)
+                m, st = m.copy(), st.copy()
+                m[again], st[again] = out.mu, out.status
+                if e is not None:
+                    e = e.copy()
+                    e[again] = out.error
                 if err is not None:
-                    self.inertial[rows, i] = out.model == 1
+                    self.inertial[rows[again], i] = out.model == 1
             ok = ((st == VALUED[0]) | (st == VALUED[1]))[:, None]
             m = m if ok.all() else np.where(ok, m, np.nan)
             x = self.trends[q][i]

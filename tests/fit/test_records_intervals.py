@@ -108,18 +108,22 @@ def test_a_start_far_off_reaches_the_truth(step):
         assert float(ds[f"{n}_lower"][0]) <= v <= float(ds[f"{n}_upper"][0]), (n, float(ds[n][0]))
 
 
-def test_a_round_in_one_call_gives_friction_at_per_record():
+@pytest.mark.parametrize("alone", [64, 0])
+def test_a_round_in_one_call_gives_friction_at_per_record(alone, monkeypatch):
     """A round's records in one compiled call per number of segments (RecordStack, sample_friction_rows) give
     friction_at's numbers per record, bit for bit: records of their own times with 2 and 3 segments, two records
     sharing parameters (one problem), a detrended record (its model minus friction_at's is a line in its times), a
     record with its machine's g whose slide has gamma/A > INERTIA_LIMIT and a soft spring's stick-slip record (both
-    with inertia, friction_at alone), with and without estimates."""
+    with inertia, friction_at alone), with and without estimates; and each record by itself (its sets above ALONE:
+    a global stage's grid)."""
     from sweep.accuracy import TIGHTER
+    from sweep.fit import record_forward
     from sweep.fit.problem import make_problems
     from sweep.fit.record_forward import RecordStack, make_record_space
     from sweep.fit.segments import load_history
     from sweep.protocols.history.forward import friction_at
 
+    monkeypatch.setattr(record_forward, "ALONE", alone)
     rng = np.random.default_rng(5)
 
     def times(n, end):
