@@ -109,6 +109,7 @@ NUMBERS: dict[str, Callable[[], str]] = {
     "fit_records_scipy_s": lambda: f"{_json('fit_records')['scipy_least_squares_s']:.2f}",
     "fit_records_local_one_x": lambda: _x(_json('fit_records')['speedup_local_one_record']),
     "fit_records_local_per_record_x": lambda: f"{_json('fit_records')['speedup_local_per_record']:.0f}x",
+    "fit_records_local_fresh_x": lambda: f"{_json('fit_records')['speedup_local_per_record_fresh']:.0f}x",
     "cold_import_s": lambda: f"{_json('throughput')['cold_start']['import_only_process_wall_s_median']:.1f}",
 }
 """Key of a marked span -> its text, from the measurement."""
@@ -514,7 +515,9 @@ def _histories() -> list[str]:
         + (f", {_x(fit['speedup_local_one_record'])} from the same start (`search=\"local\"`)"
            if "speedup_local_one_record" in fit else "")
         + (f", {_x(fit['speedup_local_per_record'])} per record of {fit['records']} fitted together from it"
-           if "speedup_local_per_record" in fit else "") + ".", "",
+           if "speedup_local_per_record" in fit else "")
+        + (f" ({_x(fit['speedup_local_per_record_fresh'])} where the records are new to it: their steps and slip "
+           f"events found in that call)" if "speedup_local_per_record_fresh" in fit else "") + ".", "",
         _record("fit_records"), "",
     ]
     return lines
