@@ -82,7 +82,7 @@ from .solvers.controllers import ERR_FLOOR, I_CONTROLLER, PI_CONTROLLER, accepte
 from .solvers.explicit import make_erk_step
 from .solvers.fastmath import FAST
 from .solvers.rosenbrock_step import make_rodas3_step, scratch
-from .solvers.vmath import EXP_MAX
+from .solvers.vmath import EXP_MAX, log2_approx
 
 __all__ = ["DrivenOutputs", "DrivenParams", "DrivenResult", "DrivenSettings", "Regime", "point_kernel",
            "simulate_driven", "simulate_point"]
@@ -308,8 +308,6 @@ def _make_simulate(law: str, with_inertia: bool, slaved: bool = False):
     compiling takes half the time) or for both; with ``slaved`` (inertial only) the inertial model runs on its slow
     manifold where inertia is below :data:`SLAVED_INERTIA` (:func:`make_slaved_rhs`: the stick phases and the
     decay after a slip, where the full system took ~2/3 of the steps of a stick-slip cycle, all RODAS3)."""
-    from .lanes_adaptive import _log2_approx  # (here: lanes_adaptive imports this module through batch.py)
-
     rhs, advance, extremum = scalar_parts(law, with_inertia)
     rhs_s, advance_s, extremum_s = _slaved_parts(law) if slaved else (rhs, advance, extremum)
     n = _size(with_inertia)
@@ -335,7 +333,7 @@ def _make_simulate(law: str, with_inertia: bool, slaved: bool = False):
         a_start = _linear_amplitude(p, perturbation)
         cycles, steps = 0, 0
         w_peak = -math.inf
-        lerr_prev, rejected = _log2_approx(1e-4), False  # log2 of the last accepted error norm
+        lerr_prev, rejected = log2_approx(1e-4), False  # log2 of the last accepted error norm
         work = scratch(n)
         on_manifold = False  # the slaved form in use (``slaved`` only)
         rhs(y, p, dy)
@@ -429,7 +427,7 @@ def _make_simulate(law: str, with_inertia: bool, slaved: bool = False):
                     dz1 = dy[0]
             dz = dz1
             size = max(size, abs(y[0]))
-            lerr = _log2_approx(max(err, ERR_FLOOR))  # the lanes' logarithm: a step factor needs no more than 0.5 %
+            lerr = log2_approx(max(err, ERR_FLOOR))  # the lanes' logarithm: a step factor needs no more than 0.5 %
             h *= accepted_factor_log2(I_CONTROLLER if stiff else PI_CONTROLLER, lerr, lerr_prev, q, rejected)
             lerr_prev = lerr
             rejected = False

@@ -54,7 +54,8 @@ from .models.stop import (
 from .models.stop_inertial import make_correction_rate, tail_correction
 from .solvers import EXPLICIT_METHODS
 from .solvers.controllers import ERR_FLOOR, MAX_FACTOR, MIN_FACTOR, NONFINITE_FACTOR, PI_CONTROLLER, SAFETY
-from .solvers.vmath import _bits_as_float, _float_as_bits, exp_f64
+from .solvers.vmath import exp_f64
+from .solvers.vmath import log2_approx as _log2_approx
 from .stop_point import U_ROUNDING
 
 LANES = 32
@@ -70,23 +71,6 @@ _LOGPREV = 14  # log2 of the previous accepted error norm squared (the PI contro
 _XF, _SF, _DXF, _DSF, _EF = 15, 16, 17, 18, 19  # the fine run: state, derivative, E
 _TX, _TS, _TDX, _TDS, _TE, _TO = 20, 21, 22, 23, 24, 25  # the fine run's tentative step, and the attempt's max exponent
 _G, _Y, _DY = 26, 27, 28  # with the first-order inertial correction: G = gamma/A, the correction y, dy/dsigma
-
-_MANTISSA = 0x000FFFFFFFFFFFFF
-_ONE_BITS = 0x3FF0000000000000
-_MAGIC_BITS = 0x4330000000000000  # 2^52: an integer OR-ed into its mantissa is read back exactly by subtracting it
-_MAGIC = 4503599627370496.0
-
-
-@njit(inline="always", fastmath=FAST, error_model="numpy", cache=True)
-def _log2_approx(x):
-    """log2(x) for a positive normal float64 to about 0.005 (a quadratic in the mantissa), in operations LLVM
-    vectorises (bit masks and float arithmetic; int64 -> float64 conversion, which AVX2 lacks, is avoided by
-    reading the exponent bits as the mantissa of 2^52)."""
-    bits = _float_as_bits(x)
-    exponent = _bits_as_float((bits >> 52) | _MAGIC_BITS) - _MAGIC - 1023.0
-    m = _bits_as_float((bits & _MANTISSA) | _ONE_BITS)  # in [1, 2)
-    return exponent + ((-0.34484843 * m + 2.02466578) * m - 1.67487759)
-
 
 _LN2 = math.log(2.0)
 

@@ -20,7 +20,7 @@ lanes (issue grid, 1 thread: 0.070 -> 0.056 s; its longest point alone 58 -> 34 
 
 Where the arithmetic differs from the one-point driver: the exponentials of the right-hand side are
 :func:`sweep.integrate.solvers.vmath.exp_f64` (<= 2.3e-16 relative, vectorisable; the driver calls libm); the
-controller's factor is the driver's (exp_f64 of :func:`sweep.integrate.lanes_adaptive._log2_approx`, 0.5 %: a step
+controller's factor is the driver's (exp_f64 of :func:`sweep.integrate.solvers.vmath.log2_approx`, 0.5 %: a step
 factor needs no more), up to rounding. Steps therefore differ from the driver's at the tolerance's level, and so do
 growth rates and amplitudes (within their estimates; tests/integrate/test_lanes_driven.py). A point's numbers do
 not depend on its lane or neighbours.
@@ -57,12 +57,12 @@ from .driven import (
     _linear_amplitude,
     scalar_parts,
 )
-from .lanes_adaptive import _log2_approx
 from .solvers import DP5
 from .solvers.controllers import ERR_FLOOR, MAX_FACTOR, MIN_FACTOR, NONFINITE_FACTOR, PI_CONTROLLER, SAFETY
 from .solvers.fastmath import FAST
 from .solvers.rosenbrock_step import scratch
 from .solvers.vmath import EXP_MAX, exp_f64
+from .solvers.vmath import log2_approx as _log2_approx
 
 __all__ = ["LANES", "DrivenJob", "DrivenPoints", "driven_lanes"]
 

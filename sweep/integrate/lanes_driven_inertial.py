@@ -48,7 +48,6 @@ from .driven import (
     _slaved_parts,
     scalar_parts,
 )
-from .lanes_adaptive import _log2_approx
 from .lanes_driven import (
     LANES,
     WIDTHS,
@@ -73,6 +72,7 @@ from .solvers.controllers import (
 )
 from .solvers.fastmath import FAST
 from .solvers.vmath import EXP_MAX, exp_f64
+from .solvers.vmath import log2_approx as _log2_approx
 
 __all__ = ["InertialPoints", "inertial_lanes"]
 
