@@ -565,21 +565,24 @@ def scipy_solve(pts, i, rtol, method, samples_per_cycle=SAMPLES_PER_CYCLE, slack
             t = np.unique(np.concatenate([t, sol.t_events[1] - half, sol.t_events[1] + half]).clip(0.0, sol.t[-1]))
         ts.append(t + start)
         Ys.append(np.asarray(sol.y, float).T if grid is None else np.asarray(sol.sol(t), float).T)
-        if sol.status != 0 or start + span >= pts.horizon[i]:
+        if sol.status != 0 or start + span >= pts.horizon[i] or not np.isfinite(sol.y[:, -1]).all():
             break
         start, y = start + span, sol.y[:, -1]
     t, Y = np.concatenate(ts), np.vstack(Ys)
     if sol.status == 1:  # ran away: the samples up to the event, and the event's state
         return t, Y, True, nfev, np.vstack([Y, sol.y_events[0]]), np.append(t, start + sol.t_events[0])
-    return t, Y, sol.status == 0, nfev, Y, t
+    return t, Y, sol.status == 0 and np.isfinite(Y[-1]).all(), nfev, Y, t
 
 
 def scipy_tool(method):
     def solve(pts, idx, rtol):
         res = {f: np.empty(idx.size) for f in ("regime", "growth_rate", "period", "amplitude", "cycles")}
         for j, i in enumerate(idx):
-            _, _, _, _, Y, t = scipy_solve(pts, i, rtol, method)
-            r = observe_point(t, Y, Y.shape[0], pts.k[i], pts.a[i], pts.b[i], pts.g[i], pts.perturbation)
+            try:
+                _, _, _, _, Y, t = scipy_solve(pts, i, rtol, method)
+                r = observe_point(t, Y, Y.shape[0], pts.k[i], pts.a[i], pts.b[i], pts.g[i], pts.perturbation)
+            except ValueError:  # solve_ivp gave up on the point (LSODA on a slip's end): undecided, not a crash
+                r = (UNDECIDED_I, math.nan, math.nan, math.nan, 0)
             for f, v in zip(res, r):
                 res[f][j] = v
         res["regime"] = res["regime"].astype(np.int8)
