@@ -20,8 +20,9 @@ fitted in one call (each its own parameter set, the best of the repeats). A reco
 found once and kept on it (its data do not change), so the repeats fit records whose steps and events are known:
 ``hundred_records_own_times_local_fresh_s`` is the first call on new Record objects of the same data (the steps
 found from the displacement and the events looked for in that call), ``speedup_local_per_record_fresh`` its ratio.
-``local_own_times_split_s`` says where that call's time goes (step detection from the displacement and the events
-check are timed by wrapping their functions in a separate, untimed run).
+``local_own_times_split_s`` says where such a call's time goes (a separate, untimed run on new Record objects: step
+detection from the displacement, the records' slip-event search and the rest of the events check timed by wrapping
+their functions).
 
     python benchmarks/fit_records.py [--repeats 3] [--out benchmarks/results/fit_records.json]
 
@@ -128,22 +129,30 @@ def coverage(ds, n_rec: int, free) -> float:
 
 
 def local_split(own, free, params) -> dict[str, float]:
-    """Seconds of one local fit of ``own`` (one call) by part: the stages the fit reports, the load histories found
-    from the displacement (segments.load_history, called by the RecordStack) and the events check of the verdicts
-    (events.record_events), both timed by wrapping them; the rest (noise, covariance, engine-error check, verdicts,
-    Dataset) is the difference."""
+    """Seconds of one local fit of ``own`` (one call, on records new to it) by part: the stages the fit reports, the
+    load histories (segments.load_history, called by the RecordStack: the steps found from the displacement), the
+    records' slip-event search (events._record_finest, once per record, in the event stage or the verdicts) and the
+    rest of the events check of the verdicts (events.record_events), each timed by wrapping it (its own time, less
+    the wrapped calls inside it); the rest (noise, covariance, engine-error check, verdicts, Dataset) is the
+    difference."""
     from sweep.fit import events, record_forward
 
-    spent = {"step_detection": 0.0, "events_check": 0.0}
-    originals = {"step_detection": (record_forward, "load_history"), "events_check": (events, "record_events")}
+    spent = {"step_detection": 0.0, "slip_event_search": 0.0, "events_check": 0.0}
+    originals = {"step_detection": (record_forward, "load_history"), "slip_event_search": (events, "_record_finest"),
+                 "events_check": (events, "record_events")}
+    inside: list[float] = []  # per wrapped call in progress: the time of the wrapped calls inside it
 
     def wrap(key, fn):
         def timed(*a, **k):
             t0 = time.perf_counter()
+            inside.append(0.0)
             try:
                 return fn(*a, **k)
             finally:
-                spent[key] += time.perf_counter() - t0
+                took = time.perf_counter() - t0
+                spent[key] += took - inside.pop()
+                if inside:
+                    inside[-1] += took
         return timed
 
     saved = {key: getattr(mod, name) for key, (mod, name) in originals.items()}
@@ -224,7 +233,8 @@ def main(argv=None) -> None:
             scipy_fit(rec.t, rec.mu)
             times.append(time.perf_counter() - t0)
         scipy_each.append(min(times))
-    split = local_split(own, free, params)
+    split = local_split([Record(r.t, r.mu, displacement=r.displacement, k=r.k, name=r.name) for r in own], free,
+                        params)
     ls_stage = json.loads(ds1.attrs["fit_seconds"])["least_squares"]
     ls_rounds = json.loads(ds1.attrs["fit_rounds"])["least_squares"] if "fit_rounds" in ds1.attrs else None
     t0 = time.perf_counter()
