@@ -69,7 +69,8 @@ def read_samples(s_loose, s_tight, st_loose, st_tight, A, mu_ref, rtol: float, s
     looser run not made: pass the tighter twice) the error is NaN and the status the tighter run's."""
     s_loose, s_tight = np.asarray(s_loose, dtype=float), np.asarray(s_tight, dtype=float)
     mu, error, above = np.empty(s_tight.shape), np.empty(s_tight.shape), np.empty(s_tight.shape[0], np.bool_)
-    _read_off(s_loose, s_tight, np.asarray(A, dtype=float), np.asarray(mu_ref, dtype=float), float(rtol), mu, error,
+    # copies, not views: a broadcast (read-only) view into a compiled function is a numba FutureWarning
+    _read_off(s_loose, s_tight, np.array(A, dtype=float), np.array(mu_ref, dtype=float), float(rtol), mu, error,
               above)
     if not estimates:
         error[:] = np.nan
