@@ -77,7 +77,7 @@ from .models.driven import (
     stiffness,
 )
 from .models.state_laws import STATE_LAWS
-from .solvers import DP5, RODAS3
+from .solvers import DP5, EXPLICIT_METHODS, RODAS3
 from .solvers.controllers import ERR_FLOOR, I_CONTROLLER, PI_CONTROLLER, accepted_factor_log2, rejected_factor
 from .solvers.explicit import make_erk_step
 from .solvers.fastmath import FAST
@@ -157,13 +157,14 @@ class DrivenOutputs(NamedTuple):
 _stiff_step = make_rodas3_step(inertial_system)
 
 
-def _make_advance(rhs, with_inertia: bool, variant: tuple[str, str]):
+def _make_advance(rhs, with_inertia: bool, variant: tuple[str, ...], tableau=DP5):
     """advance(stiff, y, h, p, K, ys, y_new, err, work) -> (done, ln xi' at y_new or NaN): one step of size h from
-    y (rates in K[0]): Dormand-Prince (FSAL: its last stage is the rates at y_new, kept in K[-1]), or RODAS3 where
-    ``stiff`` (inertial variant only) with its scratch ``work`` (a :class:`RodasWork` from ``scratch``). Every kernel
-    a factory builds is pinned to its ``variant`` (state law, model): one whose closure holds an unpinned dispatcher
-    misses numba's disk cache in every new process."""
-    erk_step = make_erk_step(rhs, _size(with_inertia), DP5)
+    y (rates in K[0]): the explicit ``tableau`` (Dormand-Prince, FSAL: its last stage is the rates at y_new, kept in
+    K[-1]; the quasi-static lanes pass DOP853, whose returned aux is not at y_new), or RODAS3 where ``stiff``
+    (inertial variant only) with its scratch ``work`` (a :class:`RodasWork` from ``scratch``). Every kernel a factory
+    builds is pinned to its ``variant`` (state law, model, and the tableau where not dp5): one whose closure holds an
+    unpinned dispatcher misses numba's disk cache in every new process."""
+    erk_step = make_erk_step(rhs, _size(with_inertia), tableau)
 
     @njit(inline="always", fastmath=FAST, error_model="numpy")
     def advance(stiff, y, h, p, K, ys, y_new, err, work):
@@ -176,29 +177,66 @@ def _make_advance(rhs, with_inertia: bool, variant: tuple[str, str]):
     return pin(advance, *variant)
 
 
+NEWTON_FINISH = 1e-3
+"""Newton correction (a fraction of the step) below which an extremum's z is finished by its Taylor series
+(:func:`_make_extremum`)."""
+
+
+@njit(inline="always", fastmath=FAST, error_model="numpy")
+def _first_guess(dz0, dz1, ddz0_h, ddz1_h):
+    """The fraction theta of a step where z' = 0, from z' (dz0, dz1: opposite signs) and z'' times the step
+    (ddz0_h, ddz1_h) at its ends: the root in [0, 1] of the cubic Hermite interpolant of z' (Newton from the root of
+    the quadratic through dz0, ddz0_h and dz1, itself Newton from the linear interpolation's root). Where a stage is
+    unusable (a vanishing slope, a root outside the step) the previous guess stands."""
+    theta = dz0 / (dz0 - dz1)
+    c = dz1 - dz0 - ddz0_h  # the quadratic dz0 + ddz0_h s + c s^2
+    for _ in range(3):
+        slope = ddz0_h + 2.0 * c * theta
+        step = (dz0 + theta * (ddz0_h + c * theta)) / slope
+        if slope == 0.0 or not (0.0 <= theta - step <= 1.0):
+            break
+        theta -= step
+    for _ in range(6):  # the cubic's coefficients in the Hermite basis (value and slope at s = 0, 1)
+        s = theta
+        q = (2.0 * s - 3.0) * s * s * (dz0 - dz1) + dz0 + s * (s - 1.0) * ((s - 1.0) * ddz0_h + s * ddz1_h)
+        dq = 6.0 * s * (s - 1.0) * (dz0 - dz1) + (s - 1.0) * (3.0 * s - 1.0) * ddz0_h + s * (3.0 * s - 2.0) * ddz1_h
+        if dq == 0.0 or not (0.0 <= s - q / dq <= 1.0):
+            break
+        theta = s - q / dq
+        if abs(q / dq) < 1e-15:
+            break
+    return theta
+
+
 def _make_extremum(rhs, advance, variant: tuple[str, ...], slaved: bool = False):
-    """extremum(stiff, y0, h, dz0, dz1, p, K, ys, yt, err, work, dy) -> (theta h, z there): the extremum of z inside
-    a step of size h from y0 where z' changes sign (dz0 at the start, dz1 at the end): linear interpolation of z' as
-    a first guess, then Newton on exact partial steps of size theta h with the step's own method
-    (z'' = -xi' (ln xi')'; on the slaved inertial form, ``slaved``, (ln xi')' is the quasi-static balance's rate: a
-    Newton slope, exact to O(g e^w))."""
+    """extremum(stiff, y0, y1, h, dz0, dz1, p, K, ys, yt, err, work, dy) -> (theta h, z there): the extremum of z
+    inside a step of size h from y0 to y1 where z' changes sign (dz0 at the start, dz1 at the end): a first guess from
+    z' and z'' at both ends (:func:`_first_guess`), then Newton on exact partial steps of size theta h with the step's
+    own method (z'' = -xi' (ln xi')'; on the slaved inertial form, ``slaved``, (ln xi')' is the quasi-static
+    balance's rate: a Newton slope, exact to O(g e^w)). Once a Newton correction delta is below NEWTON_FINISH, z at
+    theta + delta is the partial step's z continued by its Taylor series to second order, off by
+    O((delta h)^3 z^(3)), far below the step's own error, instead of one more partial step: mostly one partial step
+    per extremum."""
 
     @njit(fastmath=FAST, error_model="numpy")
-    def extremum(stiff, y0, h, dz0, dz1, p, K, ys, yt, err, work, dy):
-        theta = dz0 / (dz0 - dz1)
+    def extremum(stiff, y0, y1, h, dz0, dz1, p, K, ys, yt, err, work, dy):
+        rate_of = DrivenParams(p.k, p.a, p.b, 0.0) if slaved else p
+        lw1 = rhs(y1, p, dy)
+        ddz1_h = -math.exp(min(lw1, EXP_MAX)) * log_velocity_rate(y1, dy, rate_of) * h
+        lw0 = rhs(y0, p, K[0])  # a partial step leaves K[0] as it found it
+        theta = _first_guess(dz0, dz1, -math.exp(min(lw0, EXP_MAX)) * log_velocity_rate(y0, K[0], rate_of) * h,
+                             ddz1_h)
         for _ in range(4):
-            rhs(y0, p, K[0])
             advance(stiff, y0, theta * h, p, K, ys, yt, err, work)
             lw = rhs(yt, p, dy)
-            rate_of = DrivenParams(p.k, p.a, p.b, 0.0) if slaved else p
             ddz = -math.exp(min(lw, EXP_MAX)) * log_velocity_rate(yt, dy, rate_of)
             if ddz == 0.0 or not math.isfinite(ddz):
                 break
             delta = -dy[0] / (ddz * h)
+            if abs(delta) < NEWTON_FINISH and 0.0 <= theta + delta <= 1.0:
+                s = delta * h
+                return (theta + delta) * h, yt[0] + s * (dy[0] + 0.5 * ddz * s)
             theta = min(max(theta + delta, 0.0), 1.0)
-            if abs(delta) < 1e-12:
-                break
-        rhs(y0, p, K[0])
         advance(stiff, y0, theta * h, p, K, ys, yt, err, work)
         return theta * h, yt[0]
 
@@ -273,13 +311,15 @@ def _largest(size, v):
 
 
 @functools.cache
-def scalar_parts(law: str, with_inertia: bool):
+def scalar_parts(law: str, with_inertia: bool, tableau: str = "dp5"):
     """(rhs, advance, extremum) of one variant, made once per process: the driver below and the lanes
     (sweep/integrate/lanes_driven.py and lanes_driven_inertial.py, which locate their extrema with this
-    ``extremum`` and take their stiff RODAS3 steps with this ``advance``) share them."""
+    ``extremum`` and take their stiff RODAS3 steps with this ``advance``) share them. ``tableau`` names the explicit
+    method of ``advance`` (:data:`sweep.integrate.solvers.EXPLICIT_METHODS`): the quasi-static lanes step with
+    DOP853, and their extrema are located on partial steps of the same method."""
     rhs = make_driven_rhs(STATE_LAWS[law].rate, with_inertia)
-    variant = (law, "inertial" if with_inertia else "quasistatic")
-    advance = _make_advance(rhs, with_inertia, variant)
+    variant = (law, "inertial" if with_inertia else "quasistatic") + (() if tableau == "dp5" else (tableau,))
+    advance = _make_advance(rhs, with_inertia, variant, EXPLICIT_METHODS[tableau])
     return rhs, advance, _make_extremum(rhs, advance, variant)
 
 
@@ -379,9 +419,9 @@ def _make_simulate(law: str, with_inertia: bool, slaved: bool = False):
                 norm_tenth, t_tenth = norm, tau + h
             if dz > 0.0 and dz1 <= 0.0:  # a maximum of z: a cycle ends
                 if on_manifold:
-                    dt, z_top = extremum_s(False, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
+                    dt, z_top = extremum_s(False, y, y_new, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
                 else:
-                    dt, z_top = extremum(stiff, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
+                    dt, z_top = extremum(stiff, y, y_new, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
                 t_peak = tau + dt
                 rebound = 0.5 * (z_top - z_min) < REBOUND * amp[-1]  # not a cycle end (False before two cycles)
                 if not rebound and z_min < math.inf and math.isfinite(t_max_prev):
@@ -403,9 +443,9 @@ def _make_simulate(law: str, with_inertia: bool, slaved: bool = False):
                 after_rebound = rebound
             elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z (the lower one where the maximum between was a rebound)
                 if on_manifold:
-                    z_new = extremum_s(False, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
+                    z_new = extremum_s(False, y, y_new, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
                 else:
-                    z_new = extremum(stiff, y, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
+                    z_new = extremum(stiff, y, y_new, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1]
                 z_min = min(z_min, z_new) if after_rebound else z_new
             for m in range(n):
                 y[m] = y_new[m]

@@ -1,32 +1,42 @@
 """Quasi-static driven points in lockstep lanes (issue 35): every lane its own point, step, accept/reject and cycle
 bookkeeping, as the adaptive stop lanes (:mod:`sweep.integrate.lanes_adaptive`) do for the stop scene.
 
-The equations, the stepper and the rules are those of the one-point driver :mod:`sweep.integrate.driven` (its
-module docstring): the quasi-static driven equations in (z, u) with the aging law (docs/physics.md 3b), Dormand-Prince
-5(4) with the PI controller, the local error max(|e_z|, |e_u|) / (rtol max(largest |z| met, |z_new|, |u_new|)), the
-cycle history cut at the maxima of z, and the regime decision (:func:`sweep.integrate.driven._decide`). What differs
-is how the work is laid out. One pass of the lane loops is one *attempt* of every lane: the six stage loops (one
-loop per stage, for the reason of :func:`sweep.integrate.lanes_adaptive._stage_loops`), then a closing loop with the
-error norm, the accept mask, the next step and the commit of the accepted state, all straight-line code (selects,
-not branches) that LLVM vectorises. The closing loop also raises a lane's *attention* flag where the scalar
-bookkeeping must look: an accepted step across an extremum of z (z' changes sign), past the runaway threshold
-W_RUNAWAY, below DECAYED (or, the first time, 0.1) x perturbation, the step budget spent, or a rejected step below
-the step floor. Those steps (a few per cycle of some hundred) are left uncommitted for the short scalar loop that
-follows every attempt: it locates the extremum with the one-point driver's own Newton on exact partial dp5 steps
-(:func:`sweep.integrate.driven.scalar_parts`), books the cycle, decides, and hands a finished lane its next point.
-Once no point is queued, the busy lanes are gathered into the first half, then the first quarter, of the lanes and
-only those are stepped (:data:`WIDTHS`): a batch ends with its longest points, which then no longer pay for 16
-lanes (issue grid, 1 thread: 0.070 -> 0.056 s; its longest point alone 58 -> 34 ms, the one-point driver's 37).
+The equations and the rules are those of the one-point driver :mod:`sweep.integrate.driven` (its module docstring):
+the quasi-static driven equations in (z, u) with the aging law (docs/physics.md 3b), the error scale
+rtol max(largest |z| met, |z_new|, |u_new|), the cycle history cut at the maxima of z, and the regime decision
+(:func:`sweep.integrate.driven._decide`). The stepper is Hairer's DOP853 rather than the driver's dp5: its error
+norm is dop853.f's, err5^2 / sqrt(err5^2 + 0.01 err3^2) of the max-norms of the fifth- and third-order estimates
+(:data:`sweep.integrate.solvers.tableau.DOP853_ER3`), of order 8 in h, with the I controller's exponent 1/8; f at the
+step's end (the turn of z', and the next step's first stage) makes twelve evaluations an attempt. The driven stepper's
+tolerance is 1e-9 whatever the scene's (:func:`sweep.accuracy.driven_stepper_rtol`), where the eighth order pays:
+on the issue grid dp5 with the PI controller took 7.41M evaluations (1.23M attempts), DOP853 with this norm takes
+4.14M (0.34M attempts), 2.7-3.6x fewer on the long points near the line, and its amplitudes are closer to a
+1e-12 reference (largest error 1.0e-8 against dp5's 7.2e-8; benchmarks/driven_lanes.py). Steps in the slips are
+bound by accuracy, not stability (scipy's Radau and BDF at the same tolerance take 1.6-3.5x more steps than its
+RK45 there), so an L-stable step would not save any.
 
-Where the arithmetic differs from the one-point driver: the exponentials of the right-hand side are
-:func:`sweep.integrate.solvers.vmath.exp_f64` (<= 2.3e-16 relative, vectorisable; the driver calls libm); the
-controller's factor is the driver's (exp_f64 of :func:`sweep.integrate.solvers.vmath.log2_approx`, 0.5 %: a step
-factor needs no more), up to rounding. Steps therefore differ from the driver's at the tolerance's level, and so do
-growth rates and amplitudes (within their estimates; tests/integrate/test_lanes_driven.py). A point's numbers do
-not depend on its lane or neighbours.
+What differs from the driver is how the work is laid out. One pass of the lane loops is one *attempt* of every lane:
+the eleven stage loops (one loop per stage, for the reason of :func:`sweep.integrate.lanes_adaptive._stage_loops`),
+then a closing loop with the error norm, the accept mask, the next step and the commit of the accepted state, all
+straight-line code (selects, not branches) that LLVM vectorises. The closing loop also raises a lane's *attention*
+flag where the scalar bookkeeping must look: an accepted step across an extremum of z (z' changes sign), past the
+runaway threshold W_RUNAWAY, below DECAYED (or, the first time, 0.1) x perturbation, the step budget spent, or a
+rejected step below the step floor. Those steps (a few per cycle of some tens) are left uncommitted for the short
+scalar loop that follows every attempt: it locates the extremum with the one-point driver's Newton on exact partial
+DOP853 steps (:func:`sweep.integrate.driven.scalar_parts`; mostly one partial step from a Hermite first guess),
+books the cycle, decides, and hands a finished lane its next point. Once no point is queued, the busy lanes are
+gathered into the first half, then the first quarter, of the lanes and only those are stepped (:data:`WIDTHS`): a
+batch ends with its longest points, which then no longer pay for 16 lanes.
+
+Where the arithmetic differs from the one-point driver besides the method: the exponentials of the right-hand side
+are :func:`sweep.integrate.solvers.vmath.exp_f64` (<= 2.3e-16 relative, vectorisable; the driver calls libm); the
+controller's factor is exp_f64 of :func:`sweep.integrate.solvers.vmath.log2_approx` (0.5 %: a step factor needs no
+more). Steps therefore differ from the driver's, and growth rates and amplitudes differ at the tolerance's level
+(within their estimates; tests/integrate/test_lanes_driven.py). A point's numbers do not depend on its lane or
+neighbours.
 
 Only the quasi-static model with the aging law runs here; the inertial model runs in
-:mod:`sweep.integrate.lanes_driven_inertial`, which shares the cycle bookkeeping (:class:`Bookkeeping`,
+:mod:`sweep.integrate.lanes_driven_inertial` (dp5), which shares the cycle bookkeeping (:class:`Bookkeeping`,
 :func:`book_state`, :func:`book_maximum`, :func:`book_minimum`) and the lane loop (:func:`make_run_lanes`) with this
 module; the slip law runs on the one-point driver.
 """
@@ -57,10 +67,11 @@ from .driven import (
     _linear_amplitude,
     scalar_parts,
 )
-from .solvers import DP5
-from .solvers.controllers import ERR_FLOOR, MAX_FACTOR, MIN_FACTOR, NONFINITE_FACTOR, PI_CONTROLLER, SAFETY
+from .solvers import DOP853, DP5
+from .solvers.controllers import ERR_FLOOR, MAX_FACTOR, MIN_FACTOR, NONFINITE_FACTOR, SAFETY
 from .solvers.fastmath import FAST
 from .solvers.rosenbrock_step import scratch
+from .solvers.tableau import DOP853_ER3
 from .solvers.vmath import EXP_MAX, exp_f64
 from .solvers.vmath import log2_approx as _log2_approx
 
@@ -70,14 +81,17 @@ LANES = 16
 """Points in flight per thread."""
 
 # lane fields, each LANES wide at offset F * LANES of one flat array
-_K, _A, _B, _H, _Z, _U, _DZ, _DU, _TAU, _SIZE, _LOGPREV, _REJ, _ATTN, _ACC = range(14)
-_ZE, _UE, _DZE, _DUE, _LWE, _HN, _LERR, _NSTEP, _TENTH, _WPEAK = range(14, 24)
-_STAGES = 24
-"""Stage j = 2..6 of the step under way: dz_j at _STAGES + 2 (j - 2), du_j next to it."""
-_N_FIELDS = _STAGES + 2 * 5
+_K, _A, _B, _H, _Z, _U, _DZ, _DU, _TAU, _SIZE, _REJ, _ATTN, _ACC = range(13)
+_ZE, _UE, _DZE, _DUE, _LWE, _HN, _NSTEP, _TENTH, _WPEAK = range(13, 22)
+_STAGES = 22
+"""Stage j = 2..12 of the step under way: dz_j at _STAGES + 2 (j - 2), du_j next to it."""
+_N_FIELDS = _STAGES + 2 * (DOP853.stages - 1)
 _LN2 = math.log(2.0)
-_Q1 = DP5.error_order + 1
-_DP5_STAGES = DP5.stages
+_Q1 = 8
+"""The controller's exponent is -1/_Q1: DOP853's damped error norm is of order 8 in h (:data:`DOP853_ER3`)."""
+SCRATCH_STAGES = max(DP5.stages, DOP853.stages)
+"""Rows of the stage scratch of the scalar extremum search (the quasi-static lanes' DOP853 steps, the inertial lanes'
+dp5 ones)."""
 
 
 @njit(inline="always", fastmath=FAST, error_model="numpy")
@@ -90,18 +104,15 @@ def rate(z, u, k, a, b):
 
 
 def _attempt_source(width: int) -> str:
-    """Source of attempt_all(st, rtol, pert, max_steps): one dp5 attempt of lanes 0..width-1 (module docstring);
+    """Source of attempt_all(st, rtol, pert, max_steps): one DOP853 attempt of lanes 0..width-1 (module docstring);
     the loop count a literal, so that every width runs the same vector code per lane."""
-    _, A, b, e = DP5.arrays()
+    _, A, b, e = DOP853.arrays()
+    s = DOP853.stages
     W = LANES
     f = lambda field: f"st[{field * W} + l]"  # noqa: E731
 
-    def d(comp: int, j: int) -> str:  # the derivative of stage j (1-based): first in locals, then stage fields
-        if j == 1:
-            return ("dz1", "du1")[comp]
-        if j == 7:
-            return ("dze", "due")[comp]
-        return f(_STAGES + 2 * (j - 2) + comp)
+    def d(comp: int, j: int) -> str:  # the derivative of stage j (1-based): the first in locals, then stage fields
+        return ("dz1", "du1")[comp] if j == 1 else f(_STAGES + 2 * (j - 2) + comp)
 
     def combo(weights, comp: int, count: int) -> str:
         return " + ".join(f"{float(weights[j])!r} * {d(comp, j + 1)}" for j in range(count) if weights[j] != 0.0)
@@ -110,29 +121,36 @@ def _attempt_source(width: int) -> str:
             f"        k, a, bb, h = {f(_K)}, {f(_A)}, {f(_B)}, {f(_H)}",
             f"        z1, u1, dz1, du1 = {f(_Z)}, {f(_U)}, {f(_DZ)}, {f(_DU)}"]
     lines = ["def attempt_all(st, rtol, pert, max_steps):"]
-    for i in range(2, 7):
+    for i in range(2, s + 1):
         lines += head + [
             f"        zi = z1 + h * ({combo(A[i - 1], 0, i - 1)})",
             f"        ui = u1 + h * ({combo(A[i - 1], 1, i - 1)})",
             "        dzi, dui, lwi = rate(zi, ui, k, a, bb)",
             f"        {f(_STAGES + 2 * (i - 2))}, {f(_STAGES + 2 * (i - 2) + 1)} = dzi, dui"]
     lines += head + [
-        f"        ze = z1 + h * ({combo(b, 0, 6)})",
-        f"        ue = u1 + h * ({combo(b, 1, 6)})",
+        f"        ze = z1 + h * ({combo(b, 0, s)})",
+        f"        ue = u1 + h * ({combo(b, 1, s)})",
+        # the rates at the step's end: the turn of z' below and, once accepted, the next step's first stage
         "        dze, due, lwe = rate(ze, ue, k, a, bb)",
-        f"        ez = h * ({combo(e, 0, 7)})",
-        f"        eu = h * ({combo(e, 1, 7)})",
-        f"        size, tau, logprev, rej = {f(_SIZE)}, {f(_TAU)}, {f(_LOGPREV)}, {f(_REJ)}",
-        # the driver's norm: NaN anywhere (a stage beyond the exponent clamp) rejects with the non-finite factor
-        "        finite = ze == ze and ue == ue and ez == ez and eu == eu",
-        "        err = max(abs(ez), abs(eu)) / (rtol * max(size, max(abs(ze), abs(ue))))",
+        f"        ez = h * ({combo(e, 0, s)})",
+        f"        eu = h * ({combo(e, 1, s)})",
+        f"        e3z = h * ({combo(DOP853_ER3, 0, s)})",
+        f"        e3u = h * ({combo(DOP853_ER3, 1, s)})",
+        f"        size, tau, rej = {f(_SIZE)}, {f(_TAU)}, {f(_REJ)}",
+        # NaN anywhere (a stage beyond the exponent clamp) rejects with the non-finite factor
+        "        finite = ze == ze and ue == ue and ez == ez and eu == eu and e3z == e3z and e3u == e3u",
+        "        scale = rtol * max(size, max(abs(ze), abs(ue)))",
+        "        err5 = max(abs(ez), abs(eu)) / scale",
+        "        err3 = max(abs(e3z), abs(e3u)) / scale",
+        "        den = math.sqrt(err5 * err5 + 0.01 * err3 * err3)",
+        "        err = err5 * (err5 / den) if den > zero else zero",
         "        err = err if finite else one",
         "        accept = finite and err <= one",
         "        lerr = _log2_approx(max(err, err_floor))",
-        "        f_pi = min(max_factor, max(min_factor, safety * exp_f64(pi_now * lerr + pi_prev * logprev)))",
-        "        f_pi = min(f_pi, one) if rej > half else f_pi",
-        "        f_i = min(one, max(min_factor, safety * exp_f64(i_now * lerr)))",
-        "        hn = h * (f_pi if accept else (f_i if finite else nonfinite_factor))",
+        "        grow = safety * exp_f64(i_now * lerr)",
+        "        f_acc = min(one if rej > half else max_factor, max(min_factor, grow))",
+        "        f_rej = min(one, max(min_factor, grow))",
+        "        hn = h * (f_acc if accept else (f_rej if finite else nonfinite_factor))",
         # where the scalar bookkeeping must look (module docstring)
         "        norm = max(abs(ze), abs(ue))",
         "        turn = (dz1 > zero and dze <= zero) or (dz1 < zero and dze >= zero)",
@@ -147,13 +165,12 @@ def _attempt_source(width: int) -> str:
         f"        {f(_TAU)} = tau + h if commit else tau",
         f"        {f(_SIZE)} = max(size, abs(ze)) if commit else size",
         f"        {f(_WPEAK)} = max({f(_WPEAK)}, lwe) if commit else {f(_WPEAK)}",
-        f"        {f(_LOGPREV)} = lerr if commit else logprev",
         f"        {f(_H)} = h if (accept and attn) else hn",
         f"        {f(_REJ)} = zero if commit else (one if not accept else rej)",
         f"        {f(_ATTN)} = one if attn else zero",
         f"        {f(_ACC)} = one if accept else zero",
         f"        {f(_ZE)}, {f(_UE)}, {f(_DZE)}, {f(_DUE)}, {f(_LWE)} = ze, ue, dze, due, lwe",
-        f"        {f(_HN)}, {f(_LERR)} = hn, lerr",
+        f"        {f(_HN)} = hn",
     ]
     return "\n".join(lines) + "\n"
 
@@ -166,15 +183,13 @@ only those are stepped, so that the last long points of a batch do not pay for i
 @functools.cache
 def _attempt(width: int):
     """attempt_all(st, rtol, pert, max_steps) over ``width`` lanes, compiled (inlined by LLVM into the driver)."""
-    namespace = {"rate": rate, "exp_f64": exp_f64, "_log2_approx": _log2_approx, "W": LANES, "one": 1.0,
+    namespace = {"rate": rate, "exp_f64": exp_f64, "_log2_approx": _log2_approx, "math": math, "W": LANES, "one": 1.0,
                  "zero": 0.0, "half": 0.5, "tenth": 0.1, "decayed": DECAYED, "w_runaway": W_RUNAWAY,
                  "h_floor": H_FLOOR, "err_floor": ERR_FLOOR, "safety": SAFETY, "max_factor": MAX_FACTOR,
                  "min_factor": MIN_FACTOR, "nonfinite_factor": NONFINITE_FACTOR,
-                 # err^(-alpha/q1) err_prev^(beta/q1) and err^(-1/q1) as exp of multiples of log2
-                 "pi_now": -_LN2 * PI_CONTROLLER.alpha / _Q1, "pi_prev": _LN2 * PI_CONTROLLER.beta / _Q1,
-                 "i_now": -_LN2 / _Q1, "__name__": __name__}
-    exec(compile(_attempt_source(width), f"<sweep.integrate.lanes_driven: dp5, {width} lanes>", "exec"), namespace)
-    return pin(njit(forceinline=True, fastmath=FAST, error_model="numpy")(namespace["attempt_all"]), "dp5", width)
+                 "i_now": -_LN2 / _Q1, "__name__": __name__}  # err^(-1/q1) as exp of a multiple of log2
+    exec(compile(_attempt_source(width), f"<sweep.integrate.lanes_driven: dop853, {width} lanes>", "exec"), namespace)
+    return pin(njit(forceinline=True, fastmath=FAST, error_model="numpy")(namespace["attempt_all"]), "dop853", width)
 
 
 class DrivenPoints(NamedTuple):
@@ -304,14 +319,13 @@ def book_minimum(bk, lane, z_new):
     bk.z_min[lane] = min(bk.z_min[lane], z_new) if bk.after_rebound[lane] else z_new
 
 
-def make_run_lanes(attempts, look, load, idle, n_fields: int, attn: int, n: int, variant: tuple):
+def make_run_lanes(attempts, widths, look, load, idle, n_fields: int, attn: int, n: int, variant: tuple):
     """run_lanes(pts, job, runs, out): the lane loop (module docstring) over ``attempts`` (one per :data:`WIDTHS`),
     the scalar ``look`` of a lane whose attention flag is up, ``load(st, bk, lane, pts, i, pert)`` of point i and
     ``idle(st, bk, lane, pert)`` of an idle dummy, ``n_fields`` lane fields (the attention flag at ``attn``) and
     ``n`` state components (the scratch of the scalar extremum search)."""
-    attempt_full, attempt_half, attempt_quarter = attempts
-    HALF, QUARTER = WIDTHS[1], WIDTHS[2]
-    W = LANES
+    attempt_full, attempt_mid, attempt_last = attempts
+    W, MID, LAST = widths
 
     @njit(inline="always", fastmath=FAST, error_model="numpy")
     def gather(st, bk, lane_point, width):
@@ -335,8 +349,9 @@ def make_run_lanes(attempts, look, load, idle, n_fields: int, attn: int, n: int,
         lane_point = np.full(W, -1, np.int64)
         pert, rtol = job.perturbation, job.rtol
         max_steps = float(job.max_steps)
-        y0, ys, yt, err_v, dyt = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-        K = np.empty((_DP5_STAGES, n))
+        y0, y1, ys, yt = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        err_v, dyt = np.empty(n), np.empty(n)
+        K = np.empty((SCRATCH_STAGES, n))
         work = scratch(n)
         queued, busy = 0, 0
         for lane in range(W):
@@ -350,17 +365,17 @@ def make_run_lanes(attempts, look, load, idle, n_fields: int, attn: int, n: int,
                 idle(st, bk, lane, pert)
         width = W
         while busy > 0:
-            if queued == runs.size and width > QUARTER and busy <= width // 2:
+            while queued == runs.size and width > LAST and busy <= (MID if width == W else LAST):
                 gather(st, bk, lane_point, width)
-                width //= 2
+                width = MID if width == W else LAST
                 for lane in range(busy, width):  # idle dummies in the freed lanes (never looked at)
                     idle(st, bk, lane, pert)
             if width == W:
                 attempt_full(st, rtol, pert, max_steps)
-            elif width == HALF:
-                attempt_half(st, rtol, pert, max_steps)
+            elif width == MID:
+                attempt_mid(st, rtol, pert, max_steps)
             else:
-                attempt_quarter(st, rtol, pert, max_steps)
+                attempt_last(st, rtol, pert, max_steps)
             for lane in range(width):
                 if st[attn * W + lane] == 0.0:
                     continue
@@ -368,7 +383,7 @@ def make_run_lanes(attempts, look, load, idle, n_fields: int, attn: int, n: int,
                 if i < 0:  # an idle dummy: restart it, never look
                     idle(st, bk, lane, pert)
                     continue
-                if not look(st, bk, lane, i, job, out, y0, K, ys, yt, err_v, work, dyt):
+                if not look(st, bk, lane, i, job, out, y0, y1, K, ys, yt, err_v, work, dyt):
                     continue
                 if queued < runs.size:
                     i = job.point[runs[queued]]
@@ -386,7 +401,7 @@ def make_run_lanes(attempts, look, load, idle, n_fields: int, attn: int, n: int,
 
 @functools.cache
 def _make_kernels():
-    _, _, extremum = scalar_parts("aging", False)
+    _, _, extremum = scalar_parts("aging", False, "dop853")
     W = LANES
 
     @njit(inline="always", fastmath=FAST, error_model="numpy")
@@ -397,7 +412,6 @@ def _make_kernels():
         st[_DZ * W + lane], st[_DU * W + lane] = dz, du
         st[_H * W + lane] = H_START / (1.0 + k)
         st[_TAU * W + lane], st[_SIZE * W + lane] = 0.0, pert
-        st[_LOGPREV * W + lane] = _log2_approx(1e-4)  # the driver's first err_prev
         st[_REJ * W + lane], st[_NSTEP * W + lane], st[_TENTH * W + lane] = 0.0, 0.0, 0.0
         st[_WPEAK * W + lane] = -math.inf
         reset_bookkeeping(bk, lane, _linear_amplitude(DrivenParams(k, a, b, 0.0), pert))
@@ -411,7 +425,7 @@ def _make_kernels():
         load_values(st, bk, lane, 1.0, 0.5, 0.0, pert)  # an idle dummy (steady sliding, stable)
 
     @njit(fastmath=FAST, error_model="numpy")
-    def look(st, bk, lane, i, job, out, y0, K, ys, yt, err_v, work, dyt):
+    def look(st, bk, lane, i, job, out, y0, y1, K, ys, yt, err_v, work, dyt):
         """The scalar bookkeeping of a lane whose attention flag is up (the driver's loop body after the error
         test); True where the point is finished (its outputs written)."""
         pert = job.perturbation
@@ -434,19 +448,19 @@ def _make_kernels():
             dz = st[_DZ * W + lane]
             p = DrivenParams(st[_K * W + lane], st[_A * W + lane], st[_B * W + lane], 0.0)
             y0[0], y0[1] = st[_Z * W + lane], st[_U * W + lane]
+            y1[0], y1[1] = ze, ue
             if dz > 0.0 and dz1 <= 0.0:  # a maximum of z: a cycle ends
-                dt, z_top = extremum(False, y0, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
+                dt, z_top = extremum(False, y0, y1, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
                 if book_maximum(bk, lane, i, out, z_top, tau + dt, pert, job.max_cycles, steps, w_peak):
                     return True
             elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
-                book_minimum(bk, lane, extremum(False, y0, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1])
+                book_minimum(bk, lane, extremum(False, y0, y1, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1])
             # the accepted step, committed
             st[_Z * W + lane], st[_U * W + lane] = ze, ue
             st[_DZ * W + lane], st[_DU * W + lane] = dz1, st[_DUE * W + lane]
             st[_TAU * W + lane] = tau + h
             st[_SIZE * W + lane] = max(st[_SIZE * W + lane], abs(ze))
             st[_WPEAK * W + lane] = w_peak
-            st[_LOGPREV * W + lane] = st[_LERR * W + lane]
             st[_H * W + lane] = st[_HN * W + lane]
             st[_REJ * W + lane] = 0.0
         if steps >= job.max_steps:
@@ -457,7 +471,8 @@ def _make_kernels():
     variant = ("aging", "quasistatic", W)
     for kernel in (load_values, load, idle, look):
         pin(kernel, *variant)
-    run_lanes = make_run_lanes(tuple(_attempt(w) for w in WIDTHS), look, load, idle, _N_FIELDS, _ATTN, 2, variant)
+    run_lanes = make_run_lanes(tuple(_attempt(w) for w in WIDTHS), WIDTHS, look, load, idle, _N_FIELDS, _ATTN, 2,
+                               variant)
     return run_lanes, lanes_in_threads(run_lanes, W)
 
 

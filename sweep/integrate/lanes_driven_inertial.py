@@ -281,7 +281,7 @@ def _make_kernels():
         st[_HN * W + lane], st[_LERR * W + lane], st[_ACC * W + lane] = hn, lerr, 1.0
 
     @njit(fastmath=FAST, error_model="numpy")
-    def look(st, bk, lane, i, job, out, y0, K, ys, yt, err_v, work, dyt):
+    def look(st, bk, lane, i, job, out, y0, y1, K, ys, yt, err_v, work, dyt):
         """The scalar part of a lane whose attention flag is up: a stiff step, then the driver's loop body after the
         error test; True where the point is finished (its outputs written)."""
         pert = job.perturbation
@@ -311,10 +311,11 @@ def _make_kernels():
             on = st[_M * W + lane] > 0.5
             turn = (dz > 0.0 and dz1 <= 0.0) or (dz < 0.0 and dz1 >= 0.0)
             if turn:  # an extremum of z, located with the step's own method
+                y1[0], y1[1], y1[2] = ze, ue, st[_WE * W + lane]
                 if on:
-                    dt, z_ext = extremum_s(False, y0, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
+                    dt, z_ext = extremum_s(False, y0, y1, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
                 else:
-                    dt, z_ext = extremum(stiff, y0, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
+                    dt, z_ext = extremum(stiff, y0, y1, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
                 if dz > 0.0:  # a maximum of z: a cycle ends
                     if book_maximum(bk, lane, i, out, z_ext, tau + dt, pert, job.max_cycles, steps, w_peak):
                         return True
@@ -342,7 +343,8 @@ def _make_kernels():
     variant = ("aging", "inertial-slaved", W)
     for kernel in (load_values, load, idle, stiff_step, look):
         pin(kernel, *variant)
-    run_lanes = make_run_lanes(tuple(_attempt(w) for w in WIDTHS), look, load, idle, _N_FIELDS, _ATTN, 3, variant)
+    run_lanes = make_run_lanes(tuple(_attempt(w) for w in WIDTHS), WIDTHS, look, load, idle, _N_FIELDS, _ATTN, 3,
+                               variant)
     return run_lanes, lanes_in_threads(run_lanes, W)
 
 

@@ -174,3 +174,29 @@ def test_a_rebound_inside_the_slip_is_not_a_cycle(slaved):
     assert (z.max() - z.min()) / 2 == pytest.approx(r.amplitude, rel=1e-6)
     peaks = t[1:-1][(z[1:-1] > z[:-2]) & (z[1:-1] >= z[2:]) & (z[1:-1] > 0.0)]
     assert np.diff(peaks)[-1] == pytest.approx(r.period, rel=1e-5)
+
+
+@pytest.mark.parametrize("root, others", [(0.37, (-0.5, 2.0)), (0.02, (1.5, -3.0)), (0.93, (-0.2, 1.4))])
+def test_extremum_first_guess_is_the_root_of_a_cubic_slope(root, others):
+    """Where z' is itself a cubic in the step fraction s, the first guess from z' and z'' at both ends (Hermite
+    data) is its root in [0, 1] to rounding (the Newton on exact partial steps then starts converged)."""
+    from sweep.integrate.driven import _first_guess
+
+    poly = np.polynomial.Polynomial.fromroots([root, *others])
+    slope = poly.deriv()
+    guess = _first_guess(poly(0.0), poly(1.0), slope(0.0), slope(1.0))
+    assert guess == pytest.approx(root, abs=1e-12)
+
+
+def test_extremum_first_guess_stays_in_the_step():
+    """Random end data with z' changing sign: the guess lies in [0, 1] whatever the z'' given (a vanishing slope or
+    a root outside the step leaves the previous stage's guess)."""
+    from sweep.integrate.driven import _first_guess
+
+    rng = np.random.default_rng(3)
+    for _ in range(2000):
+        dz0, dz1 = rng.uniform(0.0, 1.0), -rng.uniform(0.0, 1.0)
+        if rng.random() < 0.5:
+            dz0, dz1 = -dz0, -dz1
+        guess = _first_guess(dz0, dz1, *rng.normal(0.0, 5.0, 2))
+        assert 0.0 <= guess <= 1.0

@@ -13,7 +13,7 @@ import pytest
 
 from sweep.integrate.solvers import DOP853, DP5, METHODS, RK4, ButcherTableau
 from sweep.integrate.solvers.rosenbrock import rosenbrock_conditions
-from sweep.integrate.solvers.tableau import rooted_trees, tree_density, tree_name
+from sweep.integrate.solvers.tableau import DOP853_ER3, rooted_trees, tree_density, tree_name
 
 
 def test_rk4_is_a_valid_fourth_order_tableau():
@@ -109,6 +109,16 @@ def test_dp5_error_weights_are_the_published_ones():
     """Dormand & Prince (1980): b - b_hat = (71/57600, 0, -71/16695, 71/1920, -17253/339200, 22/525, -1/40)."""
     published = (71 / 57600, 0.0, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525, -1 / 40)
     np.testing.assert_allclose(DP5.arrays()[3], published, rtol=1e-14, atol=1e-17)
+
+
+def test_dop853_third_order_estimate_is_of_order_three():
+    """b - er3 (dop853.f's bhh: weights on stages 1, 9 and 12 only) is a third-order solution and no more, so that
+    err3 = h er3.k is an O(h^4) estimate; the tableau's order conditions check it, not the weights' source."""
+    bhh = tuple(b - e for b, e in zip(DOP853.b, DOP853_ER3))
+    assert [i for i, w in enumerate(bhh) if w != 0.0] == [0, 8, 11]
+    dataclasses.replace(DOP853, b_hat=bhh, order_hat=3)
+    with pytest.raises(ValueError, match="order condition .* of order 4 fails"):
+        dataclasses.replace(DOP853, b_hat=bhh, order_hat=4)
 
 
 @pytest.mark.parametrize("method, i, j", [(RK4, 2, 1), (DP5, 4, 2), (DOP853, 5, 2), (DOP853, 11, 10)])

@@ -28,8 +28,8 @@ from types import MappingProxyType
 import numpy as np
 
 __all__ = [
-    "COEFFICIENT_TOL", "DOP853", "DP5", "EXPLICIT_METHODS", "MAX_TREE_ORDER", "RK4", "ButcherTableau", "Tree",
-    "rooted_trees", "tree_density", "tree_name", "tree_order",
+    "COEFFICIENT_TOL", "DOP853", "DOP853_ER3", "DP5", "EXPLICIT_METHODS", "MAX_TREE_ORDER", "RK4", "ButcherTableau",
+    "Tree", "rooted_trees", "tree_density", "tree_name", "tree_order",
 ]
 
 Tree = tuple["Tree", ...]
@@ -279,13 +279,20 @@ DOP853 = ButcherTableau(
 )
 """Hairer's DOP853 (Dormand-Prince 8(5,3)) with its fifth-order embedded estimate: twelve stages, no FSAL
 stage in the tableau (the fifth-order estimator does not use f at the step's end; a kernel may still reuse
-that evaluation as the next step's first stage). The third-order estimator (used by the original code to
-damp the error norm) and the dense-output stages are not included.
+that evaluation as the next step's first stage). The third-order estimator, with which the original code damps
+the error norm, is :data:`DOP853_ER3`; the dense-output stages are not included.
 
 Hairer, Norsett & Wanner, Solving Ordinary Differential Equations I, 2nd ed. (1993), Sec. II.10 (code
 DOP853); coefficients as in the Fortran code dop853.f (http://www.unige.ch/~hairer/software.html). The
 eighth-order formula derives from P. J. Prince, J. R. Dormand, "High order embedded Runge-Kutta formulae",
 J. Comput. Appl. Math. 7 (1981) 67-75."""
+
+_DOP853_BHH = {0: 0.244094488188976377952755905512, 8: 0.733846688281611857341361741547,
+                11: 0.220588235294117647058823529412e-1}  # published bhh_i of the third-order solution
+DOP853_ER3 = tuple(b - _DOP853_BHH.get(i, 0.0) for i, b in enumerate(_DOP853_B))
+"""Weights of DOP853's third-order error estimate h er3.k (er3 = b - bhh over its twelve stages). dop853.f
+measures a step by err5^2 / sqrt(err5^2 + 0.01 err3^2) of the two estimates' norms: of order 8 in h as h -> 0,
+so its controller exponent is 1/8 (Hairer, Norsett & Wanner I, Sec. II.10)."""
 
 EXPLICIT_METHODS: Mapping[str, ButcherTableau] = MappingProxyType({m.name: m for m in (RK4, DP5, DOP853)})
 """Built-in methods by name (read-only)."""
