@@ -20,7 +20,8 @@ recorded with each. Where the base tree is missing, the tree is compared with it
 
 Numbers: regimes per class and the points whose regime moved (steady, stick_slip and runaway must keep theirs;
 undecided and neutral may move), growth rates where both closed >= 2 cycles (|dg| x period), stick-slip amplitudes
-(relative), and steps. Writes JSON (no PNG) and prints a summary.
+(relative), and steps. Both trees' quasi-static outputs are also compared with a reference: the new tree with the
+driven stepper at 1e-12 (scene rtol REFERENCE_RTOL). Writes JSON (no PNG) and prints a summary.
 """
 
 from __future__ import annotations
@@ -82,7 +83,8 @@ def worker(args) -> None:
     p, KM, V = issue_grid(10, 10, deep=True) if deep else issue_grid()
     if args.quick:
         KM, V = (KM[::2], V[::2]) if deep else (KM[::4], V[::4])
-    scene = sweep.Scene(protocol="driven", params=p, K_over_M=KM, V=V, model=args.model)
+    rtol = {} if args.rtol is None else {"rtol": args.rtol}
+    scene = sweep.Scene(protocol="driven", params=p, K_over_M=KM, V=V, model=args.model, **rtol)
     numba.set_num_threads(args.threads)
     plan = sweep.make_plan(scene)
     compute = driven_chunk(scene, plan)
@@ -100,11 +102,11 @@ def worker(args) -> None:
 
 
 def run_worker(tree: Path, model: str, threads: int, grid: str, quick: bool, timed: int, save: Path,
-               cache: Path) -> dict:
+               cache: Path, rtol: float | None = None) -> dict:
     env = {**os.environ, "PYTHONPATH": str(tree), "NUMBA_CACHE_DIR": str(cache)}
     cmd = [sys.executable, str(Path(__file__).resolve()), "--worker", "--tree", str(tree), "--model", model,
            "--threads", str(threads), "--grid", grid, "--timed-calls", str(timed), "--save", str(save)]
-    cmd += ["--quick"] * quick
+    cmd += ["--quick"] * quick + ([] if rtol is None else ["--rtol", repr(rtol)])
     proc = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=tempfile.gettempdir())
     if proc.returncode:
         raise RuntimeError(f"worker failed ({' '.join(cmd)}):\n{proc.stderr[-4000:]}")
@@ -130,6 +132,24 @@ def compare(base: dict, new: dict) -> dict:
             "steps_base": int(base["steps"].sum()), "steps_new": int(new["steps"].sum())}
 
 
+REFERENCE_RTOL = 1e-10
+"""Scene rtol of the reference run (the driven stepper at 1e-12: sweep.accuracy.driven_stepper_rtol)."""
+
+
+def against_reference(out: dict, ref: dict) -> dict:
+    """Errors of one tree's quasi-static outputs against the reference run's (the new tree at REFERENCE_RTOL):
+    stick-slip amplitudes and periods (relative), growth rates where both closed the same number of cycles."""
+    slip = (out["regime"] == 1) & (ref["regime"] == 1)
+    amp = np.abs(out["amplitude"][slip] / ref["amplitude"][slip] - 1.0)
+    per = np.abs(out["period"][slip] / ref["period"][slip] - 1.0)
+    same = (out["cycles"] == ref["cycles"]) & (out["cycles"] >= 2) & np.isfinite(ref["growth_rate"])
+    g = np.abs(out["growth_rate"][same] - ref["growth_rate"][same]) * ref["period"][same]
+    return {"regimes_differ": int((out["regime"] != ref["regime"]).sum()), "stick_slip_compared": int(slip.sum()),
+            "amplitude_rel_err_max": float(amp.max()), "amplitude_rel_err_median": float(np.median(amp)),
+            "period_rel_err_max": float(per.max()), "growth_compared": int(same.sum()),
+            "growth_err_per_cycle_max": float(g.max())}
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--base", type=Path, default=DEFAULT_BASE)
@@ -139,6 +159,7 @@ def main(argv=None) -> None:
     add_worker_arguments(ap, DEFAULT_OUT)
     ap.add_argument("--tree", help=argparse.SUPPRESS)
     ap.add_argument("--grid", default="issue", choices=("issue", "deep"), help=argparse.SUPPRESS)
+    ap.add_argument("--rtol", type=float, default=None, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.worker:
         return worker(args)
@@ -176,6 +197,14 @@ def main(argv=None) -> None:
         print(f"{key:16s} base {best['base']:.3f} s  new {best['new']:.3f} s  x{best['base'] / best['new']:.2f}  "
               f"moved {numbers[key]['moved']} (firm {numbers[key]['moved_firm']})  growth diff "
               f"{numbers[key]['max_growth_diff_per_cycle']}", flush=True)
+        if key == "quasistatic_1t":  # both trees' accuracy: against the new tree at a tolerance 100x tighter
+            save = work / "reference.npz"
+            run_worker(ROOT, model, 1, grid, args.quick, 1, save, caches["new"], rtol=REFERENCE_RTOL)
+            ref = dict(np.load(save))
+            numbers[key]["against_reference"] = {name: against_reference(outs[name], ref) for name in trees}
+            print("  against the reference: " + "; ".join(
+                f"{name} amplitude {r['amplitude_rel_err_max']:.1e} max, {r['amplitude_rel_err_median']:.1e} median"
+                for name, r in numbers[key]["against_reference"].items()), flush=True)
     result = {
         "benchmark": "benchmarks/driven_lanes.py" + (" --quick" if args.quick else ""),
         "quick": args.quick,

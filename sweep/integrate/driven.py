@@ -77,7 +77,7 @@ from .models.driven import (
     stiffness,
 )
 from .models.state_laws import STATE_LAWS
-from .solvers import DP5, EXPLICIT_METHODS, RODAS3
+from .solvers import DP5, RODAS3
 from .solvers.controllers import ERR_FLOOR, I_CONTROLLER, PI_CONTROLLER, accepted_factor_log2, rejected_factor
 from .solvers.explicit import make_erk_step
 from .solvers.fastmath import FAST
@@ -157,14 +157,13 @@ class DrivenOutputs(NamedTuple):
 _stiff_step = make_rodas3_step(inertial_system)
 
 
-def _make_advance(rhs, with_inertia: bool, variant: tuple[str, ...], tableau=DP5):
+def _make_advance(rhs, with_inertia: bool, variant: tuple[str, str]):
     """advance(stiff, y, h, p, K, ys, y_new, err, work) -> (done, ln xi' at y_new or NaN): one step of size h from
-    y (rates in K[0]): the explicit ``tableau`` (Dormand-Prince, FSAL: its last stage is the rates at y_new, kept in
-    K[-1]; the quasi-static lanes pass DOP853, whose returned aux is not at y_new), or RODAS3 where ``stiff``
-    (inertial variant only) with its scratch ``work`` (a :class:`RodasWork` from ``scratch``). Every kernel a factory
-    builds is pinned to its ``variant`` (state law, model, and the tableau where not dp5): one whose closure holds an
-    unpinned dispatcher misses numba's disk cache in every new process."""
-    erk_step = make_erk_step(rhs, _size(with_inertia), tableau)
+    y (rates in K[0]): Dormand-Prince (FSAL: its last stage is the rates at y_new, kept in K[-1]), or RODAS3 where
+    ``stiff`` (inertial variant only) with its scratch ``work`` (a :class:`RodasWork` from ``scratch``). Every kernel
+    a factory builds is pinned to its ``variant`` (state law, model): one whose closure holds an unpinned dispatcher
+    misses numba's disk cache in every new process."""
+    erk_step = make_erk_step(rhs, _size(with_inertia), DP5)
 
     @njit(inline="always", fastmath=FAST, error_model="numpy")
     def advance(stiff, y, h, p, K, ys, y_new, err, work):
@@ -311,15 +310,13 @@ def _largest(size, v):
 
 
 @functools.cache
-def scalar_parts(law: str, with_inertia: bool, tableau: str = "dp5"):
-    """(rhs, advance, extremum) of one variant, made once per process: the driver below and the lanes
-    (sweep/integrate/lanes_driven.py and lanes_driven_inertial.py, which locate their extrema with this
-    ``extremum`` and take their stiff RODAS3 steps with this ``advance``) share them. ``tableau`` names the explicit
-    method of ``advance`` (:data:`sweep.integrate.solvers.EXPLICIT_METHODS`): the quasi-static lanes step with
-    DOP853, and their extrema are located on partial steps of the same method."""
+def scalar_parts(law: str, with_inertia: bool):
+    """(rhs, advance, extremum) of one variant, made once per process: the driver below and the inertial lanes
+    (sweep/integrate/lanes_driven_inertial.py, which locate their extrema with this ``extremum`` and take their
+    stiff RODAS3 steps with this ``advance``) share them."""
     rhs = make_driven_rhs(STATE_LAWS[law].rate, with_inertia)
-    variant = (law, "inertial" if with_inertia else "quasistatic") + (() if tableau == "dp5" else (tableau,))
-    advance = _make_advance(rhs, with_inertia, variant, EXPLICIT_METHODS[tableau])
+    variant = (law, "inertial" if with_inertia else "quasistatic")
+    advance = _make_advance(rhs, with_inertia, variant)
     return rhs, advance, _make_extremum(rhs, advance, variant)
 
 

@@ -22,11 +22,12 @@ straight-line code (selects, not branches) that LLVM vectorises. The closing loo
 flag where the scalar bookkeeping must look: an accepted step across an extremum of z (z' changes sign), past the
 runaway threshold W_RUNAWAY, below DECAYED (or, the first time, 0.1) x perturbation, the step budget spent, or a
 rejected step below the step floor. Those steps (a few per cycle of some tens) are left uncommitted for the short
-scalar loop that follows every attempt: it locates the extremum with the one-point driver's Newton on exact partial
-DOP853 steps (:func:`sweep.integrate.driven.scalar_parts`; mostly one partial step from a Hermite first guess),
-books the cycle, decides, and hands a finished lane its next point. Once no point is queued, the busy lanes are
-gathered into the first half, then the first quarter, of the lanes and only those are stepped (:data:`WIDTHS`): a
-batch ends with its longest points, which then no longer pay for 16 lanes.
+scalar loop that follows every attempt: it locates the extremum on the step's dense output (:func:`dense_extremum`:
+the stages are still in the lane fields, three more evaluations give DOP853's interpolant of order 7, and Newton on
+the exact z' at its states gives the time), books the cycle, decides, and hands a finished lane its next point.
+Once no point is queued, the busy lanes are gathered into the first half, then the first quarter, of the lanes and
+only those are stepped (:data:`WIDTHS`): a batch ends with its longest points, which then no longer pay for 16
+lanes.
 
 Where the arithmetic differs from the one-point driver besides the method: the exponentials of the right-hand side
 are :func:`sweep.integrate.solvers.vmath.exp_f64` (<= 2.3e-16 relative, vectorisable; the driver calls libm); the
@@ -53,6 +54,7 @@ from numba import njit
 from ..accuracy import DECAYED, REBOUND, W_RUNAWAY
 from ..jitcache import pin, pin_module
 from .batch import lanes_in_threads
+from .dense_dop853 import EXTRA_A, D
 from .driven import (
     BREAKDOWN,
     H_FLOOR,
@@ -65,9 +67,8 @@ from .driven import (
     Regime,
     _decide,
     _linear_amplitude,
-    scalar_parts,
 )
-from .solvers import DOP853, DP5
+from .solvers import DOP853
 from .solvers.controllers import ERR_FLOOR, MAX_FACTOR, MIN_FACTOR, NONFINITE_FACTOR, SAFETY
 from .solvers.fastmath import FAST
 from .solvers.rosenbrock_step import scratch
@@ -89,9 +90,18 @@ _N_FIELDS = _STAGES + 2 * (DOP853.stages - 1)
 _LN2 = math.log(2.0)
 _Q1 = 8
 """The controller's exponent is -1/_Q1: DOP853's damped error norm is of order 8 in h (:data:`DOP853_ER3`)."""
-SCRATCH_STAGES = max(DP5.stages, DOP853.stages)
-"""Rows of the stage scratch of the scalar extremum search (the quasi-static lanes' DOP853 steps, the inertial lanes'
-dp5 ones)."""
+_DOP853_STAGES = DOP853.stages
+SCRATCH_STAGES = 16
+"""Rows of the stage scratch of the scalar loop: a DOP853 step's twelve stages, f at its end and the dense output's
+three more stages (:func:`dense_extremum`; the inertial lanes' dp5 steps use seven)."""
+_EXTRA = np.zeros((3, SCRATCH_STAGES))
+_DENSE = np.zeros((4, SCRATCH_STAGES))
+for _s, _row in EXTRA_A.items():
+    for _j, _a in _row.items():
+        _EXTRA[_s - 13, _j] = _a
+for _r, _row in enumerate(D):
+    for _j, _d in _row.items():
+        _DENSE[_r, _j] = _d
 
 
 @njit(inline="always", fastmath=FAST, error_model="numpy")
@@ -173,6 +183,88 @@ def _attempt_source(width: int) -> str:
         f"        {f(_HN)} = hn",
     ]
     return "\n".join(lines) + "\n"
+
+
+@njit(inline="always", fastmath=FAST, error_model="numpy")
+def _nested(theta, z0, F):
+    """z(theta) of the dense output (sweep/integrate/dense_dop853.py (1)) and its first two derivatives in theta:
+    the nested form z0 + theta (F0 + (1 - theta) (F1 + theta (F2 + ...))) evaluated inside out with its
+    derivatives carried along (each factor theta or 1 - theta, of slope +1 or -1)."""
+    v, d1, d2 = F[6], 0.0, 0.0
+    for r in range(5, -1, -1):
+        m, dm = (theta, 1.0) if r % 2 == 1 else (1.0 - theta, -1.0)
+        v, d1, d2 = F[r] + m * v, dm * v + m * d1, 2.0 * dm * d1 + m * d2
+    return z0 + theta * v, v + theta * d1, 2.0 * d1 + theta * d2
+
+
+@njit(inline="always", fastmath=FAST, error_model="numpy")
+def _dense_rows(y0, y1, h, K, m):
+    """The rows F0..F6 of component m's dense output (sweep/integrate/dense_dop853.py (1)) of a step from y0 to y1
+    with the stages K (16 rows)."""
+    f0 = y1 - y0
+    rows = [0.0, 0.0, 0.0, 0.0]
+    for r in range(4):
+        acc = 0.0
+        for j in range(SCRATCH_STAGES):
+            acc += _DENSE[r, j] * K[j, m]
+        rows[r] = h * acc
+    return (f0, h * K[0, m] - f0, 2.0 * f0 - h * (K[12, m] + K[0, m]), rows[0], rows[1], rows[2], rows[3])
+
+
+@njit(fastmath=FAST, error_model="numpy")
+def dense_extremum(st, lane, K):
+    """(theta h, z there): the extremum of z inside lane ``lane``'s accepted, uncommitted DOP853 step (z' changes
+    sign), from the step's dense output of order 7 (sweep/integrate/dense_dop853.py): its stages are still in the
+    lane fields (stage 1 the start's rates, 2..12 the stage fields, 13 the end's), three more are evaluated here.
+    First the root of the interpolant's own slope (Newton kept inside the bracket where it changes sign), then
+    Newton on the exact z' = 1 - xi' at the interpolated state (z'' = -xi' (ln xi')'): the time of a flat
+    extremum is ill-conditioned in z' (an error dz' moves it by dz'/z''), and the interpolant's slope is a
+    derivative of the interpolant, off by ~1e-5 of a period where the exact rate at its state is off by the
+    state's error only. Six evaluations an extremum instead of a partial step (twelve) and Newton's own."""
+    W = LANES
+    k, a, b, h = st[_K * W + lane], st[_A * W + lane], st[_B * W + lane], st[_H * W + lane]
+    z0, u0 = st[_Z * W + lane], st[_U * W + lane]
+    K[0, 0], K[0, 1] = st[_DZ * W + lane], st[_DU * W + lane]
+    for j in range(1, _DOP853_STAGES):
+        K[j, 0], K[j, 1] = st[(_STAGES + 2 * (j - 1)) * W + lane], st[(_STAGES + 2 * (j - 1) + 1) * W + lane]
+    K[12, 0], K[12, 1] = st[_DZE * W + lane], st[_DUE * W + lane]
+    for s in range(13, 16):
+        zi, ui = z0, u0
+        for j in range(s):
+            zi += h * _EXTRA[s - 13, j] * K[j, 0]
+            ui += h * _EXTRA[s - 13, j] * K[j, 1]
+        K[s, 0], K[s, 1], _ = rate(zi, ui, k, a, b)
+    Fz = _dense_rows(z0, st[_ZE * W + lane], h, K, 0)
+    Fu = _dense_rows(u0, st[_UE * W + lane], h, K, 1)
+    rising = K[0, 0] > 0.0  # z' > 0 at the start: a maximum (the slope falls through zero)
+    lo, hi = 0.0, 1.0
+    theta = K[0, 0] / (K[0, 0] - K[12, 0])
+    for _ in range(12):
+        _, slope, curvature = _nested(theta, z0, Fz)
+        if (slope > 0.0) == rising:
+            lo = theta
+        else:
+            hi = theta
+        nxt = theta - slope / curvature if curvature != 0.0 else 0.5 * (lo + hi)
+        if not lo < nxt < hi:
+            nxt = 0.5 * (lo + hi)
+        if abs(nxt - theta) < 1e-12:
+            theta = nxt
+            break
+        theta = nxt
+    for _ in range(3):
+        z, u = _nested(theta, z0, Fz)[0], _nested(theta, u0, Fu)[0]
+        dz, du, lw = rate(z, u, k, a, b)
+        ddz = -exp_f64(min(lw, EXP_MAX)) * (k * dz - (a + 2.0 * b * u + 1.0) * du)
+        if ddz == 0.0 or not math.isfinite(ddz):
+            break
+        delta = -dz / (ddz * h)
+        if not 0.0 <= theta + delta <= 1.0:
+            break
+        theta += delta
+        if abs(delta) < 1e-12:
+            break
+    return theta * h, _nested(theta, z0, Fz)[0]
 
 
 WIDTHS = (LANES, LANES // 2, LANES // 4)
@@ -401,7 +493,6 @@ def make_run_lanes(attempts, widths, look, load, idle, n_fields: int, attn: int,
 
 @functools.cache
 def _make_kernels():
-    _, _, extremum = scalar_parts("aging", False, "dop853")
     W = LANES
 
     @njit(inline="always", fastmath=FAST, error_model="numpy")
@@ -446,15 +537,12 @@ def _make_kernels():
             if math.isfinite(bk.t_tenth[lane]):
                 st[_TENTH * W + lane] = 1.0
             dz = st[_DZ * W + lane]
-            p = DrivenParams(st[_K * W + lane], st[_A * W + lane], st[_B * W + lane], 0.0)
-            y0[0], y0[1] = st[_Z * W + lane], st[_U * W + lane]
-            y1[0], y1[1] = ze, ue
             if dz > 0.0 and dz1 <= 0.0:  # a maximum of z: a cycle ends
-                dt, z_top = extremum(False, y0, y1, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)
+                dt, z_top = dense_extremum(st, lane, K)
                 if book_maximum(bk, lane, i, out, z_top, tau + dt, pert, job.max_cycles, steps, w_peak):
                     return True
             elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
-                book_minimum(bk, lane, extremum(False, y0, y1, h, dz, dz1, p, K, ys, yt, err_v, work, dyt)[1])
+                book_minimum(bk, lane, dense_extremum(st, lane, K)[1])
             # the accepted step, committed
             st[_Z * W + lane], st[_U * W + lane] = ze, ue
             st[_DZ * W + lane], st[_DU * W + lane] = dz1, st[_DUE * W + lane]
