@@ -435,6 +435,18 @@ def _fit() -> list[str]:
     ]
 
 
+def _against_reference(ref: dict | None) -> list[str]:
+    """The quasi-static outputs of both trees against the 1e-12 reference run (driven_lanes.py), one sentence."""
+    if not ref:
+        return []
+    text = "; ".join(
+        f"{name} {r['amplitude_rel_err_max']:.1e} (median {r['amplitude_rel_err_median']:.1e}), periods "
+        f"{r['period_rel_err_max']:.1e}, growth rates {r['growth_err_per_cycle_max']:.1e} per cycle"
+        for name, r in ref.items())
+    return ["Quasi-static outputs against the same grid with the driven stepper at 1e-12 (largest relative error of "
+            f"the stick-slip amplitudes): {text}.", ""]
+
+
 def _driven() -> list[str]:
     lanes, scaling, peers = _json("driven_lanes"), _json("driven_scaling"), _json("peers_driven")
     moved = {key: f"{n['moved_firm']} of {n['moved']}" for key, n in lanes["numbers"].items()}
@@ -474,6 +486,7 @@ def _driven() -> list[str]:
         "(base) against this one in one run; points per second per core; *moved*: points whose regime differs from "
         "the base's (steady, stick_slip or runaway of them / all, undecided and neutral included):", "",
         *_table(["grid, model, threads", "points", "base", "new", "speed-up", "moved"], rows), "",
+        *_against_reference(lanes["numbers"]["quasistatic_1t"].get("against_reference")),
         _record("driven_lanes"), "",
         f"`python benchmarks/driven_scaling.py`: {scaling['settings']['grid']}, wall seconds of the driven chunk on "
         "1 thread and on all threads; the regimes of the two agree point for point"
