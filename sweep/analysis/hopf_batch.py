@@ -5,13 +5,14 @@ each needing a few driven simulations (sweep/integrate/driven.py) whose outcome 
 generator, a search yields each round's runs (a list of :class:`Run`) and receives their results (a list of
 :class:`sweep.integrate.driven.DrivenResult`, in the same order), and returns its answer. :func:`drive` advances the
 searches of all velocities in lockstep: the runs of one round of every search go to the driven batch entry points in
-one call, grouped by their settings: the quasi-static points of the aging law in SIMD lanes
-(sweep/integrate/lanes_driven.py, 16 points in flight per thread); the others (inertia, the slip law) one after the
-other with the one-point driver (:func:`sweep.integrate.driven.simulate_point`; the threaded
-:func:`sweep.integrate.batch.driven_batch` compiled its parallel loop for the inertial model in every process:
-11.8 s instead of 7.1 s before the first inertial line). A point's numbers do not depend on the others in its batch.
-The lanes' numbers differ from the one-point driver's at the stepper's tolerance (their own exponential and
-controller powers; sweep/integrate/lanes_driven.py).
+one call, grouped by their settings: the points of the aging law in SIMD lanes, 16 in flight per thread
+(quasi-static: sweep/integrate/lanes_driven.py; inertial, from :data:`INERTIAL_LANES_FROM` runs a call:
+sweep/integrate/lanes_driven_inertial.py, on the slow manifold where inertia is small, and a point left undecided
+there again with the full system, as the driven scene does); the others one after the other with the one-point driver
+(:func:`sweep.integrate.driven.simulate_point`; the threaded :func:`sweep.integrate.batch.driven_batch` compiled its
+parallel loop for the inertial model in every process). A point's numbers do not depend on the others in its batch.
+The lanes' numbers differ from the one-point driver's at the stepper's tolerance (their own method, exponential and
+controller; sweep/integrate/lanes_driven.py).
 """
 
 from __future__ import annotations
@@ -22,11 +23,12 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..accuracy import STEPPER_RTOL
-from ..integrate.driven import DrivenOutputs, DrivenParams, DrivenResult, DrivenSettings, simulate_point
-from ..integrate.lanes_driven import DrivenJob, DrivenPoints, driven_lanes
+from ..integrate.driven import DrivenOutputs, DrivenParams, DrivenResult, DrivenSettings, Regime, simulate_point
+from ..integrate.lanes_driven import LANES, DrivenJob, DrivenPoints, driven_lanes
+from ..integrate.lanes_driven_inertial import InertialPoints, inertial_lanes
 from ..protocols.driven.chunk import LANE_LAWS, lane_groups
 
-__all__ = ["MAX_STEPS", "TYPE_RTOL", "Run", "Search", "drive", "run_many"]
+__all__ = ["INERTIAL_LANES_FROM", "MAX_STEPS", "TYPE_RTOL", "Run", "Search", "drive", "run_many"]
 
 MAX_STEPS = 20_000_000
 """Step budget of every run of the searches."""
@@ -36,6 +38,12 @@ own (:func:`sweep.accuracy.driven_stepper_rtol`), far below the stationarity tes
 measure a growth rate at the line, where it vanishes, keep STEPPER_RTOL (1e-10). Against 1e-10: the same regimes and
 cycle counts, limit-cycle amplitudes within 8e-8 relative (sample2, 45 velocities at 0.4 and 1.6 % below the line),
 1.6x fewer steps."""
+
+
+INERTIAL_LANES_FROM = LANES // 4
+"""Inertial runs of one call go to the lanes from this many on, fewer to the one-point driver: a lone long inertial
+run costs about twice as much in a quarter-width lane attempt (the bistable band's searches, one or two runs a round:
+5 velocities 10.4 s in lanes, 5.7 s on the one-point driver); the line's searches over many velocities fill them."""
 
 
 class Run(NamedTuple):
@@ -75,14 +83,19 @@ def run_many(runs: Sequence[Run], law: str = "aging") -> list[DrivenResult]:
             where = np.flatnonzero(mine & ((g > 0.0) == with_inertia))
             if not where.size:
                 continue
-            if not with_inertia and law in LANE_LAWS:
+            if law in LANE_LAWS and (not with_inertia or where.size >= INERTIAL_LANES_FROM):
                 # the slowest transients first (growth rate ~ |a - k|/2 per tau), so that none runs alone at the end
-                first = where[np.argsort(np.abs(a[where] - k[where]), kind="stable")]
-                driven_lanes()[1](DrivenPoints(k, a, b), DrivenJob(first, *settings), lane_groups(where.size), out)
-            else:  # the one-point driver in turn (its parallel batch would add ~5 s of compiling per process)
-                for i in where:
-                    for field, value in zip(out, simulate_point(DrivenParams(k[i], a[i], b[i], g[i]), settings, law)):
-                        field[i] = value
+                first = DrivenJob(where[np.argsort(np.abs(a[where] - k[where]), kind="stable")], *settings)
+                if not with_inertia:
+                    driven_lanes()[1](DrivenPoints(k, a, b), first, lane_groups(where.size), out)
+                    continue
+                inertial_lanes()[1](InertialPoints(k, a, b, g), first, lane_groups(where.size), out)
+                # as the driven scene (sweep/protocols/driven/chunk.py): a point left undecided on the slow manifold
+                # runs again with the full system
+                where = where[out.regime[where] == Regime.UNDECIDED]
+            for i in where:  # the one-point driver in turn (its parallel batch would add ~5 s of compiling a process)
+                for field, value in zip(out, simulate_point(DrivenParams(k[i], a[i], b[i], g[i]), settings, law)):
+                    field[i] = value
     return [DrivenResult(*(field[i] for field in out)) for i in range(n)]
 
 

@@ -191,18 +191,23 @@ def _first_guess(dz0, dz1, ddz0_h, ddz1_h):
     c = dz1 - dz0 - ddz0_h  # the quadratic dz0 + ddz0_h s + c s^2
     for _ in range(3):
         slope = ddz0_h + 2.0 * c * theta
+        if slope == 0.0:
+            break
         step = (dz0 + theta * (ddz0_h + c * theta)) / slope
-        if slope == 0.0 or not (0.0 <= theta - step <= 1.0):
+        if not 0.0 <= theta - step <= 1.0:
             break
         theta -= step
     for _ in range(6):  # the cubic's coefficients in the Hermite basis (value and slope at s = 0, 1)
         s = theta
         q = (2.0 * s - 3.0) * s * s * (dz0 - dz1) + dz0 + s * (s - 1.0) * ((s - 1.0) * ddz0_h + s * ddz1_h)
         dq = 6.0 * s * (s - 1.0) * (dz0 - dz1) + (s - 1.0) * (3.0 * s - 1.0) * ddz0_h + s * (3.0 * s - 2.0) * ddz1_h
-        if dq == 0.0 or not (0.0 <= s - q / dq <= 1.0):
+        if dq == 0.0:
             break
-        theta = s - q / dq
-        if abs(q / dq) < 1e-15:
+        step = q / dq
+        if not 0.0 <= s - step <= 1.0:
+            break
+        theta = s - step
+        if abs(step) < 1e-15:
             break
     return theta
 

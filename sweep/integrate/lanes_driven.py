@@ -198,17 +198,21 @@ def _nested(theta, z0, F):
 
 
 @njit(inline="always", fastmath=FAST, error_model="numpy")
+def _dense_row(r, K, m):
+    """sum_j D[r][j] K[j, m]: row F[3 + r] of component m's dense output over h (sweep/integrate/dense_dop853.py)."""
+    acc = 0.0
+    for j in range(SCRATCH_STAGES):
+        acc += _DENSE[r, j] * K[j, m]
+    return acc
+
+
+@njit(inline="always", fastmath=FAST, error_model="numpy")
 def _dense_rows(y0, y1, h, K, m):
     """The rows F0..F6 of component m's dense output (sweep/integrate/dense_dop853.py (1)) of a step from y0 to y1
     with the stages K (16 rows)."""
     f0 = y1 - y0
-    rows = [0.0, 0.0, 0.0, 0.0]
-    for r in range(4):
-        acc = 0.0
-        for j in range(SCRATCH_STAGES):
-            acc += _DENSE[r, j] * K[j, m]
-        rows[r] = h * acc
-    return (f0, h * K[0, m] - f0, 2.0 * f0 - h * (K[12, m] + K[0, m]), rows[0], rows[1], rows[2], rows[3])
+    return (f0, h * K[0, m] - f0, 2.0 * f0 - h * (K[12, m] + K[0, m]), h * _dense_row(0, K, m),
+            h * _dense_row(1, K, m), h * _dense_row(2, K, m), h * _dense_row(3, K, m))
 
 
 @njit(fastmath=FAST, error_model="numpy")
