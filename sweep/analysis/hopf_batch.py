@@ -6,13 +6,13 @@ generator, a search yields each round's runs (a list of :class:`Run`) and receiv
 :class:`sweep.integrate.driven.DrivenResult`, in the same order), and returns its answer. :func:`drive` advances the
 searches of all velocities in lockstep: the runs of one round of every search go to the driven batch entry points in
 one call, grouped by their settings: the points of the aging law in SIMD lanes, 16 in flight per thread
-(quasi-static: sweep/integrate/lanes_driven.py; inertial, from :data:`INERTIAL_LANES_FROM` runs a call:
-sweep/integrate/lanes_driven_inertial.py, on the slow manifold where inertia is small, and a point left undecided
-there again with the full system, as the driven scene does); the others one after the other with the one-point driver
-(:func:`sweep.integrate.driven.simulate_point`; the threaded :func:`sweep.integrate.batch.driven_batch` compiled its
-parallel loop for the inertial model in every process). A point's numbers do not depend on the others in its batch.
-The lanes' numbers differ from the one-point driver's at the stepper's tolerance (their own method, exponential and
-controller; sweep/integrate/lanes_driven.py).
+(quasi-static: sweep/integrate/lanes_driven.py; inertial, the runs that end in a regime, from
+:data:`INERTIAL_LANES_FROM` a call: sweep/integrate/lanes_driven_inertial.py, on the slow manifold where inertia is
+small, and a point left undecided there again with the full system, as the driven scene does); the others one after
+the other with the one-point driver (:func:`sweep.integrate.driven.simulate_point`; the threaded
+:func:`sweep.integrate.batch.driven_batch` compiled its parallel loop for the inertial model in every process). A
+point's numbers do not depend on the others in its batch. The lanes' numbers differ from the one-point driver's at
+the stepper's tolerance (their own method, exponential and controller; sweep/integrate/lanes_driven.py).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..accuracy import STEPPER_RTOL
+from ..accuracy import SIGN_CYCLES, STEPPER_RTOL
 from ..integrate.driven import DrivenOutputs, DrivenParams, DrivenResult, DrivenSettings, Regime, simulate_point
 from ..integrate.lanes_driven import LANES, DrivenJob, DrivenPoints, driven_lanes
 from ..integrate.lanes_driven_inertial import InertialPoints, inertial_lanes
@@ -41,9 +41,12 @@ cycle counts, limit-cycle amplitudes within 8e-8 relative (sample2, 45 velocitie
 
 
 INERTIAL_LANES_FROM = LANES // 4
-"""Inertial runs of one call go to the lanes from this many on, fewer to the one-point driver: a lone long inertial
-run costs about twice as much in a quarter-width lane attempt (the bistable band's searches, one or two runs a round:
-5 velocities 10.4 s in lanes, 5.7 s on the one-point driver); the line's searches over many velocities fill them."""
+"""Inertial runs that end in a regime (a cycle budget above SIGN_CYCLES: the type, the bistable band) go to the lanes
+from this many in one call on, fewer to the one-point driver: a lone long inertial run costs about twice as much in
+a quarter-width lane attempt (the bistable band's searches, one or two runs a round: 5 velocities 10.4 s in lanes,
+5.7 s on the one-point driver); the type's searches over many velocities fill them. The runs that measure a growth
+rate over SIGN_CYCLES end undecided by design, and a point left undecided in the inertial lanes runs again with the
+full system: those stay on the one-point driver."""
 
 
 class Run(NamedTuple):
@@ -83,7 +86,7 @@ def run_many(runs: Sequence[Run], law: str = "aging") -> list[DrivenResult]:
             where = np.flatnonzero(mine & ((g > 0.0) == with_inertia))
             if not where.size:
                 continue
-            if law in LANE_LAWS and (not with_inertia or where.size >= INERTIAL_LANES_FROM):
+            if law in LANE_LAWS and (not with_inertia or (where.size >= INERTIAL_LANES_FROM and cycles > SIGN_CYCLES)):
                 # the slowest transients first (growth rate ~ |a - k|/2 per tau), so that none runs alone at the end
                 first = DrivenJob(where[np.argsort(np.abs(a[where] - k[where]), kind="stable")], *settings)
                 if not with_inertia:
