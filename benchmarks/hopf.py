@@ -283,10 +283,10 @@ def main(argv: list[str] | None = None) -> None:
     inertial_params = PARAMS.replace(m2=0.0)  # mu1 = m1 at every V: the inertial line up to gamma/A = 10
     v_fast = np.sqrt(np.logspace(lo, hi, n_fast) * PARAMS.g * PARAMS.D0 * PARAMS.A)
     # the inertial driven kernels outside the timings: the one-point driver, compiled in every process
-    # (INERTIAL_NOT_CACHED), for rounds of a few runs, and the inertial lanes for the fuller rounds
+    # (INERTIAL_NOT_CACHED), for the growth-rate runs, and the inertial lanes for the type's fuller rounds
     # (sweep/analysis/hopf_batch.py: INERTIAL_LANES_FROM)
     sweep.locate_hopf(inertial_params, v_fast[-1:], model="inertial", bifurcation=False, lyapunov=False)
-    sweep.locate_hopf(inertial_params, v_fast, model="inertial", bifurcation=False, lyapunov=False)
+    sweep.locate_hopf(inertial_params, v_fast, model="inertial", lyapunov=False)
     t_inertial, inertial = best_of(lambda: sweep.locate_hopf(inertial_params, v_fast, model="inertial",
                                                              bifurcation=False), 1)
     t_inertial_typed, inertial_typed = best_of(lambda: sweep.locate_hopf(inertial_params, v_fast, model="inertial"), 1)
