@@ -11,7 +11,15 @@ With K[0..11] the step's stages, K[12] the derivative at its end and K[13..15] t
 with F0 = y1 - y0, F1 = h K[0] - F0, F2 = 2 F0 - h (K[12] + K[0]) and F[3 + r] = h sum_j D[r][j] K[j].
 The coefficients are those of scipy.integrate._ivp.dop853_coefficients (copied: that module is private);
 tests/integrate/test_lanes_sampled.py checks the stages 0..11 against the tableau of sweep.integrate.solvers.
+:func:`rows` and :func:`evaluate` are (1) for one component in scalar code (the quasi-static driven lanes' extrema,
+sweep/integrate/lanes_driven.py); the sampled lanes write (1) out in their own vector loops.
 """
+
+import numpy as np
+from numba import njit
+
+from ..jitcache import pin_module
+from .solvers.fastmath import FAST
 
 EXTRA_A = {  # stage -> {j: a_sj}
     13: {0: 0.056167502283047954, 6: 0.25350021021662483, 7: -0.2462390374708025, 8: -0.12419142326381637,
@@ -37,3 +45,46 @@ D = (  # row r of F[3 + r] = h sum_j D[r][j] K[j]
 )
 INTERPOLATOR_POWER = 7
 """Rows F0..F6 of (1)."""
+STAGES = 16
+"""K[0..15]: the step's twelve stages, the derivative at its end and the three extra stages."""
+EXTRA_MATRIX = np.zeros((len(EXTRA_A), STAGES))
+"""EXTRA_A as a matrix: row s - 13, column j."""
+D_MATRIX = np.zeros((len(D), STAGES))
+"""D as a matrix."""
+for _s, _row in EXTRA_A.items():
+    for _j, _a in _row.items():
+        EXTRA_MATRIX[_s - 13, _j] = _a
+for _r, _row in enumerate(D):
+    for _j, _d in _row.items():
+        D_MATRIX[_r, _j] = _d
+
+
+@njit(inline="always", fastmath=FAST, error_model="numpy")
+def _d_row(r, K, m):
+    """sum_j D[r][j] K[j, m]."""
+    acc = 0.0
+    for j in range(STAGES):
+        acc += D_MATRIX[r, j] * K[j, m]
+    return acc
+
+
+@njit(inline="always", fastmath=FAST, error_model="numpy")
+def rows(y0, y1, h, K, m):
+    """The rows F0..F6 of (1) for component m of a step of size h from y0 to y1 with the stages K (STAGES rows)."""
+    f0 = y1 - y0
+    return (f0, h * K[0, m] - f0, 2.0 * f0 - h * (K[12, m] + K[0, m]), h * _d_row(0, K, m), h * _d_row(1, K, m),
+            h * _d_row(2, K, m), h * _d_row(3, K, m))
+
+
+@njit(inline="always", fastmath=FAST, error_model="numpy")
+def evaluate(theta, y0, F):
+    """(y, dy/dtheta, d2y/dtheta2) of (1) at theta with the rows F: the nested form evaluated inside out, its
+    derivatives carried along (each factor theta or 1 - theta, of slope +1 or -1)."""
+    v, d1, d2 = F[6], 0.0, 0.0
+    for r in range(5, -1, -1):
+        m, dm = (theta, 1.0) if r % 2 == 1 else (1.0 - theta, -1.0)
+        v, d1, d2 = F[r] + m * v, dm * v + m * d1, 2.0 * dm * d1 + m * d2
+    return y0 + theta * v, v + theta * d1, 2.0 * d1 + theta * d2
+
+
+pin_module(__name__)

@@ -53,8 +53,8 @@ from numba import njit
 
 from ..accuracy import DECAYED, REBOUND, W_RUNAWAY
 from ..jitcache import pin, pin_module
+from . import dense_dop853
 from .batch import lanes_in_threads
-from .dense_dop853 import EXTRA_A, D
 from .driven import (
     BREAKDOWN,
     H_FLOOR,
@@ -68,6 +68,7 @@ from .driven import (
     _decide,
     _linear_amplitude,
 )
+from .models.driven import log_velocity_rate
 from .solvers import DOP853
 from .solvers.controllers import ERR_FLOOR, MAX_FACTOR, MIN_FACTOR, NONFINITE_FACTOR, SAFETY
 from .solvers.fastmath import FAST
@@ -91,17 +92,9 @@ _LN2 = math.log(2.0)
 _Q1 = 8
 """The controller's exponent is -1/_Q1: DOP853's damped error norm is of order 8 in h (:data:`DOP853_ER3`)."""
 _DOP853_STAGES = DOP853.stages
-SCRATCH_STAGES = 16
+SCRATCH_STAGES = dense_dop853.STAGES
 """Rows of the stage scratch of the scalar loop: a DOP853 step's twelve stages, f at its end and the dense output's
 three more stages (:func:`dense_extremum`; the inertial lanes' dp5 steps use seven)."""
-_EXTRA = np.zeros((3, SCRATCH_STAGES))
-_DENSE = np.zeros((4, SCRATCH_STAGES))
-for _s, _row in EXTRA_A.items():
-    for _j, _a in _row.items():
-        _EXTRA[_s - 13, _j] = _a
-for _r, _row in enumerate(D):
-    for _j, _d in _row.items():
-        _DENSE[_r, _j] = _d
 
 
 @njit(inline="always", fastmath=FAST, error_model="numpy")
@@ -185,38 +178,8 @@ def _attempt_source(width: int) -> str:
     return "\n".join(lines) + "\n"
 
 
-@njit(inline="always", fastmath=FAST, error_model="numpy")
-def _nested(theta, z0, F):
-    """z(theta) of the dense output (sweep/integrate/dense_dop853.py (1)) and its first two derivatives in theta:
-    the nested form z0 + theta (F0 + (1 - theta) (F1 + theta (F2 + ...))) evaluated inside out with its
-    derivatives carried along (each factor theta or 1 - theta, of slope +1 or -1)."""
-    v, d1, d2 = F[6], 0.0, 0.0
-    for r in range(5, -1, -1):
-        m, dm = (theta, 1.0) if r % 2 == 1 else (1.0 - theta, -1.0)
-        v, d1, d2 = F[r] + m * v, dm * v + m * d1, 2.0 * dm * d1 + m * d2
-    return z0 + theta * v, v + theta * d1, 2.0 * d1 + theta * d2
-
-
-@njit(inline="always", fastmath=FAST, error_model="numpy")
-def _dense_row(r, K, m):
-    """sum_j D[r][j] K[j, m]: row F[3 + r] of component m's dense output over h (sweep/integrate/dense_dop853.py)."""
-    acc = 0.0
-    for j in range(SCRATCH_STAGES):
-        acc += _DENSE[r, j] * K[j, m]
-    return acc
-
-
-@njit(inline="always", fastmath=FAST, error_model="numpy")
-def _dense_rows(y0, y1, h, K, m):
-    """The rows F0..F6 of component m's dense output (sweep/integrate/dense_dop853.py (1)) of a step from y0 to y1
-    with the stages K (16 rows)."""
-    f0 = y1 - y0
-    return (f0, h * K[0, m] - f0, 2.0 * f0 - h * (K[12, m] + K[0, m]), h * _dense_row(0, K, m),
-            h * _dense_row(1, K, m), h * _dense_row(2, K, m), h * _dense_row(3, K, m))
-
-
 @njit(fastmath=FAST, error_model="numpy")
-def dense_extremum(st, lane, K):
+def dense_extremum(st, lane, K, y, dy):
     """(theta h, z there): the extremum of z inside lane ``lane``'s accepted, uncommitted DOP853 step (z' changes
     sign), from the step's dense output of order 7 (sweep/integrate/dense_dop853.py): its stages are still in the
     lane fields (stage 1 the start's rates, 2..12 the stage fields, 13 the end's), three more are evaluated here.
@@ -224,7 +187,8 @@ def dense_extremum(st, lane, K):
     Newton on the exact z' = 1 - xi' at the interpolated state (z'' = -xi' (ln xi')'): the time of a flat
     extremum is ill-conditioned in z' (an error dz' moves it by dz'/z''), and the interpolant's slope is a
     derivative of the interpolant, off by ~1e-5 of a period where the exact rate at its state is off by the
-    state's error only. Six evaluations an extremum instead of a partial step (twelve) and Newton's own."""
+    state's error only. Six evaluations an extremum instead of a partial step (twelve) and Newton's own. ``y`` and
+    ``dy`` are scratch for a state and its rates (2)."""
     W = LANES
     k, a, b, h = st[_K * W + lane], st[_A * W + lane], st[_B * W + lane], st[_H * W + lane]
     z0, u0 = st[_Z * W + lane], st[_U * W + lane]
@@ -235,16 +199,16 @@ def dense_extremum(st, lane, K):
     for s in range(13, 16):
         zi, ui = z0, u0
         for j in range(s):
-            zi += h * _EXTRA[s - 13, j] * K[j, 0]
-            ui += h * _EXTRA[s - 13, j] * K[j, 1]
+            zi += h * dense_dop853.EXTRA_MATRIX[s - 13, j] * K[j, 0]
+            ui += h * dense_dop853.EXTRA_MATRIX[s - 13, j] * K[j, 1]
         K[s, 0], K[s, 1], _ = rate(zi, ui, k, a, b)
-    Fz = _dense_rows(z0, st[_ZE * W + lane], h, K, 0)
-    Fu = _dense_rows(u0, st[_UE * W + lane], h, K, 1)
+    Fz = dense_dop853.rows(z0, st[_ZE * W + lane], h, K, 0)
+    Fu = dense_dop853.rows(u0, st[_UE * W + lane], h, K, 1)
     rising = K[0, 0] > 0.0  # z' > 0 at the start: a maximum (the slope falls through zero)
     lo, hi = 0.0, 1.0
     theta = K[0, 0] / (K[0, 0] - K[12, 0])
     for _ in range(12):
-        _, slope, curvature = _nested(theta, z0, Fz)
+        _, slope, curvature = dense_dop853.evaluate(theta, z0, Fz)
         if (slope > 0.0) == rising:
             lo = theta
         else:
@@ -257,9 +221,10 @@ def dense_extremum(st, lane, K):
             break
         theta = nxt
     for _ in range(3):
-        z, u = _nested(theta, z0, Fz)[0], _nested(theta, u0, Fu)[0]
+        z, u = dense_dop853.evaluate(theta, z0, Fz)[0], dense_dop853.evaluate(theta, u0, Fu)[0]
         dz, du, lw = rate(z, u, k, a, b)
-        ddz = -exp_f64(min(lw, EXP_MAX)) * (k * dz - (a + 2.0 * b * u + 1.0) * du)
+        y[0], y[1], dy[0], dy[1] = z, u, dz, du
+        ddz = -exp_f64(min(lw, EXP_MAX)) * log_velocity_rate(y, dy, DrivenParams(k, a, b, 0.0))
         if ddz == 0.0 or not math.isfinite(ddz):
             break
         delta = -dz / (ddz * h)
@@ -268,7 +233,7 @@ def dense_extremum(st, lane, K):
         theta += delta
         if abs(delta) < 1e-12:
             break
-    return theta * h, _nested(theta, z0, Fz)[0]
+    return theta * h, dense_dop853.evaluate(theta, z0, Fz)[0]
 
 
 WIDTHS = (LANES, LANES // 2, LANES // 4)
@@ -542,11 +507,11 @@ def _make_kernels():
                 st[_TENTH * W + lane] = 1.0
             dz = st[_DZ * W + lane]
             if dz > 0.0 and dz1 <= 0.0:  # a maximum of z: a cycle ends
-                dt, z_top = dense_extremum(st, lane, K)
+                dt, z_top = dense_extremum(st, lane, K, yt, dyt)
                 if book_maximum(bk, lane, i, out, z_top, tau + dt, pert, job.max_cycles, steps, w_peak):
                     return True
             elif dz < 0.0 and dz1 >= 0.0:  # a minimum of z
-                book_minimum(bk, lane, dense_extremum(st, lane, K)[1])
+                book_minimum(bk, lane, dense_extremum(st, lane, K, yt, dyt)[1])
             # the accepted step, committed
             st[_Z * W + lane], st[_U * W + lane] = ze, ue
             st[_DZ * W + lane], st[_DU * W + lane] = dz1, st[_DUE * W + lane]
